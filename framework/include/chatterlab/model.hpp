@@ -1,0 +1,27 @@
+#pragma once
+// A dynamics model plugin (MODELS.md G1..G7). The model supplies physics only; the framework owns
+// root finding, integration, grids and output.
+#include <memory>
+#include <optional>
+
+#include "chatterlab/characteristic.hpp"
+#include "chatterlab/registry.hpp"
+
+namespace chatterlab {
+
+class Model {
+ public:
+  virtual ~Model() = default;
+
+  // Linear stability: the characteristic function at this model's parameters, or null when the
+  // model has none (e.g. a purely nonlinear model).
+  virtual std::unique_ptr<CharacteristicFunction> characteristic() const { return nullptr; }
+
+  // Wheel revolution period Tg [s] if the model has a wheel; gives growth per wheel revolution
+  // rho = Tg Re(s) / 2 pi (MODELS.md G3).
+  virtual std::optional<double> wheel_period_s() const { return std::nullopt; }
+
+  // The time-domain interface (states, surfaces, forces) arrives with the dynamics engine.
+};
+
+}  // namespace chatterlab

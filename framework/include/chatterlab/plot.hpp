@@ -1,0 +1,44 @@
+#pragma once
+// Plots through gnuplot (a maintained plotting tool, Debian package gnuplot-nox). Each call writes
+// <stem>.png and <stem>.svg into out_dir, plus <stem>.gp and <stem>.dat so a user can restyle the
+// figure by editing the script. Failures (gnuplot missing or erroring) throw PlotError; study runs
+// record them in meta.json and still exit by the points' status.
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace chatterlab::plot {
+
+class PlotError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Series {
+  std::string label;
+  std::vector<double> x, y;
+  std::string style = "lines";  // gnuplot style: lines, points, linespoints, impulses
+};
+
+struct Curves {
+  std::string title, x_label, y_label;
+  std::vector<Series> series;
+  bool log_x = false, log_y = false;
+  std::optional<double> reference_y;  // e.g. 0 = stability limit, drawn dashed
+};
+
+// A 2-D map of z over a rectangular grid (z[iy * x.size() + ix]; NaN = failed point, left blank).
+struct Heatmap {
+  std::string title, x_label, y_label, z_label;
+  std::vector<double> x, y, z;
+  bool log_x = false, log_y = false;
+  std::optional<double> contour_level;  // e.g. 0 = stability boundary, drawn as a black line
+  bool diverging = false;               // palette centred on contour_level (blue stable, red not)
+};
+
+void render(const Curves& figure, const std::filesystem::path& out_dir, const std::string& stem);
+void render(const Heatmap& figure, const std::filesystem::path& out_dir, const std::string& stem);
+
+}  // namespace chatterlab::plot
