@@ -32,6 +32,9 @@ struct PluginInfo {
   std::vector<ParamSpec> params;
   ThreadSafety thread_safety = ThreadSafety::copy_per_thread;
   std::string models_md_ids;  // MODELS.md sections implemented, e.g. "G1"; shown by describe
+  // A small valid parameter table: printed by `chatterlab describe` as a TOML example and run by
+  // the conformance test that loops over every registered plugin.
+  Json example_params = Json::object();
 };
 
 template <class Product>
