@@ -1,0 +1,55 @@
+#pragma once
+// A study file loaded and validated: `chatterlab run STUDY.toml`. See docs/studies.md.
+//
+//   plugins = ["path/libx.so"]        # optional out-of-tree plugin libraries (relative to the file)
+//   [study]  kind = "stability_map"   # which StudyKind runs it; name/description optional
+//   [model]  type = "plunge_regenerative", ...parameters...   (component tables, kind-specific)
+//   [stability] ...                    # kind settings
+//   [grid]   "model.modes.0.damping_ratio" = [0.01, 0.02]      # parameter paths -> values
+//            wheel_speed_rpm = { from = 1000, to = 2000, steps = 21, log = false }
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "chatterlab/params.hpp"
+
+namespace chatterlab {
+
+struct GridAxis {
+  std::string key;          // exactly as written in [grid] (the results.csv column name)
+  std::string path;         // resolved dotted path: a bare name means "model.<name>"
+  std::vector<Json> values; // expanded values, in order
+  SourceLocation where;     // line of the grid key
+};
+
+struct LoadOptions {
+  bool allow_large = false;  // permit grids over 10^7 points
+};
+
+struct Study {
+  std::filesystem::path file;
+  std::string kind;                      // [study] kind
+  Json document;                         // the whole study, validated, defaults filled in
+  std::vector<GridAxis> grid;            // empty: a single point
+  std::vector<std::string> plugin_libraries;  // resolved absolute paths
+  std::shared_ptr<const SourceMap> sources;
+
+  std::size_t point_count() const;  // product of axis sizes (1 without a grid)
+  // Index -> per-axis value indices; the LAST axis varies fastest (row-major, "grid order").
+  std::vector<std::size_t> point_indices(std::size_t point) const;
+  // The document with that point's grid values written at their paths.
+  Json point_document(std::size_t point) const;
+};
+
+// Reads, parses and validates a study (including the kind's tables and every grid value against
+// the declared limits at its path). Loads the named plugin libraries first. Throws InputError with
+// "<file>:<line>: ..." messages; touches nothing on disk.
+Study load_study(const std::filesystem::path& file, const LoadOptions& options = {});
+
+// Sets a value at a dotted path inside a JSON document ("model.modes.0.damping_ratio").
+// Throws InputError when the path does not exist in the document.
+void set_at_path(Json& document, const std::string& dotted_path, const Json& value);
+
+}  // namespace chatterlab
