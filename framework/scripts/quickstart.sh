@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# chatterlab quick start. Idempotent: installs only what is missing (Debian 12 packages), then
+#   quickstart.sh run   builds Release and runs the default study (studies/default.toml)
+#   quickstart.sh test  builds with warnings as errors and runs the whole test suite through CTest
+#                       (Release, then the ASan+UBSan preset)
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+mode="${1:-}"
+case "$mode" in
+  run|test) ;;
+  *) echo "usage: $0 run|test" >&2; exit 2 ;;
+esac
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libsundials-dev libfftw3-dev libopenmpi-dev openmpi-bin
+  libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libmuparser-dev libnanoflann-dev
+  libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "chatterlab: installing missing Debian packages: ${missing[*]}" >&2
+  if [ "$(id -u)" -eq 0 ]; then
+    as_root=()
+  elif command -v sudo >/dev/null 2>&1; then
+    as_root=(sudo)
+  else
+    echo "chatterlab: these packages are missing and I am neither root nor able to use sudo." >&2
+    echo "Ask an administrator to run:" >&2
+    echo "  apt-get update && apt-get install -y ${missing[*]}" >&2
+    exit 1
+  fi
+  "${as_root[@]}" apt-get update -q
+  DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# OpenMPI refuses to start as root unless told it is deliberate (the MPI tests run mpirun).
+if [ "$(id -u)" -eq 0 ]; then
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+fi
+
+cd "$root"
+jobs="$(nproc)"
+if [ "$mode" = run ]; then
+  cmake --preset release >/dev/null
+  cmake --build --preset release -j "$jobs"
+  ./build/release/framework/chatterlab run studies/default.toml --out out/default
+  echo "chatterlab: default study written to $root/out/default (results.csv, meta.json, stability_map.png/.svg)"
+else
+  for preset in ci asan; do
+    echo "chatterlab: === test preset '$preset' ===" >&2
+    cmake --preset "$preset" >/dev/null
+    cmake --build --preset "$preset" -j "$jobs"
+    ctest --preset "$preset" -j "$jobs"
+  done
+fi
