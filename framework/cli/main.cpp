@@ -1,1 +1,212 @@
-int main() { return 0; }
+// The `chatterlab` command: list, describe, validate, run.
+//
+// Exit codes (docs/studies.md): 0 every grid point ok, 1 some points failed (each recorded in
+// results.csv and meta.json), 2 the study could not be run at all: bad input, a usage error, an
+// unusable output directory. Errors go to stderr as "chatterlab: error: <message>", never as a
+// stack trace. Under mpirun every rank loads the same study and the runner makes its errors
+// collective, so only rank 0 prints.
+#include <algorithm>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "chatterlab/catalog.hpp"
+#include "chatterlab/detail/mpi_env.hpp"
+#include "chatterlab/errors.hpp"
+#include "chatterlab/runner.hpp"
+#include "chatterlab/study.hpp"
+
+namespace {
+
+using chatterlab::Json;
+
+constexpr int exit_bad_input = 2;
+
+// MPI_Init only under a launcher; MPI_Finalize on every way out of main.
+struct MpiSession {
+  MpiSession(int& argc, char**& argv) { chatterlab::mpi_init_if_launched(argc, argv); }
+  ~MpiSession() { chatterlab::mpi_finalize(); }
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+};
+
+bool is_root() { return chatterlab::mpi_rank() == 0; }
+
+int report_error(const std::string& message) {
+  if (is_root()) std::cerr << "chatterlab: error: " << message << '\n';
+  return exit_bad_input;
+}
+
+// Numbers in shortest form (1450, not 1450.0), anything else as JSON.
+std::string show(const Json& value) {
+  return value.is_number_float() ? fmt::format("{}", value.get<double>()) : value.dump();
+}
+
+// One line per axis for `validate`: "wheel_speed_rpm  21 values from 1000 to 2000".
+std::string describe_axis(const chatterlab::GridAxis& axis) {
+  const auto& v = axis.values;
+  std::string values;
+  if (v.size() == 1) {
+    values = "1 value: " + show(v.front());
+  } else if (v.size() <= 6) {
+    values = fmt::format("{} values: ", v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) values += (i ? ", " : "") + show(v[i]);
+  } else {
+    values = fmt::format("{} values from {} to {}", v.size(), show(v.front()), show(v.back()));
+  }
+  std::string path = axis.path == axis.key ? "" : fmt::format("  ({})", axis.path);
+  return fmt::format("{}  {}{}", axis.key, values, path);
+}
+
+void print_summary(const chatterlab::Study& study) {
+  std::ostringstream out;
+  out << study.file.string() << ": valid\n";
+  out << fmt::format("  kind        {} (name \"{}\")\n", study.kind,
+                     study.document["study"].value("name", ""));
+  for (const auto& [key, value] : study.document.items()) {
+    if (key == "study" || key == "grid" || key == "plugins" || !value.is_object()) continue;
+    std::string type = value.contains("type") ? value["type"].get<std::string>() : "(settings)";
+    out << fmt::format("  {:<11} {}\n", key, type);
+  }
+  for (const auto& library : study.plugin_libraries) out << "  plugin      " << library << '\n';
+  std::string shape;
+  for (std::size_t a = 0; a < study.grid.size(); ++a) {
+    out << (a == 0 ? "  grid        " : "              ") << describe_axis(study.grid[a]) << '\n';
+    shape += (a ? " x " : "") + std::to_string(study.grid[a].values.size());
+  }
+  if (study.grid.empty()) out << "  grid        (none: a single point)\n";
+  out << fmt::format("  points      {}{}\n", study.point_count(),
+                     study.grid.size() > 1 ? " (" + shape + ", last key varies fastest)" : "");
+  std::cout << out.str();
+}
+
+struct Arguments {
+  std::string name;
+  std::filesystem::path study_file;
+  std::filesystem::path out_dir;
+  int threads = 0;
+  bool resume = false;
+  bool allow_large = false;
+  bool progress = false;
+  bool no_progress = false;
+};
+
+int run(CLI::App& app, const Arguments& args) {
+  if (app.got_subcommand("list")) {
+    if (is_root()) std::cout << chatterlab::format_plugin_list();
+    return 0;
+  }
+  if (app.got_subcommand("describe")) {
+    std::string text = chatterlab::describe_plugin(args.name);
+    if (is_root()) std::cout << text;
+    return 0;
+  }
+  chatterlab::Study study = chatterlab::load_study(args.study_file, {.allow_large = args.allow_large});
+  if (app.got_subcommand("validate")) {
+    if (is_root()) print_summary(study);
+    return 0;
+  }
+  chatterlab::RunOptions options;
+  options.out_dir = args.out_dir.empty()
+                        ? std::filesystem::path("out") / args.study_file.stem()
+                        : args.out_dir;
+  options.threads = args.threads;
+  options.resume = args.resume;
+  if (args.progress || args.no_progress) options.progress = args.progress;
+  chatterlab::RunSummary summary = chatterlab::run_study(study, options);
+  if (is_root()) {
+    std::cout << fmt::format("{} points: {} ok, {} failed", summary.points,
+                             summary.points - summary.failed, summary.failed);
+    if (summary.resumed > 0) std::cout << fmt::format(" ({} taken over from the earlier run)", summary.resumed);
+    std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
+    if (summary.failed > 0)
+      std::cout << "failed points: status column of results.csv, reasons in meta.json\n";
+  }
+  return summary.exit_code();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MpiSession mpi(argc, argv);
+
+  CLI::App app{"chatterlab: chatter and stability analysis for grinding"};
+  app.name("chatterlab");
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("chatterlab ") + CHATTERLAB_VERSION);
+
+  Arguments args;
+  app.add_subcommand("list", "List every plugin and study kind with a one-line description");
+  auto* describe = app.add_subcommand("describe", "Print the parameters of a plugin or study kind");
+  describe->add_option("NAME", args.name, "Plugin or study kind name (see `chatterlab list`)")
+      ->required();
+
+  auto add_study_arguments = [&](CLI::App* command) {
+    command->add_option("STUDY", args.study_file, "Study file (TOML), see docs/studies.md")
+        ->required();
+    command->add_flag("--allow-large", args.allow_large,
+                      fmt::format("Accept grids of more than {} points", chatterlab::max_grid_points));
+  };
+  auto* validate = app.add_subcommand("validate", "Check a study file without running it");
+  add_study_arguments(validate);
+  auto* run_command = app.add_subcommand("run", "Run a study over its grid");
+  add_study_arguments(run_command);
+  run_command->add_option("--out", args.out_dir, "Output directory (default: out/<study file stem>)");
+  run_command->add_option("--threads", args.threads, "OpenMP threads per process (0: all cores)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            return text.find_first_not_of("0123456789") == std::string::npos
+                       ? std::string()
+                       : "must be 0 (all cores) or a positive whole number, not " + text;
+          },
+          "N >= 0"));
+  run_command->add_flag("--resume", args.resume,
+                        "Complete an interrupted run, keeping the points it finished");
+  auto* progress = run_command->add_flag("--progress", args.progress,
+                                         "Show a progress bar (default: only on a terminal)");
+  run_command->add_flag("--no-progress", args.no_progress, "Never show a progress bar")
+      ->excludes(progress);
+
+  // CLI11 would report an unknown command as "a subcommand is required".
+  if (argc > 1 && argv[1][0] != '-') {
+    std::vector<std::string> commands;
+    for (const auto* command : app.get_subcommands([](const CLI::App*) { return true; }))
+      commands.push_back(command->get_name());
+    if (std::find(commands.begin(), commands.end(), argv[1]) == commands.end())
+      return report_error(fmt::format("unknown command '{}'; commands: {} (see chatterlab --help)",
+                                      argv[1], fmt::join(commands, ", ")));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {  // --help, --version: CLI11 signals them as exceptions, code 0
+      if (is_root()) app.exit(e);
+      return 0;
+    }
+    report_error(fmt::format("{} (see chatterlab --help)", e.what()));
+    return exit_bad_input;
+  }
+  try {
+    return run(app, args);
+  } catch (const chatterlab::InputError& e) {
+    return report_error(e.what());
+  } catch (const std::exception& e) {
+    // Not bad input but still no result: e.g. out of memory or a failing disk. The runner makes
+    // its errors collective; anything else may be on one rank only, whose peers would then wait
+    // forever, so print it from whichever rank has it and end all ranks.
+    std::cerr << "chatterlab: error: "
+              << (is_root() ? "" : fmt::format("(rank {}) ", chatterlab::mpi_rank())) << e.what()
+              << '\n';
+    if (chatterlab::mpi_size() > 1) chatterlab::mpi_abort(exit_bad_input);
+    return exit_bad_input;
+  }
+}

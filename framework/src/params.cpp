@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
+#include "study/messages.hpp"
 
 namespace chatterlab {
 
@@ -21,6 +22,15 @@ std::string_view to_string(ValueKind kind) {
     case ValueKind::table_list: return "list of tables";
   }
   return "?";
+}
+
+ParamSpec param_spec(std::string key, ValueKind kind, std::string unit, std::string description) {
+  ParamSpec spec;
+  spec.key = std::move(key);
+  spec.kind = kind;
+  spec.unit = std::move(unit);
+  spec.description = std::move(description);
+  return spec;
 }
 
 std::string SourceLocation::str() const {
@@ -57,15 +67,13 @@ std::vector<ParamValues> ParamValues::tables(std::string_view key) const {
 // ---------------------------------------------------------------- validation
 namespace {
 
-std::string show(const Json& v) {
-  if (v.is_number_float()) {
-    double d = v.get<double>();
-    if (std::isnan(d)) return "nan";
-    if (std::isinf(d)) return d > 0 ? "inf" : "-inf";
-    return fmt::format("{}", d);
-  }
-  std::string s = v.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
+using messages::show;
+
+// "a real number", "an integer": the kind names read as the object of "expected".
+std::string with_article(ValueKind kind) {
+  std::string_view name = to_string(kind);
+  bool vowel = name.find_first_of("aeiou") == 0;
+  return fmt::format("{} {}", vowel ? "an" : "a", name);
 }
 
 std::string limit_text(const ParamSpec& spec) {
@@ -89,7 +97,9 @@ struct Checker {
 
   double number(const Json& v, const ParamSpec& spec, const std::string& path) const {
     if (!v.is_number() || v.is_boolean())
-      fail(path, fmt::format("{} = {}: expected a {}", path, show(v), to_string(ValueKind::real)));
+      fail(path, fmt::format("{} = {}: expected {}", path, show(v),
+                             with_article(spec.kind == ValueKind::integer ? ValueKind::integer
+                                                                          : ValueKind::real)));
     double d = v.get<double>();
     if (!std::isfinite(d)) fail(path, fmt::format("{} = {}: must be finite", path, show(v)));
     bool below = spec.min_exclusive ? d <= spec.min : d < spec.min;
@@ -102,13 +112,15 @@ struct Checker {
 
   Json value(const Json& v, const ParamSpec& spec, const std::string& path) const {
     auto type_error = [&] {
-      fail(path, fmt::format("{} = {}: expected a {}", path, show(v), to_string(spec.kind)));
+      fail(path, fmt::format("{} = {}: expected {}", path, show(v), with_article(spec.kind)));
     };
     switch (spec.kind) {
       case ValueKind::real: return number(v, spec, path);
       case ValueKind::integer: {
         double d = number(v, spec, path);
-        if (!v.is_number_integer() && d != std::floor(d)) type_error();
+        if (v.is_number_integer()) return v.get<std::int64_t>();  // exact, even beyond 2^53
+        // A whole real (2.0, or a generated grid value) is accepted; 2^63 itself does not fit.
+        if (d != std::floor(d) || std::fabs(d) >= 9.2233720368547758e18) type_error();
         return static_cast<std::int64_t>(d);
       }
       case ValueKind::boolean:
@@ -119,11 +131,9 @@ struct Checker {
         if (!spec.choices.empty() &&
             std::find(spec.choices.begin(), spec.choices.end(), v.get<std::string>()) ==
                 spec.choices.end()) {
-          std::vector<std::string> sorted = spec.choices;
-          std::sort(sorted.begin(), sorted.end());
-          std::string list;
-          for (const auto& c : sorted) list += (list.empty() ? "" : ", ") + c;
-          fail(path, fmt::format("{} = {}: not one of: {}", path, show(v), list));
+          fail(path, fmt::format("{} = {}: not one of: {}{}", path, show(v),
+                                 messages::sorted_list(spec.choices),
+                                 messages::did_you_mean(v.get<std::string>(), spec.choices)));
         }
         return v;
       }
@@ -180,23 +190,25 @@ Json validate_params(const Json& table, const std::vector<ParamSpec>& specs, std
                      const SourceMap& sources) {
   Checker check{sources};
   std::string prefix = path.empty() ? std::string() : std::string(path) + ".";
+  if (!table.is_object())
+    check.fail(std::string(path), fmt::format("{} = {}: expected a table", path, show(table)));
   Json out = Json::object();
   for (const auto& [key, value] : table.items()) {
     auto it = std::find_if(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.key == key; });
     if (it == specs.end()) {
       std::vector<std::string> valid;
       for (const auto& s : specs) valid.push_back(s.key);
-      std::sort(valid.begin(), valid.end());
-      std::string list;
-      for (const auto& k : valid) list += (list.empty() ? "" : ", ") + k;
-      check.fail(prefix + key, fmt::format("unknown key '{}{}'; valid keys: {}", prefix, key,
-                                           list.empty() ? "(none)" : list));
+      check.fail(prefix + key, fmt::format("unknown key '{}{}'{}; valid keys: {}", prefix, key,
+                                           messages::did_you_mean(key, valid),
+                                           messages::sorted_list(valid)));
     }
   }
   for (const auto& spec : specs) {
     std::string key_path = prefix + spec.key;
     auto it = table.find(spec.key);
-    if (it == table.end()) {
+    // null: an optional parameter left out, as a previous validation wrote it (validating a
+    // validated table again must succeed: grid values are checked that way).
+    if (it == table.end() || it->is_null()) {
       if (spec.required())
         check.fail(std::string(path), fmt::format("missing required key '{}' ({}{})", key_path,
                                                   spec.description, unit_suffix(spec)));

@@ -4,6 +4,9 @@
 // Example: MODELS.md G1 eq 2-16 multiplied by (1 - e^{-Tg s})(1 - e^{-Tw s}) and by the modal
 // denominators. The multiplication adds known zeros (the neutral root s = 0 of the cumulative
 // removal chain); the model declares them in neutral_roots() and the solver excludes them.
+//
+// E must have real coefficients (E(conj s) = conj E(s)): roots come in conjugate pairs, so every
+// list below covers the upper half plane Im s >= 0 only and the conjugates are implied.
 #include <complex>
 #include <vector>
 
@@ -20,12 +23,18 @@ class CharacteristicFunction {
  public:
   virtual ~CharacteristicFunction() = default;
 
-  // E(s) and E'(s). Must be cheap: the solver calls it 10^4..10^5 times per grid point.
+  // E(s) and E'(s). Must be cheap: the solver calls it 10^4..10^5 times per grid point. Must not
+  // modify the object (the solver may be called from several threads on separate objects; an
+  // evaluate() that writes shared state would break determinism).
   virtual CharacteristicValue evaluate(Complex s) const = 0;
 
-  // Zeros of E(s) that are not characteristic roots (s = 0 for G1). Each listed once per
-  // multiplicity. The solver never reports them and subtracts them from contour counts.
-  virtual std::vector<Complex> neutral_roots() const { return {}; }
+  // Zeros of E(s) that are not characteristic roots (s = 0 for G1), with 0 <= Im s <=
+  // max_angular_frequency (a little beyond is fine). Each listed once per multiplicity; the
+  // conjugates (Im < 0) are implied. The solver never reports them and subtracts them from its
+  // contour counts, so each must be an exact zero of E (to rounding).
+  virtual std::vector<Complex> neutral_roots(double /*max_angular_frequency_rad_s*/) const {
+    return {};
+  }
 
   // Starting guesses for Newton covering 0 <= Im s <= max_angular_frequency (E has real
   // coefficients, so roots come in conjugate pairs and the upper half plane suffices).
@@ -35,6 +44,8 @@ class CharacteristicFunction {
                                std::vector<Complex>& guesses) const = 0;
 
   // An upper bound on Re s over all zeros of E (bounds the certificate contour on the right).
+  // Must be proven from the model's structure (e.g. a norm bound), not estimated: the
+  // certificate is only as good as this bound.
   virtual double real_part_bound() const = 0;
 
   // Characteristic frequency of the system [Hz] (highest structural natural frequency); the

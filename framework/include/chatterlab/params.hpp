@@ -46,6 +46,11 @@ struct ParamSpec {
   bool required() const { return default_value.is_null() && !optional; }
 };
 
+// A spec with its key, kind, unit and description; set limits, default etc. on the result.
+// (Designated initialisers would read better, but GCC 12 warns under -Wextra about every field
+// they leave out, and assigning string literals to the fields trips a false -Wrestrict at -O3.)
+ParamSpec param_spec(std::string key, ValueKind kind, std::string unit, std::string description);
+
 // Read access to a validated parameter table (defaults already filled in). The accessors assume
 // validation passed; a wrong key here is a programming error in the plugin (std::logic_error).
 class ParamValues {

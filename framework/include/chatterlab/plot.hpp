@@ -27,15 +27,23 @@ struct Curves {
   std::vector<Series> series;
   bool log_x = false, log_y = false;
   std::optional<double> reference_y;  // e.g. 0 = stability limit, drawn dashed
+  std::string reference_label;        // key entry of that line; empty: "y = <reference_y>"
 };
 
-// A 2-D map of z over a rectangular grid (z[iy * x.size() + ix]; NaN = failed point, left blank).
+// A 2-D map of z over a rectangular grid (z[iy * x.size() + ix]; NaN = failed point, drawn as a
+// grey "failed point" cell: blank would read as "at the boundary" in a diverging palette). Each
+// value fills the cell between the midpoints to its neighbours (in log space on log axes), so
+// non-uniform and log-spaced grids are drawn at their true positions.
 struct Heatmap {
   std::string title, x_label, y_label, z_label;
   std::vector<double> x, y, z;
   bool log_x = false, log_y = false;
   std::optional<double> contour_level;  // e.g. 0 = stability boundary, drawn as a black line
   bool diverging = false;               // palette centred on contour_level (blue stable, red not)
+  std::string contour_label;  // key entry of the contour line; empty: "<z_label> = <level>"
+  // Words at the low and high ends of the colour bar, e.g. "stable" / "chatter", so the meaning
+  // of the colours needs no caption. Empty: none.
+  std::string low_label, high_label;
 };
 
 void render(const Curves& figure, const std::filesystem::path& out_dir, const std::string& stem);

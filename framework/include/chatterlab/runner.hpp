@@ -14,6 +14,7 @@ struct RunOptions {
   int threads = 0;                      // 0: OpenMP default
   bool resume = false;                  // keep finished points of an interrupted run
   std::optional<bool> progress;         // default: a progress bar iff stderr is a terminal
+  bool plots = true;                    // false: results.csv + meta.json only (benchmarks)
 };
 
 struct RunSummary {

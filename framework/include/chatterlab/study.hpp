@@ -24,8 +24,11 @@ struct GridAxis {
   SourceLocation where;     // line of the grid key
 };
 
+// Grids with more points than this need LoadOptions::allow_large (`--allow-large`).
+inline constexpr std::size_t max_grid_points = 10'000'000;
+
 struct LoadOptions {
-  bool allow_large = false;  // permit grids over 10^7 points
+  bool allow_large = false;  // permit grids over max_grid_points points
 };
 
 struct Study {
@@ -39,7 +42,8 @@ struct Study {
   std::size_t point_count() const;  // product of axis sizes (1 without a grid)
   // Index -> per-axis value indices; the LAST axis varies fastest (row-major, "grid order").
   std::vector<std::size_t> point_indices(std::size_t point) const;
-  // The document with that point's grid values written at their paths.
+  // The document with that point's grid values written at their paths, without the [grid]
+  // table (a point is one set of values; this also keeps the copy cheap for long grids).
   Json point_document(std::size_t point) const;
 };
 

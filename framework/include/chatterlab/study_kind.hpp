@@ -1,10 +1,19 @@
 #pragma once
 // A study kind ([study] kind = "..."): what to compute at one grid point and which plots to draw.
-// Kinds register in their own registry like plugins:  CHATTERLAB_REGISTER_STUDY_KIND(StabilityMap);
+// Kinds register in their own registry like plugins, with one line in their .cpp:
+//
+//     CHATTERLAB_REGISTER_STUDY_KIND(StabilityMap);
+//
+// Convention: the class has `static PluginInfo info()` whose name is the kind name and whose
+// params/example_params describe the kind's own settings table (e.g. [stability]), so that
+// `chatterlab describe` and the conformance test treat kinds like plugins; and a default
+// constructor (a kind holds no per-study state: everything arrives in the document). A
+// constructor from `const ParamValues&` is accepted instead, and then gets an empty table.
 // The runner (grid, threads, MPI ranks, resume, results.csv, meta.json) is shared by all kinds.
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "chatterlab/params.hpp"
@@ -27,9 +36,16 @@ class StudyKind {
  public:
   virtual ~StudyKind() = default;
 
+  // The top-level tables this kind reads besides [study] and [grid] (and `plugins`), e.g.
+  // {"model", "stability"}. load_study rejects any other top-level key, listing these, and grid
+  // keys may only point into them. Default: the [model] table alone.
+  virtual std::vector<std::string> tables() const { return {"model"}; }
+
   // Validates the kind's own tables in `document` (e.g. [model] through the model registry,
   // [stability] against its specs) and fills defaults in place. `sources` locates lines for
-  // errors. Throws InputError.
+  // errors. Throws InputError. Must accept its own output unchanged (idempotent): load_study
+  // re-validates the validated document once per grid value, with that value written in, and
+  // for long grid axes does so from several threads at once (on different documents).
   virtual void validate(Json& document, const SourceMap& sources) const = 0;
 
   // Names of the numeric output columns (after the grid columns, before `status`).
@@ -48,9 +64,43 @@ class StudyKind {
   virtual bool requires_serial(const Json& /*document*/) const { return false; }
 };
 
-Registry<StudyKind>& study_kind_registry();
+Registry<StudyKind>& study_kind_registry();  // kind name "study kind"
+
+namespace detail {
+Json validate_component(const Json& document, const std::string& table,
+                        const std::string& registry_kind, const std::vector<const PluginInfo*>& plugins,
+                        const SourceMap& sources);
+}
+
+// For StudyKind::validate: checks the component table `[table] type = "<plugin>" + parameters`
+// (e.g. [model] against model_registry()) and returns it validated: `type` first, then every
+// declared parameter with defaults filled in. Throws InputError when the table is missing or not a
+// table, `type` is missing or names no registered plugin (listing the valid names), or a
+// parameter is wrong (see validate_params).
+template <class Product>
+Json validate_component(const Json& document, const std::string& table,
+                        const Registry<Product>& registry, const SourceMap& sources) {
+  std::vector<const PluginInfo*> plugins;
+  for (const auto* entry : registry.sorted()) plugins.push_back(&entry->info);
+  return detail::validate_component(document, table, registry.kind(), plugins, sources);
+}
+
+// Adds study kind T (see the convention above) to a registry.
+template <class T>
+void add_study_kind(Registry<StudyKind>& registry, std::string origin = "built-in") {
+  if constexpr (std::is_default_constructible_v<T>) {
+    registry.add(T::info(), [](const ParamValues&) -> std::unique_ptr<StudyKind> {
+      return std::make_unique<T>();
+    }, std::move(origin));
+  } else {
+    add_plugin<T>(registry, std::move(origin));
+  }
+}
 
 }  // namespace chatterlab
 
-#define CHATTERLAB_REGISTER_STUDY_KIND(Type) \
-  CHATTERLAB_DETAIL_REGISTER(::chatterlab::study_kind_registry, Type)
+#define CHATTERLAB_REGISTER_STUDY_KIND(Type)                                              \
+  namespace {                                                                              \
+  [[maybe_unused]] const bool CHATTERLAB_DETAIL_CAT(chatterlab_registered_kind_, __LINE__) = \
+      (::chatterlab::add_study_kind<Type>(::chatterlab::study_kind_registry()), true);    \
+  }

@@ -14,7 +14,8 @@ std::string join_names(const std::vector<std::string>& names);
 
 template <class Product>
 void Registry<Product>::add(PluginInfo info, Factory create, std::string origin) {
-  if (info.name.empty()) throw std::logic_error("chatterlab: a " + kind_ + " plugin has no name");
+  if (info.name.empty())
+    throw std::logic_error("chatterlab: a plugin in the " + kind_ + " registry has no name");
   if (auto it = entries_.find(info.name); it != entries_.end()) {
     throw std::logic_error("chatterlab: duplicate " + kind_ + " plugin name '" + info.name +
                            "' (registered by " + it->second.origin + " and by " + origin + ")");

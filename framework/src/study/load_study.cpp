@@ -1,0 +1,170 @@
+// load_study: the generic part of reading a study (plugins, [study], top-level keys, [grid]);
+// the kind validates its own tables.
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/plugin_api.hpp"
+#include "chatterlab/study.hpp"
+#include "chatterlab/study_kind.hpp"
+#include "study/grid.hpp"
+#include "study/messages.hpp"
+#include "study/toml_reader.hpp"
+
+namespace chatterlab {
+namespace {
+
+// Keys every study may have, whatever its kind.
+const std::vector<std::string>& generic_keys() {
+  static const std::vector<std::string> keys = {"plugins", "study", "grid"};
+  return keys;
+}
+
+std::vector<std::string> study_kind_names() {
+  std::vector<std::string> names;
+  for (const auto* entry : study_kind_registry().sorted()) names.push_back(entry->info.name);
+  return names;
+}
+
+std::vector<ParamSpec> study_table_specs(const std::filesystem::path& file) {
+  std::vector<ParamSpec> specs = {
+      param_spec("kind", ValueKind::string, "1",
+                 "what the study computes, one of: " + messages::sorted_list(study_kind_names())),
+      param_spec("name", ValueKind::string, "1",
+                 "name shown in plots and meta.json (default: the file name without .toml)"),
+      param_spec("description", ValueKind::string, "1", "free text, copied to meta.json")};
+  specs[1].default_value = file.stem().string();
+  specs[2].default_value = std::string();
+  return specs;
+}
+
+// `plugins = [...]`: resolves each path against the study file's directory and loads it, before
+// any table is validated, so that the libraries' plugins are known by then.
+std::vector<std::string> load_plugins(Json& document, const std::filesystem::path& file,
+                                      const SourceMap& sources) {
+  auto it = document.find("plugins");
+  if (it == document.end()) return {};
+  auto fail = [&](const std::string& path, const std::string& what) {
+    throw InputError(fmt::format("{}: {}", sources.locate(path).str(), what));
+  };
+  if (!it->is_array())
+    fail("plugins", fmt::format("plugins = {}: expected a list of shared library paths, e.g. "
+                                "plugins = [\"lib/libmy_model.so\"]", messages::show(*it)));
+  std::filesystem::path base = std::filesystem::absolute(file).parent_path();
+  std::vector<std::string> resolved;
+  for (std::size_t i = 0; i < it->size(); ++i) {
+    const Json& entry = (*it)[i];
+    std::string path = fmt::format("plugins.{}", i);
+    if (!entry.is_string() || entry.get<std::string>().empty())
+      fail(path, fmt::format("{} = {}: expected the path of a shared library (a non-empty string)",
+                             path, messages::show(entry)));
+    std::filesystem::path library = entry.get<std::string>();
+    if (library.is_relative()) library = base / library;
+    std::string absolute = library.lexically_normal().string();
+    try {
+      load_plugin_library(absolute);
+    } catch (const InputError& e) {
+      fail(path, fmt::format("{} = {} ({}): {}", path, messages::show(entry), absolute, e.what()));
+    }
+    resolved.push_back(absolute);
+  }
+  *it = resolved;
+  return resolved;
+}
+
+// [study]: validated in place; returns the kind.
+std::string validate_study_table(Json& document, const std::filesystem::path& file,
+                                 const SourceMap& sources) {
+  Json& table = document["study"];  // absent: validated as empty, so "missing key study.kind"
+  if (table.is_null()) table = Json::object();
+  table = validate_params(table, study_table_specs(file), "study", sources);
+  std::string kind = table["kind"].get<std::string>();
+  try {
+    study_kind_registry().at(kind);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: study.kind = \"{}\": {}{}", sources.locate("study.kind").str(),
+                                 kind, e.what(), messages::did_you_mean(kind, study_kind_names())));
+  }
+  return kind;
+}
+
+// Top-level keys: the generic ones and the kind's tables, nothing else.
+void check_top_level(const Json& document, const StudyKind& kind, const SourceMap& sources) {
+  std::vector<std::string> tables = kind.tables();
+  std::vector<std::string> valid = generic_keys();
+  valid.insert(valid.end(), tables.begin(), tables.end());
+  for (const auto& [key, value] : document.items()) {
+    std::string where = sources.locate(key).str();
+    if (std::find(valid.begin(), valid.end(), key) == valid.end())
+      throw InputError(fmt::format("{}: unknown top-level key '{}'{}; valid: {}", where, key,
+                                   messages::did_you_mean(key, valid), messages::sorted_list(valid)));
+    bool is_table = key != "plugins";
+    if (is_table && !value.is_object())
+      throw InputError(fmt::format("{}: {} = {}: expected a table [{}]", where, key,
+                                   messages::show(value), key));
+  }
+}
+
+Json without_grid(const Json& document) {
+  Json out = Json::object();
+  for (const auto& [key, value] : document.items())
+    if (key != "grid") out[key] = value;
+  return out;
+}
+
+}  // namespace
+
+Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
+  TomlDocument toml = read_toml_study(file);
+  Json& document = toml.document;
+  const SourceMap& sources = *toml.sources;
+
+  Study study;
+  study.file = file;
+  study.sources = toml.sources;
+  study.plugin_libraries = load_plugins(document, file, sources);
+  study.kind = validate_study_table(document, file, sources);
+  auto kind = study_kind_registry().at(study.kind).create(ParamValues());
+  check_top_level(document, *kind, sources);
+
+  Json grid = document.contains("grid") ? document["grid"] : Json::object();
+  Json validated = without_grid(document);
+  kind->validate(validated, sources);
+  study.grid = build_grid(grid, validated, *kind, sources, options);
+
+  // The resolved study in the order the file was written; [grid] as written (flat).
+  study.document = Json::object();
+  for (const auto& [key, value] : document.items())
+    study.document[key] = key == "grid" || !validated.contains(key) ? value : validated[key];
+  for (const auto& [key, value] : validated.items())  // tables the kind added (defaults)
+    if (!study.document.contains(key)) study.document[key] = value;
+  return study;
+}
+
+std::size_t Study::point_count() const {
+  std::vector<std::size_t> sizes;
+  for (const auto& axis : grid) sizes.push_back(axis.values.size());
+  return grid_point_count(sizes).value();  // load_study rejected grids that overflow
+}
+
+std::vector<std::size_t> Study::point_indices(std::size_t point) const {
+  if (point >= point_count())
+    throw std::out_of_range(fmt::format("grid point {} of {}", point, point_count()));
+  std::vector<std::size_t> indices(grid.size());
+  for (std::size_t a = grid.size(); a-- > 0;) {
+    indices[a] = point % grid[a].values.size();
+    point /= grid[a].values.size();
+  }
+  return indices;
+}
+
+Json Study::point_document(std::size_t point) const {
+  std::vector<std::size_t> indices = point_indices(point);
+  Json out = without_grid(document);
+  for (std::size_t a = 0; a < grid.size(); ++a) set_at_path(out, grid[a].path, grid[a].values[indices[a]]);
+  return out;
+}
+
+}  // namespace chatterlab

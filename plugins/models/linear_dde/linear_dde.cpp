@@ -1,0 +1,391 @@
+#include "models/linear_dde/linear_dde.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "chatterlab/errors.hpp"
+#include "models/model_params.hpp"
+
+namespace chatterlab {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// Guesses along the imaginary axis, spaced by this fraction of 2 pi / tau_max: a retarded chain
+// has one root per 2 pi / tau of frequency, so each root has a guess within a quarter spacing.
+constexpr double kSweepFraction = 0.5;
+// Fixed-point steps on the chain equation s = (2 pi j m - Log z(s)) / tau before Newton.
+constexpr int kChainFixedPointSteps = 1;
+
+// Storage for `size` complex numbers: on the stack up to N (no allocation per evaluation for small
+// systems), else on the heap.
+template <std::size_t N>
+class Scratch {
+ public:
+  explicit Scratch(std::size_t size) {
+    if (size > N) heap_.resize(size);
+  }
+  Complex* data() { return heap_.empty() ? stack_.data() : heap_.data(); }
+
+ private:
+  std::array<Complex, N> stack_;
+  std::vector<Complex> heap_;
+};
+
+// log z without clog's extra-precision path (z is finite and nonzero here).
+Complex logarithm(Complex z) { return {0.5 * std::log(std::norm(z)), std::arg(z)}; }
+
+// Gaussian elimination with partial pivoting of a (row-major n x n), in place: a becomes U above
+// the diagonal; the same row operations are applied to `rhs` (n x n, may be null), which becomes
+// L^{-1} P rhs. Returns det(a), or 0 when a pivot is exactly 0 (then a is left half reduced).
+Complex eliminate(Complex* a, Complex* rhs, std::size_t n) {
+  Complex det = 1.0;
+  for (std::size_t col = 0; col < n; ++col) {
+    std::size_t pivot = col;
+    for (std::size_t r = col + 1; r < n; ++r)
+      if (std::norm(a[r * n + col]) > std::norm(a[pivot * n + col])) pivot = r;
+    if (a[pivot * n + col] == Complex(0.0)) return 0.0;
+    if (pivot != col) {
+      std::swap_ranges(a + col * n, a + col * n + n, a + pivot * n);
+      if (rhs) std::swap_ranges(rhs + col * n, rhs + col * n + n, rhs + pivot * n);
+      det = -det;
+    }
+    const Complex p = a[col * n + col];
+    det *= p;
+    for (std::size_t r = col + 1; r < n; ++r) {
+      const Complex f = a[r * n + col] / p;
+      for (std::size_t c = col + 1; c < n; ++c) a[r * n + c] -= f * a[col * n + c];
+      if (rhs)
+        for (std::size_t c = 0; c < n; ++c) rhs[r * n + c] -= f * rhs[col * n + c];
+    }
+  }
+  return det;
+}
+
+Complex determinant(Complex* a, std::size_t n) { return eliminate(a, nullptr, n); }
+
+// det(M) and d det(M) = det(M) tr(M^{-1} dM) (Jacobi) for n >= 3. m, dm row-major, destroyed;
+// `scratch` holds 3 n^2 entries.
+CharacteristicValue determinant_and_derivative(Complex* m, Complex* dm, Complex* scratch,
+                                               std::size_t n) {
+  const std::size_t nn = n * n;
+  Complex* m_original = scratch;        // kept for the singular fallback
+  Complex* dm_original = scratch + nn;
+  Complex* work = scratch + 2 * nn;
+  std::copy(m, m + nn, m_original);
+  std::copy(dm, dm + nn, dm_original);
+  const Complex det = eliminate(m, dm, n);
+  const bool singular = det == Complex(0.0);
+  if (!singular) {
+    // Back substitution U X = L^{-1} P dM column by column; tr X = tr(M^{-1} dM).
+    Complex trace = 0.0;
+    for (std::size_t c = 0; c < n; ++c) {
+      for (std::size_t r = n; r-- > 0;) {
+        Complex v = dm[r * n + c];
+        for (std::size_t k = r + 1; k < n; ++k) v -= m[r * n + k] * dm[k * n + c];
+        dm[r * n + c] = v / m[r * n + r];
+      }
+      trace += dm[c * n + c];
+    }
+    return {det, det * trace};
+  }
+  // Exactly singular M (s is an exact root): d det = sum_j det(M with column j taken from dM).
+  Complex derivative = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    std::copy(m_original, m_original + nn, work);
+    for (std::size_t r = 0; r < n; ++r) work[r * n + j] = dm_original[r * n + j];
+    derivative += determinant(work, n);
+  }
+  return {0.0, derivative};
+}
+
+double induced_norm(const std::vector<double>& a, std::size_t n, bool by_rows) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < n; ++j) sum += std::abs(by_rows ? a[i * n + j] : a[j * n + i]);
+    worst = std::max(worst, sum);
+  }
+  return worst;
+}
+
+std::vector<double> row_major(const std::vector<std::vector<double>>& rows) {
+  std::vector<double> out;
+  for (const auto& row : rows) out.insert(out.end(), row.begin(), row.end());
+  return out;
+}
+
+void append_eigenvalues(const std::vector<double>& a, std::size_t n, std::vector<Complex>& out) {
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a[i * n + j];
+  Eigen::EigenSolver<Eigen::MatrixXd> solver(m, false);
+  if (solver.info() != Eigen::Success) return;
+  for (const auto& lambda : solver.eigenvalues())
+    if (lambda.imag() >= 0.0) out.push_back(lambda);
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ characteristic function
+
+LinearDdeCharacteristic::LinearDdeCharacteristic(const LinearDdeParameters& p)
+    : n_(p.a0.size()), a0_(row_major(p.a0)) {
+  std::vector<double> sum = a0_;
+  double norm_rows = induced_norm(a0_, n_, true), norm_cols = induced_norm(a0_, n_, false);
+  for (const DelayedTerm& term : p.delayed) {
+    delays_.push_back(term.delay_s);
+    matrices_.push_back(row_major(term.matrix));
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += matrices_.back()[i];
+    norm_rows += induced_norm(matrices_.back(), n_, true);
+    norm_cols += induced_norm(matrices_.back(), n_, false);
+  }
+  norm_bound_ = std::min(norm_rows, norm_cols);
+  for (std::size_t j = 0; j <= n_; ++j)
+    unit_roots_.push_back(std::polar(1.0, kTwoPi * static_cast<double>(j) / static_cast<double>(n_ + 1)));
+  if (!delays_.empty())
+    longest_ = static_cast<std::size_t>(std::max_element(delays_.begin(), delays_.end()) - delays_.begin());
+  // s = eigenvalue of A0 is exact for vanishing delayed terms; of A0 + sum A_k for vanishing
+  // delays: the two ends between which the low-frequency roots move.
+  append_eigenvalues(a0_, n_, eigenvalues_);
+  if (!delays_.empty()) append_eigenvalues(sum, n_, eigenvalues_);
+}
+
+void LinearDdeCharacteristic::fill(Complex s, Complex* m, Complex* dm, std::size_t skip) const {
+  const std::size_t nn = n_ * n_;
+  for (std::size_t i = 0; i < nn; ++i) {
+    m[i] = -a0_[i];
+    if (dm) dm[i] = 0.0;
+  }
+  for (std::size_t i = 0; i < n_; ++i) {
+    m[i * n_ + i] += s;
+    if (dm) dm[i * n_ + i] = 1.0;
+  }
+  for (std::size_t k = 0; k < delays_.size(); ++k) {
+    if (k == skip) continue;
+    const double tau = delays_[k];
+    const double magnitude = std::exp(-tau * s.real());
+    const Complex z(magnitude * std::cos(tau * s.imag()), -magnitude * std::sin(tau * s.imag()));
+    const Complex tau_z = tau * z;
+    const std::vector<double>& a = matrices_[k];
+    for (std::size_t i = 0; i < nn; ++i) {
+      if (a[i] == 0.0) continue;
+      m[i] -= a[i] * z;
+      if (dm) dm[i] += a[i] * tau_z;
+    }
+  }
+}
+
+CharacteristicValue LinearDdeCharacteristic::evaluate(Complex s) const {
+  // M = sI - A0 - sum A_k z_k and M' = I + sum tau_k A_k z_k with z_k = e^{-tau_k s}; small
+  // systems live on the stack (no allocation per evaluation).
+  const std::size_t nn = n_ * n_;
+  Scratch<5 * 36> storage(5 * nn);  // M, M' and the 3 n^2 scratch of the general path
+  Complex* m = storage.data();
+  Complex* dm = m + nn;
+  fill(s, m, dm, delays_.size());
+  switch (n_) {
+    case 1: return {m[0], dm[0]};
+    case 2: return {m[0] * m[3] - m[1] * m[2], dm[0] * m[3] + m[0] * dm[3] - dm[1] * m[2] - m[1] * dm[2]};
+    default: return determinant_and_derivative(m, dm, m + 2 * nn, n_);
+  }
+}
+
+void LinearDdeCharacteristic::chain_factors(Complex s, std::vector<Complex>& roots) const {
+  // det(M0 - A z), M0 = sI - A0 - (the other delayed terms at s), A = the longest delay's matrix,
+  // is a polynomial of degree <= n in z; its roots are the chains' values of z = e^{-tau s}.
+  roots.clear();
+  const std::size_t nn = n_ * n_, points = n_ + 1;
+  Scratch<36 + 8> storage(nn + points);
+  Complex* base = storage.data();
+  Complex* coefficients = base + nn;
+  fill(s, base, nullptr, longest_);
+  const std::vector<double>& a = matrices_[longest_];
+  if (n_ == 1) {
+    coefficients[0] = base[0];
+    coefficients[1] = -a[0];
+  } else if (n_ == 2) {
+    // (m00 - a00 z)(m11 - a11 z) - (m01 - a01 z)(m10 - a10 z), expanded.
+    coefficients[0] = base[0] * base[3] - base[1] * base[2];
+    coefficients[1] = -(base[0] * a[3] + a[0] * base[3]) + (base[1] * a[2] + a[1] * base[2]);
+    coefficients[2] = a[0] * a[3] - a[1] * a[2];
+  } else {
+    // Values at the n + 1 roots of unity, then the inverse discrete Fourier transform (exact for a
+    // polynomial of degree <= n).
+    std::vector<Complex> work(nn), values(points);
+    for (std::size_t j = 0; j < points; ++j) {
+      for (std::size_t i = 0; i < nn; ++i) work[i] = base[i] - a[i] * unit_roots_[j];
+      values[j] = determinant(work.data(), n_);
+    }
+    for (std::size_t k = 0; k < points; ++k) {
+      Complex c = 0.0;
+      for (std::size_t j = 0; j < points; ++j) c += values[j] * std::conj(unit_roots_[(j * k) % points]);
+      coefficients[k] = c / static_cast<double>(points);
+    }
+  }
+  // (Squared magnitudes throughout: std::abs on complex numbers is glibc's slow hypot.)
+  double largest = 0.0;
+  for (std::size_t k = 0; k < points; ++k) largest = std::max(largest, std::norm(coefficients[k]));
+  // Degree = how far the delayed coupling reaches (rank of A for generic M0); rounding leaves
+  // tiny top coefficients.
+  std::size_t degree = points - 1;
+  while (degree > 0 && std::norm(coefficients[degree]) <= 1e-24 * largest) --degree;
+  if (degree == 1) {
+    roots.push_back(-coefficients[0] / coefficients[1]);
+  } else if (degree == 2) {
+    const Complex b = coefficients[1], disc = std::sqrt(b * b - 4.0 * coefficients[2] * coefficients[0]);
+    const Complex q = -0.5 * (b + ((std::conj(b) * disc).real() >= 0.0 ? disc : -disc));
+    if (q != Complex(0.0)) roots = {q / coefficients[2], coefficients[0] / q};
+  } else if (degree > 2) {
+    const auto d = static_cast<Eigen::Index>(degree);
+    Eigen::MatrixXcd companion = Eigen::MatrixXcd::Zero(d, d);
+    for (Eigen::Index i = 0; i < d; ++i) {
+      companion(0, i) = -coefficients[degree - 1 - static_cast<std::size_t>(i)] / coefficients[degree];
+      if (i + 1 < d) companion(i + 1, i) = 1.0;
+    }
+    Eigen::ComplexEigenSolver<Eigen::MatrixXcd> solver(companion, false);
+    if (solver.info() == Eigen::Success)
+      for (const auto& z : solver.eigenvalues()) roots.push_back(z);
+  }
+  std::erase_if(roots, [](Complex z) { return !(std::norm(z) > 0.0) || !std::isfinite(std::norm(z)); });
+}
+
+void LinearDdeCharacteristic::initial_guesses(double max_angular_frequency,
+                                              std::vector<Complex>& guesses) const {
+  guesses.insert(guesses.end(), eigenvalues_.begin(), eigenvalues_.end());
+  if (delays_.empty()) return;  // an ODE: the eigenvalues are the roots
+  // Retarded chains of the longest delay tau: a root satisfies z = e^{-tau s} with z a root of
+  // det(M0(s) - A z) (chain_factors), i.e. s = (2 pi j m - Log z(s)) / tau. For large tau the
+  // right side varies slowly with s, so a fixed-point step from the lattice point 2 pi j m / tau
+  // land next to the root of chain m; Newton on E finishes. One guess per root of the band.
+  const double tau = delays_[longest_];
+  const long lattice_points = static_cast<long>(max_angular_frequency * tau / kTwoPi) + 2;
+  bool any_chain = false;
+  std::vector<Complex> start_factors, factors;
+  for (long m = 0; m < lattice_points; ++m) {
+    const Complex lattice(0.0, kTwoPi * static_cast<double>(m));
+    chain_factors(lattice / tau, start_factors);
+    for (Complex z : start_factors) {
+      Complex s = (lattice - logarithm(z)) / tau;
+      for (int step = 0; step < kChainFixedPointSteps; ++step) {
+        chain_factors(s, factors);
+        if (factors.empty()) break;
+        // Follow the same chain: the factor nearest the previous one (relative distance).
+        z = *std::min_element(factors.begin(), factors.end(), [&](Complex p, Complex q) {
+          return std::norm(p / z - 1.0) < std::norm(q / z - 1.0);
+        });
+        s = (lattice - logarithm(z)) / tau;
+      }
+      if (std::isfinite(s.real()) && std::isfinite(s.imag())) guesses.push_back(s);
+      any_chain = true;
+    }
+  }
+  if (any_chain) return;
+  // No delayed coupling in the longest delay's matrix (all zero): sweep the axis instead.
+  const double spacing = kSweepFraction * kTwoPi / tau;
+  for (double y = 0.0; y <= max_angular_frequency + spacing; y += spacing) guesses.emplace_back(0.0, y);
+}
+
+double LinearDdeCharacteristic::real_part_bound() const {
+  // A zero with Re s >= 0 has s x = (A0 + sum A_k e^{-tau_k s}) x for some x != 0 and
+  // |e^{-tau_k s}| <= 1, so |s| <= ||A0|| + sum ||A_k|| in any induced norm.
+  return 1.01 * norm_bound_ + 1e-9;
+}
+
+double LinearDdeCharacteristic::natural_frequency_scale_hz() const {
+  double scale = 0.0;
+  for (Complex lambda : eigenvalues_) scale = std::max(scale, std::abs(lambda));
+  if (scale == 0.0) scale = norm_bound_;
+  if (scale == 0.0) scale = delays_.empty() ? 1.0 : 1.0 / *std::max_element(delays_.begin(), delays_.end());
+  return scale / kTwoPi;
+}
+
+// ------------------------------------------------------------------ model plugin
+
+namespace {
+
+std::string shape(const std::vector<std::vector<double>>& m) {
+  if (m.empty()) return "empty";
+  return fmt::format("{}x{}", m.size(), m.front().size());
+}
+
+bool is_square_of(const std::vector<std::vector<double>>& m, std::size_t n) {
+  if (m.size() != n) return false;
+  return std::all_of(m.begin(), m.end(), [n](const std::vector<double>& row) { return row.size() == n; });
+}
+
+// The parameter validator checks types, limits and that each matrix is rectangular; sizes that
+// must agree across keys are this model's to check. Paths are as a study writes them ([model]).
+void check_sizes(const LinearDdeParameters& p) {
+  const std::size_t n = p.a0.size();
+  if (n == 0 || !is_square_of(p.a0, n))
+    throw InputError(fmt::format("model.a0 is {}: the state matrix A0 must be square (n x n)",
+                                 shape(p.a0)));
+  for (std::size_t k = 0; k < p.delayed.size(); ++k) {
+    const DelayedTerm& term = p.delayed[k];
+    if (!is_square_of(term.matrix, n))
+      throw InputError(fmt::format(
+          "model.delayed.{}.matrix is {} but model.a0 is {}x{}: every delayed matrix must be "
+          "square with the size of a0", k, shape(term.matrix), n, n));
+    if (!(term.delay_s > 0.0) || !std::isfinite(term.delay_s))
+      throw InputError(fmt::format("model.delayed.{}.delay_s = {}: must be finite and > 0", k,
+                                   term.delay_s));
+  }
+}
+
+LinearDdeParameters read_parameters(const ParamValues& v) {
+  LinearDdeParameters p;
+  p.a0 = v.matrix("a0");
+  if (v.has("delayed"))
+    for (const ParamValues& term : v.tables("delayed"))
+      p.delayed.push_back({term.real("delay_s"), term.matrix("matrix")});
+  return p;
+}
+
+}  // namespace
+
+LinearDde::LinearDde(const ParamValues& values) : LinearDde(read_parameters(values)) {}
+
+LinearDde::LinearDde(LinearDdeParameters parameters) : parameters_(std::move(parameters)) {
+  check_sizes(parameters_);
+}
+
+PluginInfo LinearDde::info() {
+    ParamSpec delay = model_params::positive("delay_s", "s", "delay tau_k");
+  ParamSpec matrix = param_spec("matrix", ValueKind::real_matrix, "1/s",
+                               "delayed matrix A_k (n x n, the size of a0)");
+  matrix.min_items = 1;
+  ParamSpec delayed = param_spec("delayed", ValueKind::table_list, "",
+                                "delayed terms A_k x(t - tau_k); empty: an ODE");
+  delayed.default_value = Json::array();
+  delayed.fields = {delay, matrix};
+  ParamSpec a0 = param_spec("a0", ValueKind::real_matrix, "1/s",
+                           "state matrix A0 (n x n) of x' = A0 x + sum_k A_k x(t - tau_k)");
+  a0.min_items = 1;
+  return PluginInfo{
+      .name = "linear_dde",
+      .description = "Any linear delay system x' = A0 x + sum_k A_k x(t - tau_k), given as matrices",
+      .params = {a0, delayed},
+      .thread_safety = ThreadSafety::shareable,  // immutable after construction
+      .models_md_ids = "general linear DDE (solver testbed for G1)",
+      // x'' + 2 zeta x' + x = -K (x - x(t - tau)), zeta = 0.05, K = 0.3, tau = 10: the tests'
+      // known-answer case (rightmost root near 0.03856 + 1.1222i).
+      .example_params = Json::parse(R"({
+          "a0": [[0.0, 1.0], [-1.3, -0.1]],
+          "delayed": [ { "delay_s": 10.0, "matrix": [[0.0, 0.0], [0.3, 0.0]] } ] })"),
+  };
+}
+
+std::unique_ptr<CharacteristicFunction> LinearDde::characteristic() const {
+  return std::make_unique<LinearDdeCharacteristic>(parameters_);
+}
+
+CHATTERLAB_REGISTER_MODEL(LinearDde);
+
+}  // namespace chatterlab

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# `mpirun -np 2 chatterlab run` writes a results.csv byte-identical to a single-process run (and
+# exits the same way). Usage: mpi_equivalence.sh CHATTERLAB MPIEXEC WORK_DIR
+source "$(dirname "$0")/lib.sh"
+bin=$1 mpiexec=$2 work=$3
+rm -rf "$work" && mkdir -p "$work"
+
+for study in plunge_2d dde_2d budget_failure; do
+  file=$CLI_TESTS_DIR/studies/$study.toml
+  want=0
+  [ "$study" = budget_failure ] && want=1
+  expect_exit "$want" "$work/$study.single" "$bin" run "$file" --out "$work/$study.single" --threads 2
+  expect_exit "$want" "$work/$study.mpi" "$mpiexec" --oversubscribe -np 2 "$bin" run "$file" \
+    --out "$work/$study.mpi" --threads 1
+  cmp "$work/$study.single/results.csv" "$work/$study.mpi/results.csv" ||
+    fail "$study: results.csv differs between 1 process and 2 MPI ranks"
+  # Both ranks really took part (an MPI that silently failed to start would run two
+  # independent single processes into the same directory).
+  [ "$(json_number "$work/$study.mpi/meta.json" ranks)" = 2 ] || fail "$study: meta.json does not report 2 ranks"
+  [ -s "$work/$study.mpi/journal/points-1-1.jsonl" ] || fail "$study: rank 1 wrote no journal"
+  points=$(json_number "$work/$study.mpi/meta.json" points)
+  [ "$(json_number "$work/$study.mpi/meta.json" points_computed)" = "$points" ] ||
+    fail "$study: not every point computed exactly once"
+  # Only rank 0 prints the summary.
+  [ "$(grep -c "^[0-9]* points: " "$work/$study.mpi.out")" = 1 ] || fail "$study: summary printed $(grep -c "^[0-9]* points: " "$work/$study.mpi.out") times"
+done
+finish
