@@ -19,6 +19,7 @@
 #include <fmt/ranges.h>
 
 #include "chatterlab/catalog.hpp"
+#include "chatterlab/plugin_api.hpp"
 #include "chatterlab/detail/mpi_env.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/runner.hpp"
@@ -97,9 +98,13 @@ struct Arguments {
   bool allow_large = false;
   bool progress = false;
   bool no_progress = false;
+  std::vector<std::string> plugin_libraries;  // list/describe: out-of-tree libraries to include
 };
 
 int run(CLI::App& app, const Arguments& args) {
+  // A study names its libraries itself; list and describe read no study, so they take --plugin.
+  for (const auto& library : args.plugin_libraries)
+    chatterlab::load_plugin_library(std::filesystem::absolute(library).string());
   if (app.got_subcommand("list")) {
     if (is_root()) std::cout << chatterlab::format_plugin_list();
     return 0;
@@ -144,10 +149,13 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("chatterlab ") + CHATTERLAB_VERSION);
 
   Arguments args;
-  app.add_subcommand("list", "List every plugin and study kind with a one-line description");
+  auto* list = app.add_subcommand("list", "List every plugin and study kind with a one-line description");
   auto* describe = app.add_subcommand("describe", "Print the parameters of a plugin or study kind");
   describe->add_option("NAME", args.name, "Plugin or study kind name (see `chatterlab list`)")
       ->required();
+  for (auto* command : {list, describe})
+    command->add_option("--plugin", args.plugin_libraries,
+                        "Also load this out-of-tree plugin library (repeatable)");
 
   auto add_study_arguments = [&](CLI::App* command) {
     command->add_option("STUDY", args.study_file, "Study file (TOML), see docs/studies.md")
