@@ -39,20 +39,24 @@ constexpr std::string_view kTitleFont = ",16";
 // the near-white of the boundary.
 constexpr std::string_view kFailedGrey = "#969696";
 
-// A gnuplot single-quoted string: no escapes are interpreted, a quote is written twice. Newlines
-// would end the command, so they become spaces. Terminals run `noenhanced`, so '_' and '^' in
-// labels (column names like growth_rate_per_s) print literally.
+// A gnuplot double-quoted string. Not single-quoted: gnuplot 5.4 mis-parses the runs of doubled
+// quotes that a title like "x'' + x = ..." becomes. Inside double quotes a backslash starts an
+// escape, so backslashes and double quotes are escaped. Newlines would end the command, so they
+// become spaces. Terminals run `noenhanced`, so '_' and '^' in labels (column names like
+// growth_rate_per_s) print literally.
 std::string gp_string(std::string_view text) {
-  std::string out = "'";
+  std::string out = "\"";
   for (char c : text) {
-    if (c == '\'')
-      out += "''";
-    else if (c == '\n' || c == '\r')
-      out += ' ';
-    else
+    if (c == '"' || c == '\\') {
+      out += '\\';
       out += c;
+    } else if (c == '\n' || c == '\r') {
+      out += ' ';
+    } else {
+      out += c;
+    }
   }
-  return out + "'";
+  return out + "\"";
 }
 
 // Shortest round-trip text of a number. gnuplot reads "NaN" as an undefined value: a curve is

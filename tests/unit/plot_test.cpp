@@ -105,8 +105,8 @@ TEST(Plot, HeatmapWritesPngSvgScriptAndData) {
   // The contour is drawn at the requested level and the palette is white exactly there.
   EXPECT_NE(gp.find("set cntrparam levels discrete 0\n"), std::string::npos) << gp;
   EXPECT_NE(gp.find("0 '#f7f7f7'"), std::string::npos) << gp;
-  // The quote in the title is doubled inside gnuplot's single-quoted string.
-  EXPECT_NE(gp.find("'Plunge grinding stability map (operator''s test)'"), std::string::npos);
+  // The title goes into a double-quoted gnuplot string; a single quote needs no escaping there.
+  EXPECT_NE(gp.find("\"Plunge grinding stability map (operator's test)\""), std::string::npos);
   std::string dat = read_all(dir / "stability_map.dat");
   EXPECT_NE(dat.find(" NaN "), std::string::npos);
 }
@@ -244,6 +244,20 @@ TEST(Plot, LogCurvesDropAReferenceLineTheAxisCannotShow) {
   // Four decades: gnuplot's own power-of-ten ticks, printed plainly.
   EXPECT_NE(read_all(dir / "log.gp").find("set logscale y\nset format y '%g'\n"),
             std::string::npos);
+}
+
+TEST(Plot, TitlesWithQuotesAndBackslashesRender) {
+  // A study name quoting a DDE ("x'' + 2 zeta x' = ...") once made gnuplot fail on the run of
+  // doubled single quotes; backslashes and double quotes must not start escapes either.
+  fs::path dir = output_dir("quoted_title");
+  Curves curves;
+  curves.title = "x'' + 2 zeta x' + x = -K (x - x(t - tau)) \"DDE-BIFTOOL\" C:\\runs";
+  curves.x_label = "delay tau";
+  curves.y_label = "Re s";
+  curves.series.push_back(series("rightmost root", {1, 2, 3}, {0.1, -0.2, 0.05}));
+  render(curves, dir, "quoted");
+  expect_png(dir / "quoted.png", 10000);
+  EXPECT_NE(read_all(dir / "quoted.svg").find("x'' + 2 zeta x'"), std::string::npos);
 }
 
 TEST(Plot, BadFiguresAreRejectedWithTheReason) {

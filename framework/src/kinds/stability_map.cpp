@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -214,6 +215,14 @@ void plot_maps(const Study& study, const ResultTable& results, std::size_t slow_
   growth.contour_level = 0.0;
   growth.contour_label = "stability boundary (Re s = 0)";
   growth.diverging = true;
+  // The palette stretches each side of 0 over its own range, but the colour bar is linear: when
+  // the stable side is tiny next to the chatter side (roots of a regeneration chain decaying
+  // slowly) its ticks vanish, so the colour-bar label states the most stable value.
+  double most_stable = 0.0;
+  for (double z : growth.z)
+    if (std::isfinite(z)) most_stable = std::min(most_stable, z);
+  if (most_stable < 0.0)
+    growth.z_label = fmt::format("growth rate Re s [1/s]  (most stable: {:.3g})", most_stable);
   growth.low_label = "stable";
   growth.high_label = "chatter";
   figures.render(growth, out_dir, "growth_rate_map");
