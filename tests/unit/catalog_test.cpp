@@ -70,7 +70,7 @@ class TwoTableKind final : public StudyKind {
   std::vector<std::string> tables() const override { return {"model", "first", "second"}; }
   void validate(Json&, const SourceMap&) const override {}
   std::vector<std::string> output_columns(const Json&) const override { return {"level"}; }
-  std::vector<Json> run_point(const Json&) const override { return {1.0}; }
+  std::vector<Json> run_point(const Json&, const PointContext&) const override { return {1.0}; }
   void write_artifacts(const Study&, const ResultTable&,
                        const std::filesystem::path&) const override {}
 };

@@ -175,7 +175,7 @@ class ExampleStudy : public ::testing::Test {
     EXPECT_EQ(study.plugin_libraries, std::vector<std::string>{CHATTERLAB_EXAMPLE_PLUGIN});
     auto kind = study_kind_registry().at("stability_map").create(ParamValues{});
     std::vector<std::string> columns = kind->output_columns(study.document);
-    std::vector<Json> values = kind->run_point(study.point_document(0));
+    std::vector<Json> values = kind->run_point(study.point_document(0), {});
     Json row = Json::object();
     for (std::size_t i = 0; i < columns.size() && i < values.size(); ++i)
       row[columns[i]] = values[i];

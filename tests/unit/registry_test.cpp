@@ -51,11 +51,14 @@ class MacroModel final : public Model {
   double gain_;
 };
 
-// Analysis plugins have no interface yet; registering one shows the macro of another kind works
-// and that the conformance test covers every kind, not just models.
+// Registering an analysis shows the macro of another kind works and that the conformance test
+// covers every kind, not just models.
 class MacroAnalysis final : public Analysis {
  public:
   explicit MacroAnalysis(const ParamValues&) {}
+  Json analyse(const SampledSeries& series, const Json&) const override {
+    return {{"samples", series.values.size()}};
+  }
   static PluginInfo info() {
     PluginInfo info;
     info.name = "registry_test_analysis";

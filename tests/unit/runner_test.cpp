@@ -251,8 +251,10 @@ TEST(RunnerFiles, AtomicWriteReplacesAndLeavesNoTemporaries) {
   EXPECT_EQ(runner::read_file(dir / "results.csv"), "new\n");
   std::size_t entries = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
-  EXPECT_EQ(entries, 1u);
-  EXPECT_THROW(runner::write_file_atomically(dir / "missing" / "x.csv", "x"), std::runtime_error);
+  EXPECT_EQ(entries, 1u);  // no temporaries left
+  runner::write_file_atomically(dir / "sub" / "x.csv", "x");  // parent directories are created
+  EXPECT_EQ(runner::read_file(dir / "sub" / "x.csv"), "x");
+  EXPECT_THROW(runner::write_file_atomically(dir / "results.csv" / "x.csv", "x"), std::runtime_error);
 }
 
 TEST(RunnerOutputDir, CreatesMarksAndReplacesOnlyItsOwnRuns) {
@@ -358,7 +360,7 @@ class SquareKind final : public StudyKind {
   std::vector<std::string> output_columns(const Json&) const override {
     return {"square", "big", "note"};
   }
-  std::vector<Json> run_point(const Json& point) const override {
+  std::vector<Json> run_point(const Json& point, const PointContext&) const override {
     ++square_calls;
     double x = point.at("runner_test").at("x").get<double>();
     if (x < 0) throw PointFailure("negative x,\nno square");

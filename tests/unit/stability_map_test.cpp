@@ -106,7 +106,7 @@ TEST(StabilityMap, DdeBiftoolPointMatchesTheReferenceRoot) {
   TempDir dir;
   Study study = load(dir, std::string(dde_model) + "[stability]\nmax_frequency_hz = 1.0\n");
   std::vector<std::string> columns = kind.output_columns(study.document);
-  std::vector<Json> out = kind.run_point(study.point_document(0));
+  std::vector<Json> out = kind.run_point(study.point_document(0), {});
   ASSERT_EQ(out.size(), columns.size());
   // Reference: mpmath, 40 digits (tests/cli/reference/make_dde_reference.py).
   const double sigma = 0.038562247054131913, frequency = 0.178611627971801;
@@ -125,7 +125,7 @@ TEST(StabilityMap, GrowthPerWheelRevolutionIsTgReSOver2Pi) {
   Study study = plunge_study();
   ASSERT_EQ(study.grid.at(0).values.at(3), 1450.0);
   std::vector<std::string> columns = kind.output_columns(study.document);
-  std::vector<Json> out = kind.run_point(study.point_document(3));
+  std::vector<Json> out = kind.run_point(study.point_document(3), {});
   const double sigma = out[column(columns, "growth_rate_per_s")].get<double>();
   const double wheel_period = 60.0 / 1450.0;
   EXPECT_NEAR(out[column(columns, "growth_rate_per_wheel_rev")].get<double>(),
@@ -139,7 +139,7 @@ TEST(StabilityMap, TinyWorkBudgetFailsThePoint) {
       load(dir, std::string(dde_model) +
                     "[stability]\nmax_frequency_hz = 1.0\nmax_function_evaluations = 3\n");
   try {
-    kind.run_point(study.point_document(0));
+    kind.run_point(study.point_document(0), {});
     ADD_FAILURE() << "no failure with a budget of 3 evaluations";
   } catch (const PointFailure& e) {
     EXPECT_NE(std::string(e.what()).find("budget"), std::string::npos) << e.what();
@@ -160,7 +160,7 @@ std::vector<std::string> plots_for(const std::string& grid) {
     std::vector<std::size_t> index = study.point_indices(p);
     for (std::size_t a = 0; a < study.grid.size(); ++a)
       row.push_back(study.grid[a].values[index[a]]);
-    for (auto& v : kind.run_point(study.point_document(p))) row.push_back(v);
+    for (auto& v : kind.run_point(study.point_document(p), {})) row.push_back(v);
     table.rows.push_back(row);
     table.status.push_back("ok");
   }

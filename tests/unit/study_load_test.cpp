@@ -115,7 +115,7 @@ class FakeKind final : public StudyKind {
   std::vector<std::string> output_columns(const Json&) const override {
     return {"scaled_speed_rpm", "first_frequency_hz"};
   }
-  std::vector<Json> run_point(const Json& point) const override {
+  std::vector<Json> run_point(const Json& point, const PointContext&) const override {
     ParamValues model(point["model"]);
     return {model.real("speed_rpm") * point["fake_settings"]["scale"].get<double>(),
             model.tables("modes").front().real("frequency_hz")};

@@ -32,6 +32,20 @@ struct ResultTable {
   std::vector<std::string> status;
 };
 
+// Where a point may put its own files. A study without [grid] has one point, whose artefact
+// directory is the output directory itself (a `simulate` run writes timeseries.csv and
+// summary.json next to results.csv). In a grid, point i gets <out>/points/<i, 6 digits>/, which
+// the kind creates only if it writes something (a kind may write nothing per point, e.g. for
+// large grids). Write through write_file_atomically (chatterlab/output_files.hpp): a killed run
+// must not leave half a file that a resumed run would take for finished.
+struct PointContext {
+  std::size_t index = 0;        // grid point index
+  std::size_t point_count = 1;  // points in the study
+  std::filesystem::path artifact_dir;  // empty: write no files (unit tests, benchmarks)
+  bool plots = true;                   // false: data files only (chatterlab run --no-plots)
+  bool single_point() const { return point_count == 1; }
+};
+
 class StudyKind {
  public:
   virtual ~StudyKind() = default;
@@ -54,7 +68,9 @@ class StudyKind {
   // Computes one grid point from its document (grid values applied, already validated).
   // Returns one value per output column (number, boolean or short string). Throws PointFailure
   // (recorded, run continues). Must be thread-safe: called concurrently for different points.
-  virtual std::vector<Json> run_point(const Json& point_document) const = 0;
+  // Per-point files (time series, spectra, a summary.json) go to context.artifact_dir.
+  virtual std::vector<Json> run_point(const Json& point_document,
+                                      const PointContext& context) const = 0;
 
   // Plots and any other whole-study artefacts (PNG + SVG). Called once, after all points.
   virtual void write_artifacts(const Study& study, const ResultTable& results,

@@ -312,7 +312,8 @@ std::vector<std::string> StabilityMap::output_columns(const Json& document) cons
   return columns;
 }
 
-std::vector<Json> StabilityMap::run_point(const Json& point_document) const {
+std::vector<Json> StabilityMap::run_point(const Json& point_document,
+                                          const PointContext& /*context*/) const {
   const Json& model_table = point_document.at("model");
   auto model = build_model(model_table);
   auto characteristic = model->characteristic();

@@ -25,7 +25,8 @@ class StabilityMap final : public StudyKind {
   std::vector<std::string> tables() const override { return {"model", "stability"}; }
   void validate(Json& document, const SourceMap& sources) const override;
   std::vector<std::string> output_columns(const Json& document) const override;
-  std::vector<Json> run_point(const Json& point_document) const override;
+  std::vector<Json> run_point(const Json& point_document,
+                            const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
   bool requires_serial(const Json& document) const override;

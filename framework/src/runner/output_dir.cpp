@@ -79,6 +79,11 @@ void prepare_output_dir(const fs::path& dir, bool resume) {
 
 fs::path journal_dir(const fs::path& out_dir) { return out_dir / "journal"; }
 
+fs::path point_artifact_dir(const fs::path& out_dir, std::size_t point, std::size_t point_count) {
+  if (point_count <= 1) return out_dir;
+  return out_dir / "points" / fmt::format("{:06}", point);
+}
+
 fs::path journal_file(const fs::path& out_dir, int session, int rank) {
   return journal_dir(out_dir) /
          fmt::format("{}{}-{}{}", journal_prefix, session, rank, journal_suffix);

@@ -6,6 +6,7 @@
 // run's files first (a clean replacement: no stale plots or journals from another grid survive).
 // A non-empty directory WITHOUT the mark is refused (InputError), so a mistyped --out can never
 // wipe a user's own files. With --resume the directory is kept and its journals are read.
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -20,6 +21,10 @@ inline constexpr const char* output_marker_name = ".chatterlab-output";
 void prepare_output_dir(const std::filesystem::path& dir, bool resume);
 
 std::filesystem::path journal_dir(const std::filesystem::path& out_dir);
+
+// PointContext::artifact_dir: out_dir itself for a one-point study, else out_dir/points/NNNNNN.
+std::filesystem::path point_artifact_dir(const std::filesystem::path& out_dir, std::size_t point,
+                                         std::size_t point_count);
 
 // Journal files of earlier sessions, sorted by name: journal/points-<session>-<rank>.jsonl.
 // Every run (and every resume) writes new files, so an old file cut by a kill is never appended to.

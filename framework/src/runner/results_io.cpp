@@ -240,43 +240,6 @@ ResultTable assemble_results(const Study& study, const std::vector<std::string>&
 }
 
 // ------------------------------------------------------------------ files
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
-  std::filesystem::path tmp = path;
-  tmp += fmt::format(".tmp{}", static_cast<long>(::getpid()));
-  auto fail = [&](const char* what) {
-    int err = errno;
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error(
-        fmt::format("cannot {} {}: {}", what, path.string(), std::strerror(err)));
-  };
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail("create");
-  std::size_t written = 0;
-  while (written < content.size()) {
-    ssize_t n = ::write(fd, content.data() + written, content.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      int err = errno;
-      ::close(fd);
-      errno = err;
-      fail("write");
-    }
-    written += static_cast<std::size_t>(n);
-  }
-  // fsync before rename: after a crash the new name never points at unwritten blocks.
-  bool synced = ::fsync(fd) == 0;
-  int err = errno;
-  if (::close(fd) != 0 && synced) {
-    synced = false;
-    err = errno;
-  }
-  if (!synced) {
-    errno = err;
-    fail("write");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("replace");
-}
 
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

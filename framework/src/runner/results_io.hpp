@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "chatterlab/output_files.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
@@ -83,9 +84,7 @@ ResultTable assemble_results(const Study& study, const std::vector<std::string>&
                              const std::vector<PointResult>& results);
 
 // ------------------------------------------------------------------ files
-// Writes `content` to a temporary file next to `path`, flushes it to disk and renames it over
-// `path`: readers see the old or the new file, never a partial one. Throws std::runtime_error.
-void write_file_atomically(const std::filesystem::path& path, std::string_view content);
+using chatterlab::write_file_atomically;  // chatterlab/output_files.hpp
 
 std::string read_file(const std::filesystem::path& path);
 

@@ -116,11 +116,16 @@ class JournalWriter {
 
 // One grid point. Nothing escapes: this runs inside the OpenMP region.
 PointResult compute_point(const StudyKind& kind, const Study& study, std::size_t point,
-                          const std::vector<std::string>& columns) {
+                          const std::vector<std::string>& columns, const RunOptions& options) {
   PointResult result;
   result.done = true;
   try {
-    std::vector<Json> outputs = kind.run_point(study.point_document(point));
+    PointContext context;
+    context.index = point;
+    context.point_count = study.point_count();
+    context.artifact_dir = runner::point_artifact_dir(options.out_dir, point, context.point_count);
+    context.plots = options.plots;
+    std::vector<Json> outputs = kind.run_point(study.point_document(point), context);
     if (outputs.size() != columns.size())
       throw std::logic_error(fmt::format("study kind {} returned {} outputs for {} columns",
                                          study.kind, outputs.size(), columns.size()));
@@ -369,7 +374,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     const Clock::time_point point_start = Clock::now();
     const std::size_t p = todo[static_cast<std::size_t>(k)];
-    PointResult result = compute_point(*kind, study, p, columns);
+    PointResult result = compute_point(*kind, study, p, columns, options);
     compute_s += seconds_since(point_start);
     journal->append(runner::journal_line(p, result));
     mine[static_cast<std::size_t>(k)] = std::move(result);
