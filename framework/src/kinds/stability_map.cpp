@@ -260,13 +260,13 @@ void plot_closed_form_margins(const Study& study, const ResultTable& results,
       ++compared;
       disagree += (g > 0.0) != (m > 0.0) ? 1 : 0;
     }
-    const std::string what = fmt::format("closed form {} ({} of {} points disagree with the root)",
-                                         spec.name, disagree, compared);
+    const std::string what =
+        fmt::format("{} ({}/{} points disagree with the root)", spec.name, disagree, compared);
     const std::string stem = spec.name;  // results.csv column = file name
     if (varying.size() == 1) {
       const PlotAxis axis = plot_axis(study, study.grid[varying[0]]);
       plot::Curves curves;
-      curves.title = fmt::format("{}: {}", study_title(study), what);
+      curves.title = what;  // long enough without the study name
       curves.x_label = axis.label;
       curves.y_label = spec.name + " (> 0: chatter)";
       curves.log_x = axis.log;
@@ -285,7 +285,7 @@ void plot_closed_form_margins(const Study& study, const ResultTable& results,
       const PlotAxis x = plot_axis(study, study.grid[varying[1]]);
       const PlotAxis y = plot_axis(study, study.grid[varying[0]]);
       plot::Heatmap h;
-      h.title = fmt::format("{}: {}", study_title(study), what);
+      h.title = what;
       h.x_label = x.label;
       h.y_label = y.label;
       h.z_label = spec.name;
