@@ -6,7 +6,6 @@
 #include <numbers>
 
 #include "models/model_params.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
 
 namespace chatterlab {
 
@@ -32,6 +31,19 @@ double boundary_inverse_index(const ThompsonParameters& p, double w) {
 }
 
 }  // namespace
+
+PlungeRegenerativeParameters equivalent_g1(const ThompsonParameters& p) {
+  PlungeRegenerativeParameters g1;
+  g1.wheel_speed_rpm = p.wheel_speed_rpm;
+  g1.work_speed_rpm = p.work_speed_rpm;
+  g1.contact_stiffness_n_per_m = 1.0 / p.contact_compliance_m_per_n;
+  g1.wheel_wear_stiffness_n_per_m = 1.0 / p.wheel_wear_compliance_m_per_n;
+  g1.work_removal_stiffness_n_per_m = 1.0 / p.work_removal_compliance_m_per_n;
+  g1.modes = {{natural_frequency_rad_s(p) / kTwoPi,
+               p.damping_n_s_per_m / (2.0 * std::sqrt(p.stiffness_n_per_m * p.mass_kg)),
+               p.stiffness_n_per_m}};
+  return g1;
+}
 
 double cutting_compliance_m_per_n(const ThompsonParameters& p) {
   return p.wheel_wear_compliance_m_per_n + p.work_removal_compliance_m_per_n;
@@ -223,18 +235,7 @@ PluginInfo Thompson::info() {
 }
 
 std::unique_ptr<CharacteristicFunction> Thompson::characteristic() const {
-  const ThompsonParameters& p = parameters_;
-  PlungeRegenerativeParameters g1;
-  g1.wheel_speed_rpm = p.wheel_speed_rpm;
-  g1.work_speed_rpm = p.work_speed_rpm;
-  g1.contact_stiffness_n_per_m = 1.0 / p.contact_compliance_m_per_n;
-  g1.wheel_wear_stiffness_n_per_m = 1.0 / p.wheel_wear_compliance_m_per_n;
-  g1.work_removal_stiffness_n_per_m = 1.0 / p.work_removal_compliance_m_per_n;
-  const double omega = std::sqrt(p.stiffness_n_per_m / p.mass_kg);
-  g1.modes = {{omega / (2.0 * std::numbers::pi),
-               p.damping_n_s_per_m / (2.0 * std::sqrt(p.stiffness_n_per_m * p.mass_kg)),
-               p.stiffness_n_per_m}};
-  return std::make_unique<PlungeCharacteristic>(g1);
+  return std::make_unique<PlungeCharacteristic>(thompson::equivalent_g1(parameters_));
 }
 
 std::optional<double> Thompson::wheel_period_s() const { return 60.0 / parameters_.wheel_speed_rpm; }

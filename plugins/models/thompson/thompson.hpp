@@ -23,6 +23,7 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/registry.hpp"
+#include "models/plunge_regenerative/plunge_regenerative.hpp"
 
 namespace chatterlab {
 
@@ -38,6 +39,10 @@ struct ThompsonParameters {
 };
 
 namespace thompson {
+
+// The same system as G1 (eq 2-16) with one mode: kc = 1/Kc, kg = 1/Kg, kw = 1/Kw,
+// f = sqrt(k/m)/(2 pi), zeta = c/(2 sqrt(k m)), modal stiffness k.
+PlungeRegenerativeParameters equivalent_g1(const ThompsonParameters& p);
 
 // K = Kg + Kw (2-42) [m/N].
 double cutting_compliance_m_per_n(const ThompsonParameters& p);
