@@ -206,7 +206,8 @@ FloquetResult floquet_growth(const AmplitudeModulatedParameters& p, const Floque
     const double stiffest = std::sqrt((p.stiffness_n_per_m + p.grinding_stiffness_n_per_m) / p.mass_kg);
     n_steps = std::max(16, static_cast<int>(std::ceil(1.2 * stiffest * period / 0.5)));
   }
-  n_steps = std::min(n_steps, options.max_steps_per_period);
+  // At least 8 steps: the cubic reads samples up to two steps ahead of the delayed interval.
+  n_steps = std::max(8, std::min(n_steps, options.max_steps_per_period));
 
   FloquetResult out;
   Eigen::MatrixXd m = monodromy(md, n_steps);
