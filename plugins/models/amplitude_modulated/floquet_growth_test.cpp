@@ -181,6 +181,20 @@ TEST(FloquetGrowth, SidebandsAreSpacedByTheWheelFrequencyAndGrowWithQ) {
     EXPECT_NEAR(twice.sidebands[i].relative_amplitude / small.sidebands[i].relative_amplitude, 4.0, 0.4);
 }
 
+TEST(FloquetGrowth, WithoutRegenerationItIsTheStiffenedOscillator) {
+  // mu = 0: no memory; at Q = 0 the force is -kappa x1 with kappa = kg b/(1 + kg/kc), so the
+  // solution decays at exactly -c/(2m) and rings at sqrt((k + kappa)/m - (c/2m)^2).
+  AmplitudeModulatedParameters p = base();
+  p.overlap_factor = 0.0;
+  const FloquetResult f = floquet_growth(p);
+  ASSERT_TRUE(f.converged);
+  const double decay = -p.damping_n_s_per_m / (2.0 * p.mass_kg);
+  EXPECT_NEAR(f.growth_rate_per_s, decay, 1e-6 * std::abs(decay));
+  const double kappa = p.grinding_stiffness_n_per_m / (1.0 + p.grinding_stiffness_n_per_m / p.contact_stiffness_n_per_m);
+  const double ring = std::sqrt((p.stiffness_n_per_m + kappa) / p.mass_kg - decay * decay);
+  EXPECT_NEAR(f.carrier_frequency_hz, ring / kTwoPi, 1e-6 * ring);
+}
+
 TEST(FloquetGrowth, RejectsParametersOutsideTheModel) {
   AmplitudeModulatedParameters p = base();
   p.modulation_depth = 1.0;

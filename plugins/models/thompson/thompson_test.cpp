@@ -158,6 +158,11 @@ TEST(Thompson, SpeedCrossingIsARootOfTheCharacteristicOnTheAxis) {
   EXPECT_NEAR(h.imag(), inverse_stability_index_m_per_n(p, w), 1e-8 * std::abs(h.imag()));  // 2-39
   EXPECT_NEAR(1.0 / crit.stability_index_n_per_m, inverse_stability_index_m_per_n(p, w),
               1e-8 * std::abs(h.imag()));
+  // a = F/L with the lobe heights of 2-35, 2-36: L/F = (1/2)[Kg sin(wTg)/(1 - cos wTg) + Kw ...].
+  const double tg = 60.0 / p.wheel_speed_rpm, tw = 60.0 / p.work_speed_rpm;
+  const double lobes = 0.5 * p.wheel_wear_compliance_m_per_n * std::sin(w * tg) / (1.0 - std::cos(w * tg)) +
+                       0.5 * p.work_removal_compliance_m_per_n * std::sin(w * tw) / (1.0 - std::cos(w * tw));
+  EXPECT_NEAR(lobes, inverse_stability_index_m_per_n(p, w), 1e-7 * std::abs(lobes));
   auto e = Thompson(marginal).characteristic();
   const CharacteristicValue at = e->evaluate(Complex(0.0, w));
   EXPECT_LE(std::abs(at.value / at.derivative), 1e-7 * w);  // a Newton step of ~0 from j w
