@@ -147,10 +147,11 @@ TEST(StabilityMap, TinyWorkBudgetFailsThePoint) {
 }
 
 // Plots: which files a grid of a given shape gets (the drawing itself is plot.cpp's).
-std::vector<std::string> plots_for(const std::string& grid) {
+std::vector<std::string> plots_for(const std::string& grid,
+                                   const std::string& model = std::string(dde_model) +
+                                                              "[stability]\nmax_frequency_hz = 1.0\n") {
   TempDir dir;
-  Study study =
-      load(dir, std::string(dde_model) + "[stability]\nmax_frequency_hz = 1.0\n[grid]\n" + grid);
+  Study study = load(dir, model + "[grid]\n" + grid);
   std::vector<std::string> columns = kind.output_columns(study.document);
   ResultTable table;
   for (const auto& axis : study.grid) table.grid_columns.push_back(axis.key);
@@ -188,6 +189,47 @@ TEST(StabilityMap, PlotsFollowTheNumberOfVaryingGridKeys) {
       plots_for("\"model.a0.1.1\" = [-0.1, -0.2]\n\"model.delayed.0.matrix.1.0\" = [0.1, 0.3]\n"
                 "\"model.delayed.0.delay_s\" = [2.0, 5.0]\n")
           .empty());
+}
+
+// A model with closed-form indicators (chatterlab/closed_form.hpp): MODELS.md G2, Thompson.
+constexpr const char* thompson_model = R"(
+[model]
+type = "thompson"
+mass_kg = 20.0
+damping_n_s_per_m = 3162.3
+stiffness_n_per_m = 5.0e7
+wheel_wear_compliance_m_per_n = 1.0e-9
+work_removal_compliance_m_per_n = 5.0e-9
+contact_compliance_m_per_n = 1.0e-8
+wheel_speed_rpm = 1450
+work_speed_rpm = 55
+[stability]
+max_frequency_hz = 600
+)";
+
+TEST(StabilityMap, ClosedFormIndicatorsBecomeColumnsAfterTheRootResults) {
+  TempDir dir;
+  Study study = load(dir, thompson_model);
+  std::vector<std::string> columns = kind.output_columns(study.document);
+  const std::size_t certificate = column(columns, "certificate");
+  const std::size_t margin = column(columns, "closed_form_chatter_margin");
+  EXPECT_GT(margin, certificate);
+  EXPECT_EQ(columns.size(), certificate + 1 + 11);  // Thompson reports 11 indicators
+  std::vector<Json> out = kind.run_point(study.point_document(0), {});
+  ASSERT_EQ(out.size(), columns.size());
+  // Example parameters: conditionally stable (a band exists), chattering at 1450/55 rpm, and the
+  // closed form says so too.
+  EXPECT_FALSE(out[column(columns, "boundary_a1_n_per_m")].is_null());
+  EXPECT_EQ(out[column(columns, "stable")], false);
+  EXPECT_GT(out[margin].get<double>(), 0.0);
+  EXPECT_NEAR(out[column(columns, "unconditional_damping_n_s_per_m")].get<double>(),
+              out[column(columns, "absolute_stability_damping_n_s_per_m")].get<double>(), 1e-6);
+  // Models without indicators keep their columns (WheelColumnOnlyForModelsWithAWheel).
+}
+
+TEST(StabilityMap, ChatterMarginIndicatorsGetTheirOwnPlot) {
+  EXPECT_EQ(plots_for("wheel_speed_rpm = [1400, 1450]\n", thompson_model),
+            (std::vector<std::string>{"chatter_frequency", "closed_form_chatter_margin", "growth_rate"}));
 }
 
 }  // namespace

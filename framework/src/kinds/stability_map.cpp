@@ -8,6 +8,7 @@
 #include <numbers>
 #include <optional>
 
+#include "chatterlab/closed_form.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/plot.hpp"
@@ -34,6 +35,17 @@ std::unique_ptr<Model> build_model(const Json& model_table) {
   return model_registry()
       .at(model_table.at("type").get<std::string>())
       .create(ParamValues(std::move(params)));
+}
+
+// The model's closed-form indicators (chatterlab/closed_form.hpp), if it reports any.
+const ClosedFormIndicators* closed_forms(const Model& model) {
+  return dynamic_cast<const ClosedFormIndicators*>(&model);
+}
+
+std::vector<ClosedFormIndicatorSpec> indicator_specs(const Json& document) {
+  auto model = build_model(document.at("model"));
+  const ClosedFormIndicators* indicators = closed_forms(*model);
+  return indicators ? indicators->indicator_specs() : std::vector<ClosedFormIndicatorSpec>{};
 }
 
 RootSearchOptions search_options(const Json& stability, const CharacteristicFunction& fn) {
@@ -231,6 +243,67 @@ void plot_maps(const Study& study, const ResultTable& results, std::size_t slow_
       out_dir, "chatter_frequency_map");
 }
 
+// Closed-form chatter margins (ClosedFormIndicatorSpec::chatter_margin): drawn like the growth
+// rate, with their own zero line, and the title counts the points where the closed form's verdict
+// (margin > 0: chatter) differs from the rightmost root's (Re s > 0).
+void plot_closed_form_margins(const Study& study, const ResultTable& results,
+                              const std::vector<std::size_t>& varying, const fs::path& out_dir,
+                              Figures& figures) {
+  const std::size_t growth = column_index(results, col_growth_rate);
+  for (const ClosedFormIndicatorSpec& spec : indicator_specs(study.document)) {
+    if (!spec.chatter_margin) continue;
+    const std::size_t margin = column_index(results, spec.name);
+    std::size_t compared = 0, disagree = 0;
+    for (std::size_t r = 0; r < results.rows.size(); ++r) {
+      const double g = cell(results, r, growth), m = cell(results, r, margin);
+      if (!std::isfinite(g) || !std::isfinite(m)) continue;
+      ++compared;
+      disagree += (g > 0.0) != (m > 0.0) ? 1 : 0;
+    }
+    const std::string what =
+        fmt::format("{} ({}/{} points disagree with the root)", spec.name, disagree, compared);
+    const std::string stem = spec.name;  // results.csv column = file name
+    if (varying.size() == 1) {
+      const PlotAxis axis = plot_axis(study, study.grid[varying[0]]);
+      plot::Curves curves;
+      curves.title = what;  // long enough without the study name
+      curves.x_label = axis.label;
+      curves.y_label = spec.name + " (> 0: chatter)";
+      curves.log_x = axis.log;
+      plot::Series series{spec.name, {}, {}, "linespoints"};
+      for (std::size_t r = 0; r < results.rows.size(); ++r) {
+        const double y = cell(results, r, margin);
+        if (!std::isfinite(y)) continue;
+        series.x.push_back(results.rows[r][varying[0]].get<double>());
+        series.y.push_back(y);
+      }
+      curves.series.push_back(std::move(series));
+      curves.reference_y = 0.0;
+      curves.reference_label = "closed-form boundary";
+      figures.render(curves, out_dir, stem);
+    } else if (varying.size() == 2) {
+      const PlotAxis x = plot_axis(study, study.grid[varying[1]]);
+      const PlotAxis y = plot_axis(study, study.grid[varying[0]]);
+      plot::Heatmap h;
+      h.title = what;
+      h.x_label = x.label;
+      h.y_label = y.label;
+      h.z_label = spec.name;
+      h.x = x.values;
+      h.y = y.values;
+      h.log_x = x.log;
+      h.log_y = y.log;
+      for (std::size_t r = 0; r < results.rows.size(); ++r) h.z.push_back(cell(results, r, margin));
+      h.contour_level = 0.0;
+      h.contour_label = "closed-form boundary (margin = 0)";
+      h.diverging = true;
+      h.low_label = "stable";
+      h.high_label = "chatter";
+      figures.render(h, out_dir, stem);
+    }
+  }
+}
+
 }  // namespace
 
 PluginInfo StabilityMap::info() {
@@ -309,6 +382,8 @@ std::vector<std::string> StabilityMap::output_columns(const Json& document) cons
     columns.push_back(col_growth_per_wheel_rev);
   for (const char* c : {col_stable, col_certified, col_certified_real_part, col_certificate})
     columns.push_back(c);
+  // Closed-form indicators last: a property of the model type, like the wheel column.
+  for (const ClosedFormIndicatorSpec& spec : indicator_specs(document)) columns.push_back(spec.name);
   return columns;
 }
 
@@ -330,6 +405,16 @@ std::vector<Json> StabilityMap::run_point(const Json& point_document,
   out.emplace_back(found.certified);
   out.push_back(found.certified ? Json(found.certified_real_part) : Json());
   out.emplace_back(found.certificate);
+  if (const ClosedFormIndicators* indicators = closed_forms(*model)) {
+    std::vector<Json> values = indicators->indicator_values();
+    if (values.size() != indicators->indicator_specs().size())
+      throw std::logic_error("stability_map: a model reported a wrong number of indicators");
+    for (Json& v : values) {
+      // A closed form that overflowed is "does not apply" here, never a silent inf in results.csv.
+      if (v.is_number() && !std::isfinite(v.get<double>())) v = Json();
+      out.push_back(std::move(v));
+    }
+  }
   return out;
 }
 
@@ -344,6 +429,7 @@ void StabilityMap::write_artifacts(const Study& study, const ResultTable& result
   Figures figures;
   if (varying.size() == 1) plot_curves(study, results, varying[0], out_dir, figures);
   if (varying.size() == 2) plot_maps(study, results, varying[0], varying[1], out_dir, figures);
+  plot_closed_form_margins(study, results, varying, out_dir, figures);
   figures.finish();
   // A single point has nothing to draw; 3+ varying axes have no faithful 2-D picture: both are
   // documented, and results.csv holds every number.
