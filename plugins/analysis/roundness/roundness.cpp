@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <utility>
 #include <numbers>
 #include <stdexcept>
 
@@ -33,12 +34,34 @@ std::vector<double> solve_dense(std::vector<std::vector<double>> m, std::vector<
   return x;
 }
 
-// One primal constraint row A . x >= c of a reference-circle program, built per sample.
-struct Constraint {
-  std::vector<double> a;
-  double c;
+// The three reference-circle programs, min e.x s.t. per sample one or two rows A . x >= c:
+//   circumscribed: x = (t, a, b),        t + a cos + b sin >= r
+//   inscribed:     x = (-t, -a, -b),    -t - a cos - b sin >= -r
+//   zone:          x = (u, -l, a, b),    u + a cos + b sin >= r  and  -l - a cos - b sin >= -r
+enum class Program { circumscribed, inscribed, zone };
+
+struct Samples {
+  const std::vector<double>& r;
+  const std::vector<double>& cs;
+  const std::vector<double>& sn;
 };
-using ConstraintsOfSample = std::function<void(std::size_t, std::vector<Constraint>&)>;
+
+// Rows of sample i (returns how many: 1 or 2), each 4 wide (unused tail 0).
+int rows_of(Program program, const Samples& s, std::size_t i, double a[2][4], double c[2]) {
+  switch (program) {
+    case Program::circumscribed:
+      a[0][0] = 1, a[0][1] = s.cs[i], a[0][2] = s.sn[i], a[0][3] = 0, c[0] = s.r[i];
+      return 1;
+    case Program::inscribed:
+      a[0][0] = 1, a[0][1] = s.cs[i], a[0][2] = s.sn[i], a[0][3] = 0, c[0] = -s.r[i];
+      return 1;
+    case Program::zone:
+      a[0][0] = 1, a[0][1] = 0, a[0][2] = s.cs[i], a[0][3] = s.sn[i], c[0] = s.r[i];
+      a[1][0] = 0, a[1][1] = 1, a[1][2] = -s.cs[i], a[1][3] = -s.sn[i], c[1] = -s.r[i];
+      return 2;
+  }
+  return 0;
+}
 
 struct ProgramSolution {
   std::vector<double> x;
@@ -48,8 +71,11 @@ struct ProgramSolution {
 
 // min e.x over all samples' constraints by constraint generation: solve on a subset, add the
 // most violated samples, repeat until every sample's constraints hold.
-ProgramSolution solve_by_constraint_generation(std::size_t samples, const ConstraintsOfSample& of,
-                                               const std::vector<double>& e, double scale) {
+ProgramSolution solve_by_constraint_generation(Program program, const Samples& s, double scale) {
+  const std::size_t samples = s.r.size();
+  const std::size_t m = program == Program::zone ? 4 : 3;
+  const std::vector<double> e =
+      program == Program::zone ? std::vector<double>{1, 1, 0, 0} : std::vector<double>{1, 0, 0};
   std::vector<char> in_subset(samples, 0);
   std::vector<std::size_t> subset;
   auto add = [&](std::size_t i) {
@@ -62,20 +88,19 @@ ProgramSolution solve_by_constraint_generation(std::size_t samples, const Constr
   for (std::size_t k = 0; k < start; ++k) add(k * samples / start);
 
   const double tolerance = 1e-10 * std::max(scale, 1e-300);
-  std::vector<Constraint> buffer;
+  double a[2][4], c[2];
   ProgramSolution out;
   for (int round = 0; round < 200; ++round) {
     std::vector<std::vector<double>> rows;
-    std::vector<double> c;
+    std::vector<double> costs;
     for (std::size_t i : subset) {
-      buffer.clear();
-      of(i, buffer);
-      for (auto& con : buffer) {
-        rows.push_back(con.a);
-        c.push_back(con.c);
+      const int k = rows_of(program, s, i, a, c);
+      for (int q = 0; q < k; ++q) {
+        rows.emplace_back(a[q], a[q] + m);
+        costs.push_back(c[q]);
       }
     }
-    LinearProgramResult lp = solve_covering_lp(rows, c, e);
+    LinearProgramResult lp = solve_covering_lp(rows, costs, e);
     if (lp.x.empty()) {  // the subset does not surround the centre: take every sample
       if (subset.size() == samples) return out;
       for (std::size_t i = 0; i < samples; ++i) add(i);
@@ -83,13 +108,12 @@ ProgramSolution solve_by_constraint_generation(std::size_t samples, const Constr
     }
     std::vector<std::pair<double, std::size_t>> violated;
     for (std::size_t i = 0; i < samples; ++i) {
-      buffer.clear();
-      of(i, buffer);
+      const int k = rows_of(program, s, i, a, c);
       double worst = 0;
-      for (const auto& con : buffer) {
+      for (int q = 0; q < k; ++q) {
         double lhs = 0;
-        for (std::size_t k = 0; k < con.a.size(); ++k) lhs += con.a[k] * lp.x[k];
-        worst = std::max(worst, con.c - lhs);
+        for (std::size_t j = 0; j < m; ++j) lhs += a[q][j] * lp.x[j];
+        worst = std::max(worst, c[q] - lhs);
       }
       if (worst > tolerance && !in_subset[i]) violated.emplace_back(worst, i);
     }
@@ -107,6 +131,15 @@ ProgramSolution solve_by_constraint_generation(std::size_t samples, const Constr
   return out;  // not certified
 }
 
+// r_i - a cos_i - b sin_i - R with the cosines and sines already taken.
+std::vector<double> limacon_deviations(const ReferenceCircle& circle, const std::vector<double>& r,
+                                       const std::vector<double>& cs, const std::vector<double>& sn) {
+  std::vector<double> d(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i)
+    d[i] = r[i] - circle.centre_x * cs[i] - circle.centre_y * sn[i] - circle.radius;
+  return d;
+}
+
 void finish(ReferenceCircle& circle, const std::vector<double>& d) {
   const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
   double mean = 0;
@@ -119,6 +152,9 @@ void finish(ReferenceCircle& circle, const std::vector<double>& d) {
   circle.RONv = std::max(0.0, circle.radius - *lo);
   circle.RONq = std::sqrt(sq / static_cast<double>(d.size()));
 }
+
+Roundness roundness_with_trig(const std::vector<double>& radius, const std::vector<double>& cs,
+                              const std::vector<double>& sn, References references);
 
 }  // namespace
 
@@ -221,26 +257,51 @@ std::vector<double> equally_spaced_angles(std::size_t n) {
 
 std::vector<double> deviations(const ReferenceCircle& circle, const std::vector<double>& radius,
                                const std::vector<double>& angle_rad) {
-  std::vector<double> d(radius.size());
-  for (std::size_t i = 0; i < radius.size(); ++i)
-    d[i] = radius[i] - circle.centre_x * std::cos(angle_rad[i]) -
-           circle.centre_y * std::sin(angle_rad[i]) - circle.radius;
-  return d;
-}
-
-Roundness roundness(const std::vector<double>& radius) {
-  return roundness(radius, equally_spaced_angles(radius.size()));
-}
-
-Roundness roundness(const std::vector<double>& radius, const std::vector<double>& angle_rad) {
-  const std::size_t n = radius.size();
-  if (n < 4 || angle_rad.size() != n)
-    throw std::invalid_argument("roundness: needs >= 4 samples with one angle each");
-  std::vector<double> cs(n), sn(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  std::vector<double> cs(radius.size()), sn(radius.size());
+  for (std::size_t i = 0; i < radius.size(); ++i) {
     cs[i] = std::cos(angle_rad[i]);
     sn[i] = std::sin(angle_rad[i]);
   }
+  return limacon_deviations(circle, radius, cs, sn);
+}
+
+Roundness roundness(const std::vector<double>& radius, References references) {
+  const std::size_t n = radius.size();
+  std::vector<double> cs(n), sn(n);
+  // cos/sin of 2 pi i / N by rotation, re-anchored on the exact value every 256 samples (error
+  // ~1e-14; a million trig calls per circle would cost more than the circles).
+  const double step = 2 * std::numbers::pi / static_cast<double>(n);
+  const double c1 = std::cos(step), s1 = std::sin(step);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 256 == 0) {
+      cs[i] = std::cos(step * static_cast<double>(i));
+      sn[i] = std::sin(step * static_cast<double>(i));
+    } else {
+      cs[i] = cs[i - 1] * c1 - sn[i - 1] * s1;
+      sn[i] = sn[i - 1] * c1 + cs[i - 1] * s1;
+    }
+  }
+  return roundness_with_trig(radius, cs, sn, references);
+}
+
+Roundness roundness(const std::vector<double>& radius, const std::vector<double>& angle_rad,
+                    References references) {
+  if (angle_rad.size() != radius.size())
+    throw std::invalid_argument("roundness: needs one angle per sample");
+  std::vector<double> cs(radius.size()), sn(radius.size());
+  for (std::size_t i = 0; i < radius.size(); ++i) {
+    cs[i] = std::cos(angle_rad[i]);
+    sn[i] = std::sin(angle_rad[i]);
+  }
+  return roundness_with_trig(radius, cs, sn, references);
+}
+
+namespace {
+
+Roundness roundness_with_trig(const std::vector<double>& radius, const std::vector<double>& cs,
+                              const std::vector<double>& sn, References references) {
+  const std::size_t n = radius.size();
+  if (n < 4) throw std::invalid_argument("roundness: needs >= 4 samples");
   // Work about the mean radius so the programs' numbers are of the size of the form error.
   double mean = 0;
   for (double v : radius) mean += v;
@@ -265,43 +326,39 @@ Roundness roundness(const std::vector<double>& radius, const std::vector<double>
     const auto x = solve_dense(m, rhs);
     out.least_squares = {"least_squares", x[1], x[2], x[0]};
   }
-  // Minimum circumscribed: min t s.t. t + a cos + b sin >= r_i.
-  auto mc = solve_by_constraint_generation(
-      n, [&](std::size_t i, std::vector<Constraint>& k) { k.push_back({{1.0, cs[i], sn[i]}, r[i]}); },
-      {1.0, 0.0, 0.0}, scale);
-  // Maximum inscribed, as min (-t) with (-t, -a, -b): -t - a cos - b sin >= -r_i.
-  auto mi = solve_by_constraint_generation(
-      n, [&](std::size_t i, std::vector<Constraint>& k) { k.push_back({{1.0, cs[i], sn[i]}, -r[i]}); },
-      {1.0, 0.0, 0.0}, scale);
-  // Minimum zone: min u - l with u + a cos + b sin >= r_i and -l - a cos - b sin >= -r_i.
-  auto mz = solve_by_constraint_generation(
-      n,
-      [&](std::size_t i, std::vector<Constraint>& k) {
-        k.push_back({{1.0, 0.0, cs[i], sn[i]}, r[i]});
-        k.push_back({{0.0, 1.0, -cs[i], -sn[i]}, -r[i]});
-      },
-      {1.0, 1.0, 0.0, 0.0}, scale);
-
-  auto circle = [&](const char* name, const ProgramSolution& s, double a, double b, double radius_) {
+  const Samples samples{r, cs, sn};
+  auto circle = [&](const char* name, const ProgramSolution& sol, double a, double b,
+                    double radius_) {
+    if (sol.x.empty())
+      throw std::invalid_argument(
+          "roundness: the samples do not surround the centre (they must cover the whole turn)");
     ReferenceCircle c{name, a, b, radius_};
-    c.certified = s.certified;
-    c.duality_gap = s.duality_gap;
+    c.certified = sol.certified;
+    c.duality_gap = sol.duality_gap;
+    finish(c, limacon_deviations(c, r, cs, sn));
+    c.radius += mean;
     return c;
   };
-  if (mc.x.empty() || mi.x.empty() || mz.x.empty())
-    throw std::invalid_argument(
-        "roundness: the samples do not surround the centre (they must cover the whole turn)");
-  out.minimum_circumscribed = circle("minimum_circumscribed", mc, mc.x[1], mc.x[2], mc.x[0]);
-  out.maximum_inscribed = circle("maximum_inscribed", mi, -mi.x[1], -mi.x[2], -mi.x[0]);
-  out.minimum_zone =
-      circle("minimum_zone", mz, mz.x[2], mz.x[3], 0.5 * (mz.x[0] - mz.x[1]));
-
-  for (ReferenceCircle* c : {&out.least_squares, &out.minimum_zone, &out.minimum_circumscribed,
-                             &out.maximum_inscribed}) {
-    finish(*c, deviations(*c, r, angle_rad));
-    c->radius += mean;
+  const auto mz = solve_by_constraint_generation(Program::zone, samples, scale);
+  out.minimum_zone = circle("minimum_zone", mz, mz.x.empty() ? 0 : mz.x[2],
+                            mz.x.empty() ? 0 : mz.x[3],
+                            mz.x.empty() ? 0 : 0.5 * (mz.x[0] - mz.x[1]));
+  if (references == References::all) {
+    const auto mc = solve_by_constraint_generation(Program::circumscribed, samples, scale);
+    const auto mi = solve_by_constraint_generation(Program::inscribed, samples, scale);
+    out.minimum_circumscribed =
+        circle("minimum_circumscribed", mc, mc.x.empty() ? 0 : mc.x[1], mc.x.empty() ? 0 : mc.x[2],
+               mc.x.empty() ? 0 : mc.x[0]);
+    out.maximum_inscribed =
+        circle("maximum_inscribed", mi, mi.x.empty() ? 0 : -mi.x[1], mi.x.empty() ? 0 : -mi.x[2],
+               mi.x.empty() ? 0 : -mi.x[0]);
   }
+  out.least_squares_deviations = limacon_deviations(out.least_squares, r, cs, sn);
+  finish(out.least_squares, out.least_squares_deviations);
+  out.least_squares.radius += mean;
   return out;
 }
+
+}  // namespace
 
 }  // namespace chatterlab::surface

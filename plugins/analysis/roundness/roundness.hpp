@@ -30,15 +30,21 @@ struct ReferenceCircle {
 
 struct Roundness {
   ReferenceCircle least_squares, minimum_zone, minimum_circumscribed, maximum_inscribed;
+  std::vector<double> least_squares_deviations;  // r_i minus the least-squares circle
 };
+
+// Which circles to compute: all four, or least squares and minimum zone only (the other two
+// are then left default, name empty).
+enum class References { all, least_squares_and_zone };
 
 // `radius`: deviations r_i; `angle_rad`: theta_i (any order, must span more than half a turn in
 // every direction: the MC/MI/MZ programs need samples all round). Throws std::invalid_argument
 // for fewer than 4 samples or mismatched sizes.
-Roundness roundness(const std::vector<double>& radius, const std::vector<double>& angle_rad);
+Roundness roundness(const std::vector<double>& radius, const std::vector<double>& angle_rad,
+                    References references = References::all);
 
 // Equally spaced samples of one revolution: theta_i = 2 pi i / N.
-Roundness roundness(const std::vector<double>& radius);
+Roundness roundness(const std::vector<double>& radius, References references = References::all);
 
 // Deviations from one reference given its centre: r_i - a cos theta_i - b sin theta_i - R.
 std::vector<double> deviations(const ReferenceCircle& circle, const std::vector<double>& radius,

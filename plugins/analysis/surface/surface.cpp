@@ -157,7 +157,7 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   std::optional<Roundness> round;
   if (series.closed) {
     round = roundness(out.waviness_um);
-    w = deviations(round->least_squares, out.waviness_um, equally_spaced_angles(n));
+    w = round->least_squares_deviations;
     s["form_removed"] = "least-squares circle (limacon: mean radius and centre offset)";
   } else {
     // Evaluation length: the filtered profile without lc/2 at each end. The mean line is
@@ -214,7 +214,8 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
                                                    min_samples_per_cutoff, upr)}};
         continue;
       }
-      const Roundness r = roundness(filter_profile(out.profile_um, f).waviness);
+      const Roundness r =
+          roundness(filter_profile(out.profile_um, f).waviness, References::least_squares_and_zone);
       by_upr[key] = Json{{"least_squares_RONt_um", r.least_squares.RONt},
                          {"minimum_zone_RONt_um", r.minimum_zone.RONt}};
     }
