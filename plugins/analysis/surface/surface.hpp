@@ -17,8 +17,10 @@
 
 namespace chatterlab::surface {
 
-// Smallest cut-off, in samples, the filters accept (a coarser Gaussian is not a Gaussian).
-inline constexpr double min_samples_per_cutoff = 10.0;
+// Smallest cut-off, in samples, the filters accept: ISO 12181-2's rule of at least 7 samples
+// per undulation at the cut-off (the sampled Gaussian still has its transmission there: the
+// aliases of its spectrum are below exp(-17)).
+inline constexpr double min_samples_per_cutoff = 7.0;
 
 struct SurfaceSettings {
   FilterType filter = FilterType::gaussian;

@@ -93,7 +93,7 @@ TEST(SurfaceEvaluation, ClosedProfileRoundnessAndUprTable) {
   EXPECT_NEAR(j["roundness_by_upr"]["15"]["least_squares_RONt_um"].get<double>(),
               3.0 * waviness_transmission(FilterType::gaussian, 15.0 / 7), 1e-6);
   EXPECT_TRUE(j["roundness_by_upr"]["150"].contains("least_squares_RONt_um"));
-  EXPECT_TRUE(j["roundness_by_upr"]["500"].contains("skipped"));  // 7.2 samples per cut-off
+  EXPECT_TRUE(j["roundness_by_upr"]["500"].contains("least_squares_RONt_um"));  // 7.2 >= 7
   EXPECT_FALSE(j.contains("motif"));  // MOTIF is defined for open profiles
 }
 
@@ -104,7 +104,7 @@ TEST(SurfaceEvaluation, RejectsTooFewSamplesPerCutoff) {
   s.sample_interval = 1.0;
   s.values.assign(360, 0.0);
   SurfaceSettings settings;
-  settings.cutoff_upr = 50;  // 7.2 samples per cut-off
+  settings.cutoff_upr = 60;  // 6 samples per cut-off
   EXPECT_THROW(evaluate_surface(s, settings), InputError);
 }
 
@@ -142,7 +142,7 @@ TEST_F(SurfaceStudyInput, TooFewSamplesPerCutoff) {
   const std::string message = load_error(dir_, open_study("", "cutoff_mm = 0.005\n"));
   EXPECT_NE(message.find("study.toml:"), std::string::npos) << message;
   EXPECT_NE(message.find("too few samples per cut-off: 5"), std::string::npos) << message;
-  EXPECT_NE(message.find("at least 10"), std::string::npos) << message;
+  EXPECT_NE(message.find("at least 7"), std::string::npos) << message;
 }
 
 TEST_F(SurfaceStudyInput, CutoffLongerThanTheProfile) {
@@ -193,8 +193,8 @@ TEST_F(SurfaceStudyInput, ClosedProfileKeys) {
   EXPECT_NE(message.find("3600 rows"), std::string::npos) << message;
   message = load_error(dir_, head + "[filter]\ncutoff_mm = 0.8\n");
   EXPECT_NE(message.find("use cutoff_upr"), std::string::npos) << message;
-  message = load_error(dir_, head + "[filter]\ncutoff_upr = 500\n");
-  EXPECT_NE(message.find("too few samples per cut-off: 7.2"), std::string::npos) << message;
+  message = load_error(dir_, head + "[filter]\ncutoff_upr = 600\n");
+  EXPECT_NE(message.find("too few samples per cut-off: 6 (at least 7"), std::string::npos) << message;
   message = load_error(dir_, head + "[process]\nwheel_speed_rpm = 1450\n");
   EXPECT_NE(message.find("needs both"), std::string::npos) << message;
   // Defaults: 50 UPR Gaussian, values in um.
