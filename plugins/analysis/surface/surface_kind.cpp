@@ -31,6 +31,14 @@ ParamSpec positive(ParamSpec s) {
   return s;
 }
 
+ParamSpec unit_spec() {
+  ParamSpec unit = param_spec("unit", ValueKind::string, "1",
+                              "unit of the profile values: um (default), mm or m");
+  unit.default_value = "um";
+  unit.choices = {"um", "mm", "m"};
+  return unit;
+}
+
 std::vector<ParamSpec> input_specs() {
   ParamSpec file = param_spec("file", ValueKind::string, "1",
                               "profile data file (CSV/whitespace table or WAV), relative to the "
@@ -38,10 +46,7 @@ std::vector<ParamSpec> input_specs() {
   ParamSpec closed = param_spec("closed", ValueKind::boolean, "1",
                                 "true: one revolution of a circumferential profile (periodic)");
   closed.default_value = false;
-  ParamSpec unit = param_spec("unit", ValueKind::string, "1",
-                              "unit of the profile values: um (default), mm or m");
-  unit.default_value = "um";
-  unit.choices = {"um", "mm", "m"};
+  const ParamSpec unit = unit_spec();
   ParamSpec per_rev = optional_spec("samples_per_rev", ValueKind::integer, "1",
                                     "closed profiles: samples in one revolution (= rows)");
   per_rev.min = 4;
@@ -484,6 +489,38 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
   return out;
 }
 
+PluginInfo SurfaceAnalysis::info() {
+  PluginInfo info;
+  info.name = "surface_profile";  // names are unique across registries: the kind is "surface"
+  info.description =
+      "waviness, MOTIF, roundness and Wz|f of a profile series (the surface study's evaluation)";
+  info.models_md_ids = "W1, W2";
+  info.params = {unit_spec()};
+  for (const auto& specs : {filter_specs(), process_specs(), parameter_specs()})
+    info.params.insert(info.params.end(), specs.begin(), specs.end());
+  // `type` names the plugin in a component table: the filter type is `filter` here.
+  info.params[1].key = "filter";
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"cutoff_upr", 50}, {"unit", "m"}};
+  return info;
+}
+
+Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+  // The flat parameters regrouped into the study kind's tables, read by the same code.
+  Json document{{"input", Json::object()}, {"filter", Json::object()},
+                {"process", Json::object()}, {"parameters", Json::object()}};
+  auto take = [&](const std::vector<ParamSpec>& specs, const char* table) {
+    for (const auto& spec : specs)
+      document[table][spec.key] = params_.contains(spec.key) ? params_.at(spec.key) : Json();
+  };
+  take({unit_spec()}, "input");
+  take(filter_specs(), "filter");
+  document["filter"]["type"] = params_.at("filter");
+  take(process_specs(), "process");
+  take(parameter_specs(), "parameters");
+  return evaluate_surface(series, settings_from(document));
+}
+
 void SurfaceStudy::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
                                    const fs::path& /*out_dir*/) const {
   // Every figure belongs to one profile and is drawn by run_point next to its summary.json.
@@ -492,3 +529,4 @@ void SurfaceStudy::write_artifacts(const Study& /*study*/, const ResultTable& /*
 }  // namespace chatterlab::surface
 
 CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::surface::SurfaceStudy);
+CHATTERLAB_REGISTER_ANALYSIS(chatterlab::surface::SurfaceAnalysis);

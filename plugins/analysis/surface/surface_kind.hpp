@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "chatterlab/analysis.hpp"
 #include "chatterlab/study_kind.hpp"
 
 namespace chatterlab::surface {
@@ -24,6 +25,20 @@ class SurfaceStudy final : public StudyKind {
                               const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
+};
+
+// Analysis plugin `surface_profile` (analysis_registry): the same evaluation for a series another study
+// kind already holds, e.g. a simulated work surface (`unit = "m"`, closed, sample unit deg).
+// Parameters: the study kind's [filter], [process] and [parameters] keys plus `unit`, flat.
+// analyse() returns the summary.json object of the study kind.
+class SurfaceAnalysis final : public Analysis {
+ public:
+  static PluginInfo info();
+  explicit SurfaceAnalysis(const ParamValues& params) : params_(params.json()) {}
+  Json analyse(const SampledSeries& series, const Json& context) const override;
+
+ private:
+  Json params_;
 };
 
 }  // namespace chatterlab::surface

@@ -10,6 +10,7 @@
 #include "analysis/surface/surface_kind.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "study/source_map.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::surface {
@@ -106,6 +107,22 @@ TEST(SurfaceEvaluation, RejectsTooFewSamplesPerCutoff) {
   SurfaceSettings settings;
   settings.cutoff_upr = 60;  // 6 samples per cut-off
   EXPECT_THROW(evaluate_surface(s, settings), InputError);
+}
+
+TEST(SurfaceEvaluation, AnalysisPluginEvaluatesASimulatedWorkSurface) {
+  // A work surface in metres over one revolution, as a simulate study writes it.
+  SampledSeries s;
+  s.closed = true;
+  s.sample_unit = "deg";
+  s.sample_interval = 0.1;
+  for (std::size_t i = 0; i < 3600; ++i) s.values.push_back(lobes(i) * 1e-6);
+  const auto& entry = analysis_registry().at("surface_profile");
+  const auto analysis = entry.create(ParamValues(
+      validate_params(Json{{"unit", "m"}, {"cutoff_upr", 150}}, entry.info.params, "analysis",
+                      chatterlab::LineSourceMap("test"))));
+  const Json j = analysis->analyse(s, Json::object());
+  EXPECT_NEAR(j["RONt_um"].get<double>(), 3.0 * waviness_transmission(FilterType::gaussian, 150.0 / 7),
+              1e-5);
 }
 
 class SurfaceStudyInput : public ::testing::Test {
