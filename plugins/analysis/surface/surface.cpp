@@ -108,13 +108,20 @@ FilterSettings resolve_filter(const SampledSeries& series, const SurfaceSettings
     filter_json["cutoff_mm"] = *settings.cutoff_mm;
     filter_json["end_effects"] =
         "moment retaining (ISO 16610-28): local linear (gaussian) or quadratic (robust) "
-        "regression over the samples that exist; no part of the profile is discarded";
+        "regression over the samples that exist (filtered.csv: full length); parameters over "
+        "the evaluation length = the profile without cutoff/2 at each end";
   }
-  if (filter.cutoff_samples < min_samples_per_cutoff)
+  if (filter.cutoff_samples < min_samples_per_cutoff) {
+    const std::string setting =
+        series.closed ? fmt::format("cutoff_upr = {} on {} samples per revolution",
+                                    settings.cutoff_upr.value_or(50.0), n)
+                      : fmt::format("cutoff_mm = {} at {} mm spacing", *settings.cutoff_mm,
+                                    series.sample_interval);
     throw InputError(fmt::format(
-        "{}: too few samples per cut-off: {:.4g} (at least {} needed; sample more densely or "
-        "use a longer cut-off)",
-        what, filter.cutoff_samples, min_samples_per_cutoff));
+        "{}: too few samples per cut-off: {:.4g} ({}; at least {} needed: sample more densely "
+        "or use a longer cut-off)",
+        what, filter.cutoff_samples, setting, min_samples_per_cutoff));
+  }
 
   return filter;
 }

@@ -162,7 +162,9 @@ SampledSeries series_from(const Json& input, const DataTable& table, const std::
   return s;
 }
 
-SurfaceSettings settings_from(const Json& document) {
+// `rows`: the profile's samples; for a closed profile given with spacing_mm (circumferential
+// spacing) and cutoff_mm, the cut-off becomes cutoff_upr = circumference / cutoff_mm.
+SurfaceSettings settings_from(const Json& document, std::size_t rows = 0) {
   const Json& input = document.at("input");
   const Json& filter = document.at("filter");
   const Json& process = document.at("process");
@@ -187,6 +189,10 @@ SurfaceSettings settings_from(const Json& document) {
   };
   s.low_band_upr = band("low_band_upr");
   s.high_band_upr = band("high_band_upr");
+  if (input["closed"] == Json(true) && s.cutoff_mm && input["spacing_mm"].is_number() && rows > 0) {
+    s.cutoff_upr = static_cast<double>(rows) * input["spacing_mm"].get<double>() / *s.cutoff_mm;
+    s.cutoff_mm.reset();
+  }
   return s;
 }
 
@@ -234,7 +240,13 @@ void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& t
   profile.x_label = x_label;
   profile.y_label = "height [um]";
   profile.series.push_back({"profile", x, every(e.profile_um, stride), "lines"});
-  profile.series.push_back({"waviness", x, every(e.waviness_um, stride), "lines"});
+  const Json& filter = e.summary.at("filter");
+  const std::string cutoff = filter.contains("cutoff_upr")
+                                 ? fmt::format("{} UPR", filter["cutoff_upr"].get<double>())
+                                 : fmt::format("lc = {} mm", filter["cutoff_mm"].get<double>());
+  profile.series.push_back({fmt::format("waviness ({} filter, {})",
+                                        filter["type"].get<std::string>(), cutoff),
+                            x, every(e.waviness_um, stride), "lines"});
   plot::render(profile, dir, "profile");
   plot::Curves roughness;
   roughness.title = title + ": roughness (profile - waviness)";
@@ -339,6 +351,10 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format("{}: missing table [input] (file, column, spacing_mm or "
                                  "samples_per_rev with closed = true)",
                                  sources.locate("input").str()));
+  // `column = 2` (a number) means the same as column = "2": the 1-based column index.
+  if (document["input"].is_object() && document["input"].contains("column") &&
+      document["input"]["column"].is_number_integer())
+    document["input"]["column"] = std::to_string(document["input"]["column"].get<std::int64_t>());
   Json input = validated_table(document, "input", input_specs(), sources);
   Json filter = validated_table(document, "filter", filter_specs(), sources);
   Json process = validated_table(document, "process", process_specs(), sources);
@@ -374,18 +390,18 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
   input["column"] = column;
 
   if (closed) {
-    if (input["spacing_mm"].is_number())
-      fail("input.spacing_mm", "input.spacing_mm: a closed profile is one revolution sampled by "
-                               "angle; give samples_per_rev (or nothing: all rows), not spacing_mm");
     if (input["samples_per_rev"].is_number_integer() &&
         static_cast<std::size_t>(input["samples_per_rev"].get<std::int64_t>()) != table.rows())
       fail("input.samples_per_rev",
            fmt::format("input.samples_per_rev = {}: {} has {} rows; a closed profile is exactly "
                        "one revolution",
                        input["samples_per_rev"].get<std::int64_t>(), file.string(), table.rows()));
-    if (filter["cutoff_mm"].is_number())
+    if (filter["cutoff_mm"].is_number() && filter["cutoff_upr"].is_number())
+      fail("filter.cutoff_mm", "filter.cutoff_mm and filter.cutoff_upr: give one cut-off");
+    if (filter["cutoff_mm"].is_number() && !input["spacing_mm"].is_number())
       fail("filter.cutoff_mm", "filter.cutoff_mm: a closed profile takes its cut-off in "
-                               "undulations per revolution: use cutoff_upr");
+                               "undulations per revolution: use cutoff_upr (or give "
+                               "input.spacing_mm, the circumferential spacing, to convert)");
   } else {
     if (input["samples_per_rev"].is_number())
       fail("input.samples_per_rev", "input.samples_per_rev needs closed = true (an open profile "
@@ -434,7 +450,8 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
   // The filter checks on the real series: samples per cut-off, cut-off against profile length.
   try {
     Json ignored;
-    resolve_filter(series_from(input, table, column), settings_from(document), ignored);
+    resolve_filter(series_from(input, table, column), settings_from(document, table.rows()),
+                   ignored);
   } catch (const InputError& e) {
     fail(closed ? "filter.cutoff_upr" : "filter.cutoff_mm", e.what());
   }
@@ -455,7 +472,8 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
   const DataTable table = read_data_table(input.at("file").get<std::string>());
   const std::string column = input.at("column").get<std::string>();
   const SampledSeries series = series_from(input, table, column);
-  const SurfaceEvaluation e = evaluate_surface_profile(series, settings_from(point_document));
+  const SurfaceEvaluation e =
+      evaluate_surface_profile(series, settings_from(point_document, series.values.size()));
   const Json& s = e.summary;
   std::vector<Json> out{s["Wa_um"], s["Wq_um"], s["Wz_um"], s["Wt_um"], s["Wz_five_um"]};
   if (series.closed) {
@@ -470,6 +488,11 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
                                   "waviness_um", "roughness_um"},
                                  {e.position, e.profile_um, e.waviness_um, e.roughness_um}));
   Json summary = s;
+  if (series.closed && point_document.at("filter")["cutoff_mm"].is_number()) {
+    summary["filter"]["cutoff_mm"] = point_document.at("filter")["cutoff_mm"];
+    summary["filter"]["circumference_mm"] =
+        static_cast<double>(series.values.size()) * input.at("spacing_mm").get<double>();
+  }
   if (context.plots) {
     const std::string title = column;
     std::string errors;

@@ -158,7 +158,9 @@ TEST_F(SurfaceStudyInput, TooFewSamplesPerCutoff) {
   dir_.write("p.csv", table(6000, waves));
   const std::string message = load_error(dir_, open_study("", "cutoff_mm = 0.005\n"));
   EXPECT_NE(message.find("study.toml:"), std::string::npos) << message;
-  EXPECT_NE(message.find("too few samples per cut-off: 5"), std::string::npos) << message;
+  EXPECT_NE(message.find("too few samples per cut-off: 5 (cutoff_mm = 0.005 at 0.001 mm spacing"),
+            std::string::npos)
+      << message;
   EXPECT_NE(message.find("at least 7"), std::string::npos) << message;
 }
 
@@ -210,8 +212,27 @@ TEST_F(SurfaceStudyInput, ClosedProfileKeys) {
   EXPECT_NE(message.find("3600 rows"), std::string::npos) << message;
   message = load_error(dir_, head + "[filter]\ncutoff_mm = 0.8\n");
   EXPECT_NE(message.find("use cutoff_upr"), std::string::npos) << message;
+  // With the circumferential spacing a cut-off in mm converts: 3600 x 0.1 mm / 7.2 mm = 50 UPR.
+  {
+    Study study = load_text(dir_, head + "spacing_mm = 0.1\n[filter]\ncutoff_mm = 7.2\n");
+    SurfaceStudy kind;
+    PointContext context;
+    context.artifact_dir = dir_.path() / "converted";
+    context.plots = false;
+    kind.run_point(study.point_document(0), context);
+    std::ifstream in(dir_.path() / "converted" / "summary.json");
+    const Json j = Json::parse(in);
+    EXPECT_NEAR(j["filter"]["cutoff_upr"].get<double>(), 50.0, 1e-9);
+    EXPECT_NEAR(j["filter"]["circumference_mm"].get<double>(), 360.0, 1e-9);
+  }
+  // A column given by its 1-based index as a number.
+  EXPECT_EQ(load_text(dir_, "[study]\nkind = \"surface\"\n[input]\nfile = \"p.csv\"\ncolumn = 1\n"
+                            "closed = true\n").document["input"]["column"], "1");
   message = load_error(dir_, head + "[filter]\ncutoff_upr = 600\n");
-  EXPECT_NE(message.find("too few samples per cut-off: 6 (at least 7"), std::string::npos) << message;
+  EXPECT_NE(message.find("too few samples per cut-off: 6 (cutoff_upr = 600 on 3600 samples per "
+                         "revolution; at least 7 needed"),
+            std::string::npos)
+      << message;
   message = load_error(dir_, head + "[process]\nwheel_speed_rpm = 1450\n");
   EXPECT_NE(message.find("needs both"), std::string::npos) << message;
   // Defaults: 50 UPR Gaussian, values in um.
