@@ -177,8 +177,10 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
     s["evaluation_from_mm"] = out.position[skip];
     s["evaluation_to_mm"] = out.position[n - 1 - skip];
   }
+  // Width discrimination: 1 % of the cut-off (ISO 4287's 1 % of the sampling length lr = lc).
   const WavinessParameters p = waviness_parameters(w, position_step, series.closed,
-                                                   settings.sampling_lengths);
+                                                   settings.sampling_lengths,
+                                                   0.01 * filter.cutoff_samples);
   s["Wa_um"] = p.Wa;
   s["Wq_um"] = p.Wq;
   s["Wp_um"] = p.Wp;

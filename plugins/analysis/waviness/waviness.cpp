@@ -16,6 +16,8 @@ struct PhaseExtreme {
   Phase kind;
   double extreme;
   bool started_by_transition;
+  std::size_t first, last;  // first and last sample beyond the height discrimination
+  double up_crossing;       // peaks: the mean-line up-crossing that starts them (-1: none)
 };
 
 struct AmplitudeMoments {
@@ -49,7 +51,7 @@ AmplitudeMoments amplitude_moments(const double* w, std::size_t n) {
 }  // namespace
 
 ProfileElements profile_elements(const std::vector<double>& w, double height_discrimination,
-                                 bool closed) {
+                                 bool closed, double width_discrimination) {
   ProfileElements out;
   if (w.size() < 3) return out;
   std::vector<double> y = w;
@@ -65,27 +67,47 @@ ProfileElements profile_elements(const std::vector<double>& w, double height_dis
     const Phase cls = y[i] > h ? Phase::peak : (y[i] < -h ? Phase::valley : Phase::none);
     if (cls == Phase::none) continue;
     if (phases.empty()) {
-      phases.push_back({cls, y[i], false});
+      phases.push_back({cls, y[i], false, i, i, -1.0});
     } else if (phases.back().kind == cls) {
       PhaseExtreme& p = phases.back();
       p.extreme = cls == Phase::peak ? std::max(p.extreme, y[i]) : std::min(p.extreme, y[i]);
+      p.last = i;
     } else {
+      double crossing = -1.0;
       if (cls == Phase::peak) {
         // The mean-line up-crossing closest to this peak phase.
         for (std::size_t j = i; j > last_significant; --j) {
           if (y[j - 1] < 0 && y[j] >= 0) {
-            out.up_crossings.push_back(static_cast<double>(j - 1) + y[j - 1] / (y[j - 1] - y[j]));
+            crossing = static_cast<double>(j - 1) + y[j - 1] / (y[j - 1] - y[j]);
             break;
           }
         }
       }
-      phases.push_back({cls, y[i], true});
+      phases.push_back({cls, y[i], true, i, i, crossing});
     }
     last_significant = i;
   }
-  for (std::size_t k = 0; k + 1 < phases.size(); ++k)
-    if (phases[k].kind == Phase::peak && phases[k].started_by_transition)
-      out.wave_heights.push_back(phases[k].extreme - phases[k + 1].extreme);
+  // Width discrimination: a peak or valley narrower than the limit, between two others, is no
+  // element of its own: its neighbours (of the other kind) join across it.
+  std::vector<PhaseExtreme> kept;
+  for (const PhaseExtreme& p : phases) {
+    if (kept.size() >= 2 && kept.back().started_by_transition &&
+        static_cast<double>(kept.back().last - kept.back().first + 1) < width_discrimination) {
+      kept.pop_back();
+      PhaseExtreme& joined = kept.back();
+      joined.extreme = p.kind == Phase::peak ? std::max(joined.extreme, p.extreme)
+                                             : std::min(joined.extreme, p.extreme);
+      joined.last = p.last;
+      continue;
+    }
+    kept.push_back(p);
+  }
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    if (kept[k].kind == Phase::peak && kept[k].up_crossing >= 0)
+      out.up_crossings.push_back(kept[k].up_crossing);
+    if (k + 1 < kept.size() && kept[k].kind == Phase::peak && kept[k].started_by_transition)
+      out.wave_heights.push_back(kept[k].extreme - kept[k + 1].extreme);
+  }
   return out;
 }
 
@@ -100,7 +122,7 @@ double mean_of_five_largest(std::vector<double> heights) {
 }
 
 WavinessParameters waviness_parameters(const std::vector<double>& w, double spacing, bool closed,
-                                       int sampling_lengths) {
+                                       int sampling_lengths, double width_discrimination) {
   if (w.size() < 4) throw std::invalid_argument("waviness_parameters: fewer than 4 samples");
   WavinessParameters p;
   const std::size_t n = w.size();
@@ -121,7 +143,7 @@ WavinessParameters waviness_parameters(const std::vector<double>& w, double spac
   const auto [lo, hi] = std::minmax_element(w.begin(), w.end());
   p.Wt = *hi - *lo;
 
-  const ProfileElements elements = profile_elements(w, 0.1 * p.Wz, closed);
+  const ProfileElements elements = profile_elements(w, 0.1 * p.Wz, closed, width_discrimination);
   const auto& up = elements.up_crossings;
   if (closed && !up.empty()) {
     p.WSm = static_cast<double>(n) * spacing / static_cast<double>(up.size());

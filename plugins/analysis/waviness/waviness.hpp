@@ -6,7 +6,10 @@
 //   the `sampling_lengths` equal sampling lengths of the evaluation length; Wt = max - min over
 //   the whole evaluation length; WSm = mean width of the profile elements (height discrimination
 //   10 % of Wz: an element is a peak above +0.1 Wz and the following valley below -0.1 Wz,
-//   delimited by the mean-line up-crossings between them).
+//   delimited by the mean-line up-crossings between them; peaks or valleys narrower than the
+//   width discrimination join their neighbours -- the surface evaluation uses 1 % of the
+//   cut-off, ISO's 1 % of the (roughness) sampling length lr = lc: with the sampling length
+//   = the evaluation length, 1 % of it would swallow real waves of profiles with > 50 of them).
 //   The book's Wz (W1, JB/Z168-81): mean of the five largest wave heights, a wave height being
 //   the difference between a peak and the adjacent (following) valley of the same elements.
 //   Frequency-resolved Wz|f (W2): the closed profile split into DFT bands of undulations per
@@ -27,19 +30,22 @@ struct WavinessParameters {
 };
 
 // `w`: waviness profile with form removed; `spacing`: sample spacing (mm or deg); closed: one
-// revolution, the profile wraps. sampling_lengths >= 1 (clamped to the sample count / 4).
+// revolution, the profile wraps. sampling_lengths >= 1 (clamped to the sample count / 4);
+// width_discrimination in samples (0: none).
 WavinessParameters waviness_parameters(const std::vector<double>& w, double spacing, bool closed,
-                                       int sampling_lengths = 1);
+                                       int sampling_lengths = 1,
+                                       double width_discrimination = 0.0);
 
-// Profile elements of a profile about its mean line w = 0 with height discrimination h (> 0):
-// the positions (in samples) of the mean-line up-crossings that start elements and the heights
-// peak - following valley of the waves.
+// Profile elements of a profile about its mean line w = 0 with height discrimination h (> 0)
+// and width discrimination (in samples: a peak or valley spanning fewer samples beyond +-h is
+// joined into its neighbours): the positions (in samples) of the mean-line up-crossings that
+// start elements and the heights peak - following valley of the waves.
 struct ProfileElements {
   std::vector<double> up_crossings;  // fractional sample index (closed: of the rotated profile)
   std::vector<double> wave_heights;
 };
 ProfileElements profile_elements(const std::vector<double>& w, double height_discrimination,
-                                 bool closed);
+                                 bool closed, double width_discrimination = 0.0);
 
 // Mean of the five largest heights (all of them if fewer); 0 for none.
 double mean_of_five_largest(std::vector<double> heights);

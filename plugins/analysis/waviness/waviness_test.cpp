@@ -66,6 +66,25 @@ TEST(WavinessParameters, BookWzIsTheMeanOfTheFiveLargestWaveHeights) {
   EXPECT_EQ(e.up_crossings.size(), 7u);
 }
 
+TEST(WavinessParameters, WidthDiscriminationJoinsNarrowFeatures) {
+  // 10 waves of 1000 samples; inside every crest a 5-sample notch down to -0.5 (below the
+  // height discrimination of 0.2 but 0.5 % of the sampling length wide): without width
+  // discrimination each notch splits a peak, with 1 % it does not.
+  std::vector<double> y(10000);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    y[i] = std::sin(2 * pi * static_cast<double>(i) / 1000.0);
+    if (i % 1000 >= 248 && i % 1000 < 253) y[i] = -0.5;
+  }
+  EXPECT_EQ(profile_elements(y, 0.2, false).wave_heights.size(), 19u);
+  const ProfileElements e = profile_elements(y, 0.2, false, 100.0);
+  // The first crest starts at x = 0 (no up-crossing, not a complete wave): 9 of each.
+  EXPECT_EQ(e.wave_heights.size(), 9u);
+  EXPECT_EQ(e.up_crossings.size(), 9u);
+  const WavinessParameters p = waviness_parameters(y, 0.001, false, 1, 100.0);
+  ASSERT_TRUE(p.WSm.has_value());
+  EXPECT_NEAR(*p.WSm, 1.0, 1e-6);
+}
+
 TEST(WavinessParameters, FrequencyResolvedWzSeparatesForcedLobesFromChatter) {
   // G8-like part: n_g = 1450 rpm, n_w = 55 rpm (Z = 26.4), 26 forced lobes of Wz 4.26 um and
   // 895 chatter lobes (820 Hz at 55 rpm) of Wz 3.12 um.
