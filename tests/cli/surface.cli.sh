@@ -52,6 +52,19 @@ close_to "$(json_in "$out/summary.json" Wz_f high Wz_um)" 3.12 0.2 || fail "roun
 close_to "$(json_in "$out/summary.json" roundness_by_upr 50 least_squares_RONt_um)" "$ls_ront" 1e-9 ||
   fail "roundness: 50 UPR entry differs from the study's own 50 UPR filter"
 
+# ---- a grid over the UPR cut-off: per-point files, and RONt grows as more lobes pass the filter
+mkdir -p "$work/grid"
+sed "s|file = \"data/|file = \"$src/studies/data/|" "$src/studies/surface_roundness.toml" >"$work/grid/grid.toml"
+printf '\n[grid]\n"filter.cutoff_upr" = [15, 50, 150]\n' >>"$work/grid/grid.toml"
+expect_exit 0 "$work/grid/run" "$bin" run "$work/grid/grid.toml" --out "$work/grid/out"
+expect_plots "$work/grid/out" parameters
+for i in 000000 000001 000002; do
+  [ -s "$work/grid/out/points/$i/summary.json" ] || fail "grid: points/$i/summary.json missing"
+done
+csv_column "$work/grid/out/results.csv" RONt_um |
+  awk 'NR > 1 && $1 + 0 <= last + 0 { bad = 1 } { last = $1 } END { exit bad }' ||
+  fail "grid: RONt_um does not grow with cutoff_upr"
+
 # ---- open profile: waviness parameters, MOTIF
 out=$work/waviness
 expect_exit 0 "$work/waviness" "$bin" run "$src/studies/surface_waviness.toml" --out "$out"

@@ -193,6 +193,23 @@ TEST(Roundness, MinimumZoneNeverExceedsLeastSquares) {
   }
 }
 
+TEST(Roundness, EccentricPerfectCircleIsRoundAboutEveryReference) {
+  // Every sample is active at the optimum of all three programs: maximal degeneracy.
+  const std::size_t n = 5000;
+  const auto th = equally_spaced_angles(n);
+  std::vector<double> r(n);
+  for (std::size_t i = 0; i < n; ++i) r[i] = 7.0 + 0.3 * std::cos(th[i]) - 0.1 * std::sin(th[i]);
+  const Roundness rd = roundness(r);
+  for (const auto* c : {&rd.least_squares, &rd.minimum_zone, &rd.minimum_circumscribed,
+                        &rd.maximum_inscribed}) {
+    SCOPED_TRACE(c->name);
+    EXPECT_NEAR(c->RONt, 0.0, 1e-9);
+    EXPECT_NEAR(c->centre_x, 0.3, 1e-9);
+    EXPECT_NEAR(c->centre_y, -0.1, 1e-9);
+    EXPECT_NEAR(c->radius, 7.0, 1e-9);
+  }
+}
+
 TEST(Roundness, CoveringLpSolvesASmallProgram) {
   // min x0 + x1 s.t. x0 >= 1, x1 >= 2, x0 + x1 >= 4  -> 4
   const auto lp = solve_covering_lp({{1, 0}, {0, 1}, {1, 1}}, {1, 2, 4}, {1, 1});

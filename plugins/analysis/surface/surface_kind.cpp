@@ -544,9 +544,32 @@ Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context
   return evaluate_surface(series, settings_from(document));
 }
 
-void SurfaceStudy::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                   const fs::path& /*out_dir*/) const {
-  // Every figure belongs to one profile and is drawn by run_point next to its summary.json.
+void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& results,
+                                   const fs::path& out_dir) const {
+  // Figures of one profile are drawn by run_point next to its summary.json. A grid over one
+  // numeric key (e.g. filter.cutoff_upr) also gets the parameters against that key.
+  std::vector<std::size_t> varying;
+  for (std::size_t a = 0; a < study.grid.size(); ++a)
+    if (study.grid[a].values.size() > 1) varying.push_back(a);
+  if (varying.size() != 1) return;
+  const std::size_t axis = varying.front();
+  for (const auto& v : study.grid[axis].values)
+    if (!v.is_number()) return;
+  plot::Curves curves;
+  curves.title = "surface parameters against " + study.grid[axis].key;
+  curves.x_label = study.grid[axis].key;
+  curves.y_label = "parameter [um]";
+  for (std::size_t c = 0; c < results.output_columns.size(); ++c) {
+    plot::Series series{results.output_columns[c], {}, {}, "linespoints"};
+    for (const auto& row : results.rows) {
+      const Json& y = row[results.grid_columns.size() + c];
+      if (!y.is_number()) continue;  // failed point: listed in results.csv
+      series.x.push_back(row[axis].get<double>());
+      series.y.push_back(y.get<double>());
+    }
+    curves.series.push_back(std::move(series));
+  }
+  plot::render(curves, out_dir, "parameters");
 }
 
 }  // namespace chatterlab::surface
