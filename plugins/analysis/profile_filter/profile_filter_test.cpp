@@ -51,19 +51,20 @@ TEST(ProfileFilter, AnalyticTransmissionMatchesIsoTable) {
 
 TEST(ProfileFilter, OpenGaussianTransmissionAwayFromEnds) {
   // Densely sampled, and at 7.5 samples per cut-off (near the 7 that the surface study accepts).
-  for (const double cutoff : {200.0, 7.5})
-  for (std::size_t r = 0; r < ratios.size(); ++r) {
-    const double wavelength = ratios[r] * cutoff;
-    const std::size_t n = static_cast<std::size_t>(wavelength * 40 + 4 * cutoff);
-    std::vector<double> z(n);
-    for (std::size_t i = 0; i < n; ++i) z[i] = std::sin(2 * pi * static_cast<double>(i) / wavelength);
-    FilterSettings s;
-    s.cutoff_samples = cutoff;
-    const auto w = filter_profile(z, s).waviness;
-    // Interior: >= 1.5 cut-offs (the kernel's half-width) from either end.
-    const auto edge = static_cast<std::size_t>(1.5 * cutoff);
-    const double h = fitted_amplitude(w, 1 / wavelength, edge, n - edge);
-    EXPECT_NEAR(h, iso_values[r], 0.002) << "lambda/lc = " << ratios[r] << ", cut-off " << cutoff;
+  for (const double cutoff : {200.0, 7.5}) {
+    for (std::size_t r = 0; r < ratios.size(); ++r) {
+      const double wavelength = ratios[r] * cutoff;
+      const std::size_t n = static_cast<std::size_t>(wavelength * 40 + 4 * cutoff);
+      std::vector<double> z(n);
+      for (std::size_t i = 0; i < n; ++i) z[i] = std::sin(2 * pi * static_cast<double>(i) / wavelength);
+      FilterSettings s;
+      s.cutoff_samples = cutoff;
+      const auto w = filter_profile(z, s).waviness;
+      // Interior: >= 1.5 cut-offs (the kernel's half-width) from either end.
+      const auto edge = static_cast<std::size_t>(1.5 * cutoff);
+      const double h = fitted_amplitude(w, 1 / wavelength, edge, n - edge);
+      EXPECT_NEAR(h, iso_values[r], 0.002) << "lambda/lc = " << ratios[r] << ", cut-off " << cutoff;
+    }
   }
 }
 
