@@ -1,0 +1,578 @@
+#include "analysis/surface/surface_kind.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "analysis/surface/surface.hpp"
+#include "analysis/waviness/waviness.hpp"
+#include "chatterlab/errors.hpp"
+#include "chatterlab/fft.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/plot.hpp"
+#include "chatterlab/signal_io.hpp"
+
+namespace chatterlab::surface {
+namespace {
+
+namespace fs = std::filesystem;
+
+ParamSpec optional_spec(std::string key, ValueKind kind, std::string unit, std::string what) {
+  ParamSpec s = param_spec(std::move(key), kind, std::move(unit), std::move(what));
+  s.optional = true;
+  return s;
+}
+
+ParamSpec positive(ParamSpec s) {
+  s.min = 0.0;
+  s.min_exclusive = true;
+  return s;
+}
+
+ParamSpec unit_spec() {
+  ParamSpec unit = param_spec("unit", ValueKind::string, "1",
+                              "unit of the profile values: um (default), mm or m");
+  unit.default_value = "um";
+  unit.choices = {"um", "mm", "m"};
+  return unit;
+}
+
+std::vector<ParamSpec> input_specs() {
+  ParamSpec file = param_spec("file", ValueKind::string, "1",
+                              "profile data file (CSV/whitespace table or WAV), relative to the "
+                              "study file");
+  ParamSpec closed = param_spec("closed", ValueKind::boolean, "1",
+                                "true: one revolution of a circumferential profile (periodic)");
+  closed.default_value = false;
+  const ParamSpec unit = unit_spec();
+  ParamSpec per_rev = optional_spec("samples_per_rev", ValueKind::integer, "1",
+                                    "closed profiles: samples in one revolution (= rows)");
+  per_rev.min = 4;
+  return {file,
+          optional_spec("column", ValueKind::string, "1",
+                        "profile column (header name or 1-based index); default: the only "
+                        "column besides x_column"),
+          optional_spec("x_column", ValueKind::string, "mm",
+                        "open profiles: column of positions in mm (must be uniformly spaced)"),
+          positive(optional_spec("spacing_mm", ValueKind::real, "mm",
+                                 "open profiles: sample spacing")),
+          per_rev,
+          closed,
+          unit};
+}
+
+std::vector<ParamSpec> filter_specs() {
+  ParamSpec type = param_spec("type", ValueKind::string, "1",
+                              "gaussian (ISO 16610-21) or robust_gaussian (ISO 16610-31)");
+  type.default_value = "gaussian";
+  type.choices = {"gaussian", "robust_gaussian"};
+  ParamSpec iterations = param_spec("max_iterations", ValueKind::integer, "1",
+                                    "robust_gaussian: most reweighting passes");
+  iterations.default_value = 50;
+  iterations.min = 1;
+  iterations.max = 1000;
+  return {type,
+          positive(optional_spec("cutoff_mm", ValueKind::real, "mm",
+                                 "open profiles: cut-off wavelength lambda_c")),
+          positive(optional_spec("cutoff_upr", ValueKind::real, "1/rev",
+                                 "closed profiles: cut-off in undulations per revolution "
+                                 "(default 50; ISO 12181-2 uses 15, 50, 150, 500)")),
+          iterations};
+}
+
+std::vector<ParamSpec> process_specs() {
+  ParamSpec low = optional_spec("low_band_upr", ValueKind::real_list, "1/rev",
+                                "Wz|f low band [from, to] (default around Z = n_g / n_w)");
+  low.min_items = 2;
+  low.min = 0;
+  ParamSpec high = optional_spec("high_band_upr", ValueKind::real_list, "1/rev",
+                                 "Wz|f high band [from, to] (default: above the low band)");
+  high.min_items = 2;
+  high.min = 0;
+  return {positive(optional_spec("wheel_speed_rpm", ValueKind::real, "rpm",
+                                 "wheel speed n_g (with work_speed_rpm: Wz|f bands)")),
+          positive(optional_spec("work_speed_rpm", ValueKind::real, "rpm", "work speed n_w")),
+          low, high};
+}
+
+std::vector<ParamSpec> parameter_specs() {
+  ParamSpec lengths = param_spec("sampling_lengths", ValueKind::integer, "1",
+                                 "W parameters averaged over this many equal sampling lengths");
+  lengths.default_value = 1;
+  lengths.min = 1;
+  ParamSpec a = positive(param_spec("motif_a_mm", ValueKind::real, "mm",
+                                    "ISO 12085 limit A of roughness motifs"));
+  a.default_value = 0.5;
+  ParamSpec b = positive(param_spec("motif_b_mm", ValueKind::real, "mm",
+                                    "ISO 12085 limit B of waviness motifs"));
+  b.default_value = 2.5;
+  return {lengths, a, b};
+}
+
+Json validated_table(const Json& document, const std::string& name,
+                     const std::vector<ParamSpec>& specs, const SourceMap& sources) {
+  Json table = document.contains(name) ? document.at(name) : Json::object();
+  if (!table.is_object())
+    throw InputError(fmt::format("{}: {} = {}: expected a table [{}]",
+                                 sources.locate(name).str(), name, table.dump(), name));
+  return validate_params(table, specs, name, sources);
+}
+
+double unit_to_um(const std::string& unit) {
+  if (unit == "mm") return 1e3;
+  if (unit == "m") return 1e6;
+  return 1.0;
+}
+
+// The profile column's name: as given, or the only column that is not the x column.
+std::string profile_column(const Json& input, const DataTable& table, const SourceMap* sources) {
+  if (input["column"].is_string()) return input["column"].get<std::string>();
+  std::vector<std::string> candidates;
+  for (const auto& name : table.names)
+    if (!input["x_column"].is_string() || name != input["x_column"].get<std::string>())
+      candidates.push_back(name);
+  if (candidates.size() == 1) return candidates.front();
+  std::string list;
+  for (const auto& name : table.names) list += (list.empty() ? "" : ", ") + name;
+  throw InputError(fmt::format("{}: missing key 'input.column': {} has {} columns ({}); name the "
+                               "profile column",
+                               sources ? sources->locate("input").str() : std::string("input"),
+                               table.file.string(), table.names.size(), list));
+}
+
+SampledSeries series_from(const Json& input, const DataTable& table, const std::string& column) {
+  SampledSeries s;
+  s.values = table.column(column);
+  s.closed = input["closed"].get<bool>();
+  s.name = column;
+  if (s.closed) {
+    s.sample_unit = "deg";
+    s.sample_interval = 360.0 / static_cast<double>(s.values.size());
+  } else {
+    s.sample_unit = "mm";
+    if (input["spacing_mm"].is_number()) {
+      s.sample_interval = input["spacing_mm"].get<double>();
+    } else {
+      const auto& x = table.column(input["x_column"].get<std::string>());
+      s.sample_interval = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+    }
+  }
+  return s;
+}
+
+// `rows`: the profile's samples; for a closed profile given with spacing_mm (circumferential
+// spacing) and cutoff_mm, the cut-off becomes cutoff_upr = circumference / cutoff_mm.
+SurfaceSettings settings_from(const Json& document, std::size_t rows = 0) {
+  const Json& input = document.at("input");
+  const Json& filter = document.at("filter");
+  const Json& process = document.at("process");
+  const Json& parameters = document.at("parameters");
+  SurfaceSettings s;
+  s.filter = filter["type"] == "robust_gaussian" ? FilterType::robust_gaussian
+                                                  : FilterType::gaussian;
+  if (filter["cutoff_mm"].is_number()) s.cutoff_mm = filter["cutoff_mm"].get<double>();
+  if (filter["cutoff_upr"].is_number()) s.cutoff_upr = filter["cutoff_upr"].get<double>();
+  s.max_iterations = filter["max_iterations"].get<int>();
+  s.value_to_um = unit_to_um(input["unit"].get<std::string>());
+  s.sampling_lengths = parameters["sampling_lengths"].get<int>();
+  s.motif_a_mm = parameters["motif_a_mm"].get<double>();
+  s.motif_b_mm = parameters["motif_b_mm"].get<double>();
+  if (process["wheel_speed_rpm"].is_number())
+    s.wheel_speed_rpm = process["wheel_speed_rpm"].get<double>();
+  if (process["work_speed_rpm"].is_number())
+    s.work_speed_rpm = process["work_speed_rpm"].get<double>();
+  auto band = [&](const char* key) -> std::optional<std::pair<double, double>> {
+    if (!process[key].is_array()) return std::nullopt;
+    return std::pair{process[key][0].get<double>(), process[key][1].get<double>()};
+  };
+  s.low_band_upr = band("low_band_upr");
+  s.high_band_upr = band("high_band_upr");
+  if (input["closed"] == Json(true) && s.cutoff_mm && input["spacing_mm"].is_number() && rows > 0) {
+    s.cutoff_upr = static_cast<double>(rows) * input["spacing_mm"].get<double>() / *s.cutoff_mm;
+    s.cutoff_mm.reset();
+  }
+  return s;
+}
+
+// Uniform spacing of an x column: every step within 0.1 % of the mean step (and increasing).
+void check_uniform(const DataTable& table, const std::string& x_column, const SourceMap& sources) {
+  const auto& x = table.column(x_column);
+  if (x.size() < 2) return;
+  const double mean = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+  for (std::size_t i = 0; i + 1 < x.size(); ++i) {
+    const double step = x[i + 1] - x[i];
+    if (!(mean > 0) || std::abs(step - mean) > 1e-3 * mean) {
+      const std::size_t line = i + 1 < table.source_lines.size() ? table.source_lines[i + 1] : i + 2;
+      throw InputError(fmt::format(
+          "{}: input.x_column = \"{}\": non-uniform spacing in {} at line {}: step {} mm differs "
+          "from the mean spacing {} mm by more than 0.1 % (resample the profile uniformly)",
+          sources.locate("input.x_column").str(), x_column, table.file.string(), line, step,
+          mean));
+    }
+  }
+}
+
+fs::path resolve_file(const Json& input, const SourceMap& sources) {
+  fs::path file = input["file"].get<std::string>();
+  if (file.is_relative()) {
+    const std::string study = sources.locate("input.file").file;
+    if (!study.empty()) file = fs::absolute(fs::path(study)).parent_path() / file;
+  }
+  return file.lexically_normal();
+}
+
+// ---------------------------------------------------------------- outputs
+std::vector<double> every(const std::vector<double>& v, std::size_t stride) {
+  std::vector<double> out;
+  for (std::size_t i = 0; i < v.size(); i += stride) out.push_back(v[i]);
+  return out;
+}
+
+void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& title,
+                   const fs::path& dir) {
+  const std::size_t stride = std::max<std::size_t>(1, e.position.size() / 20000);
+  const std::string x_label = closed ? "angle [deg]" : "x [mm]";
+  const auto x = every(e.position, stride);
+  plot::Curves profile;
+  profile.title = title + ": profile and waviness (filter mean line)";
+  profile.x_label = x_label;
+  profile.y_label = "height [um]";
+  profile.series.push_back({"profile", x, every(e.profile_um, stride), "lines"});
+  const Json& filter = e.summary.at("filter");
+  const std::string cutoff = filter.contains("cutoff_upr")
+                                 ? fmt::format("{} UPR", filter["cutoff_upr"].get<double>())
+                                 : fmt::format("lc = {} mm", filter["cutoff_mm"].get<double>());
+  profile.series.push_back({fmt::format("waviness ({} filter, {})",
+                                        filter["type"].get<std::string>(), cutoff),
+                            x, every(e.waviness_um, stride), "lines"});
+  plot::render(profile, dir, "profile");
+  plot::Curves roughness;
+  roughness.title = title + ": roughness (profile - waviness)";
+  roughness.x_label = x_label;
+  roughness.y_label = "roughness [um]";
+  roughness.series.push_back({"roughness", x, every(e.roughness_um, stride), "lines"});
+  roughness.reference_y = 0.0;
+  roughness.reference_label = "mean line";
+  plot::render(roughness, dir, "roughness");
+}
+
+// Polar plot of the waviness about the least-squares centre (eccentricity removed, as roundness
+// instruments draw it), magnified onto a base circle of twice the LS peak-to-valley, with the
+// four reference circles (limacons relative to the LS circle) in the same scale.
+void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir) {
+  const Json& rd = e.summary.at("roundness");
+  const Json& ls = rd.at("least_squares");
+  const double base = std::max(2.0 * ls.at("RONt_um").get<double>(), 1e-9);
+  auto limacon = [](const Json& c, double th) {
+    return c.at("radius_offset_um").get<double>() + c.at("centre_x_um").get<double>() * std::cos(th) +
+           c.at("centre_y_um").get<double>() * std::sin(th);
+  };
+  const std::size_t n = e.waviness_um.size(), stride = std::max<std::size_t>(1, n / 4000);
+  plot::Curves polar;
+  polar.title = fmt::format("{}: roundness about the LS centre (base circle {:.3g} um)", title, base);
+  polar.x_label = "x [um]";
+  polar.y_label = "y [um]";
+  plot::Series profile{"waviness", {}, {}, "lines"};
+  for (std::size_t i = 0; i <= n; i += stride) {
+    const std::size_t k = i % n;
+    const double th = e.position[k] * std::numbers::pi / 180.0;
+    const double rho = base + e.waviness_um[k] - limacon(ls, th);
+    profile.x.push_back(rho * std::cos(th));
+    profile.y.push_back(rho * std::sin(th));
+  }
+  polar.series.push_back(std::move(profile));
+  for (const char* name : {"least_squares", "minimum_zone", "minimum_circumscribed",
+                           "maximum_inscribed"}) {
+    const Json& c = rd.at(name);
+    plot::Series circle{fmt::format("{} (RONt {:.3g} um)", name, c.at("RONt_um").get<double>()),
+                        {}, {}, "lines"};
+    for (int k = 0; k <= 360; ++k) {
+      const double th = k * std::numbers::pi / 180.0;
+      const double rho = base + limacon(c, th) - limacon(ls, th);
+      circle.x.push_back(rho * std::cos(th));
+      circle.y.push_back(rho * std::sin(th));
+    }
+    polar.series.push_back(std::move(circle));
+  }
+  plot::render(polar, dir, "polar");
+}
+
+// Amplitude per UPR of the profile with the Wz|f bands marked.
+void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir) {
+  const Json& wzf = e.summary.at("Wz_f");
+  const std::size_t n = e.profile_um.size();
+  RealFft fft(n);
+  const auto spectrum = fft.forward(e.profile_um);
+  plot::Curves bands;
+  bands.title = fmt::format("{}: Wz|f low {:.3g} um, high {:.3g} um", title,
+                            wzf["low"]["Wz_um"].get<double>(), wzf["high"]["Wz_um"].get<double>());
+  bands.x_label = "undulations per revolution [UPR]";
+  bands.y_label = "amplitude [um]";
+  bands.log_x = true;
+  plot::Series low{"low band (forced lobes)", {}, {}, "impulses"},
+      high{"high band (chatter)", {}, {}, "impulses"}, other{"outside the bands", {}, {}, "impulses"};
+  for (std::size_t k = 2; k < spectrum.size(); ++k) {
+    const double upr = static_cast<double>(k);
+    const double amplitude = (2 * k == n ? 1.0 : 2.0) * std::abs(spectrum[k]) / static_cast<double>(n);
+    plot::Series& target =
+        upr >= wzf["low"]["from_upr"].get<double>() && upr <= wzf["low"]["to_upr"].get<double>()
+            ? low
+            : (upr >= wzf["high"]["from_upr"].get<double>() &&
+                       upr <= wzf["high"]["to_upr"].get<double>()
+                   ? high
+                   : other);
+    target.x.push_back(upr);
+    target.y.push_back(amplitude);
+  }
+  for (auto* s : {&low, &high, &other})
+    if (!s->x.empty()) bands.series.push_back(std::move(*s));
+  plot::render(bands, dir, "wz_f_bands");
+}
+
+}  // namespace
+
+PluginInfo SurfaceStudy::info() {
+  PluginInfo info;
+  info.name = "surface";
+  info.description =
+      "surface metrology of one profile: ISO Gaussian/robust filters, waviness and MOTIF "
+      "parameters, roundness about LS/MZ/MC/MI circles, Wz|f bands";
+  info.models_md_ids = "W1, W2";
+  info.params = filter_specs();  // the [filter] table; [input], [process], [parameters]: docs
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"type", "gaussian"}, {"cutoff_mm", 0.8}};
+  return info;
+}
+
+void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
+  if (!document.contains("input"))
+    throw InputError(fmt::format("{}: missing table [input] (file, column, spacing_mm or "
+                                 "samples_per_rev with closed = true)",
+                                 sources.locate("input").str()));
+  // `column = 2` (a number) means the same as column = "2": the 1-based column index.
+  if (document["input"].is_object() && document["input"].contains("column") &&
+      document["input"]["column"].is_number_integer())
+    document["input"]["column"] = std::to_string(document["input"]["column"].get<std::int64_t>());
+  Json input = validated_table(document, "input", input_specs(), sources);
+  Json filter = validated_table(document, "filter", filter_specs(), sources);
+  Json process = validated_table(document, "process", process_specs(), sources);
+  Json parameters = validated_table(document, "parameters", parameter_specs(), sources);
+  auto fail = [&](const std::string& key, const std::string& what) {
+    throw InputError(fmt::format("{}: {}", sources.locate(key).str(), what));
+  };
+
+  const fs::path file = resolve_file(input, sources);
+  input["file"] = file.string();
+  DataTable table;
+  try {
+    table = read_data_table(file);
+  } catch (const InputError& e) {
+    fail("input.file", fmt::format("input.file: {}", e.what()));
+  }
+  const bool closed = input["closed"].get<bool>();
+  if (input["x_column"].is_string()) {
+    if (closed) fail("input.x_column", "input.x_column: closed profiles are sampled by angle "
+                                       "(samples_per_rev); x_column is for open profiles");
+    try {
+      table.column(input["x_column"].get<std::string>());
+    } catch (const InputError& e) {
+      fail("input.x_column", fmt::format("input.x_column: {}", e.what()));
+    }
+  }
+  const std::string column = profile_column(input, table, &sources);
+  try {
+    table.column(column);
+  } catch (const InputError& e) {
+    fail("input.column", fmt::format("input.column = \"{}\": {}", column, e.what()));
+  }
+  input["column"] = column;
+
+  if (closed) {
+    if (input["samples_per_rev"].is_number_integer() &&
+        static_cast<std::size_t>(input["samples_per_rev"].get<std::int64_t>()) != table.rows())
+      fail("input.samples_per_rev",
+           fmt::format("input.samples_per_rev = {}: {} has {} rows; a closed profile is exactly "
+                       "one revolution",
+                       input["samples_per_rev"].get<std::int64_t>(), file.string(), table.rows()));
+    if (filter["cutoff_mm"].is_number() && filter["cutoff_upr"].is_number())
+      fail("filter.cutoff_mm", "filter.cutoff_mm and filter.cutoff_upr: give one cut-off");
+    if (filter["cutoff_mm"].is_number() && !input["spacing_mm"].is_number())
+      fail("filter.cutoff_mm", "filter.cutoff_mm: a closed profile takes its cut-off in "
+                               "undulations per revolution: use cutoff_upr (or give "
+                               "input.spacing_mm, the circumferential spacing, to convert)");
+  } else {
+    if (input["samples_per_rev"].is_number())
+      fail("input.samples_per_rev", "input.samples_per_rev needs closed = true (an open profile "
+                                    "takes spacing_mm or x_column)");
+    if (filter["cutoff_upr"].is_number())
+      fail("filter.cutoff_upr", "filter.cutoff_upr needs closed = true (an open profile takes "
+                                "cutoff_mm)");
+    if (!filter["cutoff_mm"].is_number())
+      fail("filter", "missing key 'filter.cutoff_mm': the cut-off wavelength of an open profile "
+                     "(e.g. 0.8 or 2.5 mm)");
+    if (!input["spacing_mm"].is_number() && !input["x_column"].is_string())
+      fail("input", "missing key 'input.spacing_mm' (or input.x_column): the sample spacing of "
+                    "an open profile");
+    if (input["x_column"].is_string()) {
+      check_uniform(table, input["x_column"].get<std::string>(), sources);
+      if (input["spacing_mm"].is_number()) {
+        const SampledSeries s = series_from(input, table, column);
+        Json without_spacing = input;
+        without_spacing["spacing_mm"] = nullptr;
+        const double from_x = series_from(without_spacing, table, column).sample_interval;
+        if (std::abs(from_x - s.sample_interval) > 1e-3 * from_x)
+          fail("input.spacing_mm",
+               fmt::format("input.spacing_mm = {} disagrees with the x column's spacing {} mm",
+                           s.sample_interval, from_x));
+      }
+    }
+  }
+  const bool wheel = process["wheel_speed_rpm"].is_number(), work = process["work_speed_rpm"].is_number();
+  if (wheel != work)
+    fail("process", "Wz|f needs both process.wheel_speed_rpm and process.work_speed_rpm");
+  if (wheel && !closed)
+    fail("process.wheel_speed_rpm", "process.wheel_speed_rpm: Wz|f bands need a closed "
+                                    "(circumferential) profile, closed = true");
+  for (const char* key : {"low_band_upr", "high_band_upr"}) {
+    const Json& band = process[key];
+    if (!band.is_array()) continue;
+    if (band.size() != 2 || band[0].get<double>() > band[1].get<double>())
+      fail(fmt::format("process.{}", key),
+           fmt::format("process.{} = {}: expected [from, to] with from <= to", key, band.dump()));
+  }
+
+  document["input"] = input;
+  document["filter"] = filter;
+  document["process"] = process;
+  document["parameters"] = parameters;
+  // The filter checks on the real series: samples per cut-off, cut-off against profile length.
+  try {
+    Json ignored;
+    resolve_filter(series_from(input, table, column), settings_from(document, table.rows()),
+                   ignored);
+  } catch (const InputError& e) {
+    fail(closed ? "filter.cutoff_upr" : "filter.cutoff_mm", e.what());
+  }
+}
+
+std::vector<std::string> SurfaceStudy::output_columns(const Json& document) const {
+  std::vector<std::string> columns{"Wa_um", "Wq_um", "Wz_um", "Wt_um", "Wz_five_um"};
+  if (document.at("input").at("closed").get<bool>()) {
+    columns.emplace_back("RONt_um");
+    columns.emplace_back("RONt_minimum_zone_um");
+  }
+  return columns;
+}
+
+std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
+                                          const PointContext& context) const {
+  const Json& input = point_document.at("input");
+  const DataTable table = read_data_table(input.at("file").get<std::string>());
+  const std::string column = input.at("column").get<std::string>();
+  const SampledSeries series = series_from(input, table, column);
+  const SurfaceEvaluation e =
+      evaluate_surface_profile(series, settings_from(point_document, series.values.size()));
+  const Json& s = e.summary;
+  std::vector<Json> out{s["Wa_um"], s["Wq_um"], s["Wz_um"], s["Wt_um"], s["Wz_five_um"]};
+  if (series.closed) {
+    out.push_back(s["RONt_um"]);
+    out.push_back(s["roundness"]["minimum_zone"]["RONt_um"]);
+  }
+  if (context.artifact_dir.empty()) return out;
+
+  const fs::path& dir = context.artifact_dir;
+  write_file_atomically(dir / "filtered.csv",
+                        csv_text({series.closed ? "angle_deg" : "x_mm", "profile_um",
+                                  "waviness_um", "roughness_um"},
+                                 {e.position, e.profile_um, e.waviness_um, e.roughness_um}));
+  Json summary = s;
+  if (series.closed && point_document.at("filter")["cutoff_mm"].is_number()) {
+    summary["filter"]["cutoff_mm"] = point_document.at("filter")["cutoff_mm"];
+    summary["filter"]["circumference_mm"] =
+        static_cast<double>(series.values.size()) * input.at("spacing_mm").get<double>();
+  }
+  if (context.plots) {
+    const std::string title = column;
+    std::string errors;
+    auto attempt = [&](auto&& draw) {
+      try {
+        draw();
+      } catch (const std::exception& err) {
+        errors += (errors.empty() ? "" : "; ") + std::string(err.what());
+      }
+    };
+    attempt([&] { plot_profiles(e, series.closed, title, dir); });
+    if (series.closed) attempt([&] { plot_polar(e, title, dir); });
+    if (s.contains("Wz_f")) attempt([&] { plot_bands(e, title, dir); });
+    if (!errors.empty()) summary["plot_errors"] = errors;
+  }
+  write_json_file(dir / "summary.json", summary);
+  return out;
+}
+
+PluginInfo SurfaceAnalysis::info() {
+  PluginInfo info;
+  info.name = "surface_profile";  // names are unique across registries: the kind is "surface"
+  info.description =
+      "waviness, MOTIF, roundness and Wz|f of a profile series (the surface study's evaluation)";
+  info.models_md_ids = "W1, W2";
+  info.params = {unit_spec()};
+  for (const auto& specs : {filter_specs(), process_specs(), parameter_specs()})
+    info.params.insert(info.params.end(), specs.begin(), specs.end());
+  // `type` names the plugin in a component table: the filter type is `filter` here.
+  info.params[1].key = "filter";
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"cutoff_upr", 50}, {"unit", "m"}};
+  return info;
+}
+
+Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+  // The flat parameters regrouped into the study kind's tables, read by the same code.
+  Json document{{"input", Json::object()}, {"filter", Json::object()},
+                {"process", Json::object()}, {"parameters", Json::object()}};
+  auto take = [&](const std::vector<ParamSpec>& specs, const char* table) {
+    for (const auto& spec : specs)
+      document[table][spec.key] = params_.contains(spec.key) ? params_.at(spec.key) : Json();
+  };
+  take({unit_spec()}, "input");
+  take(filter_specs(), "filter");
+  document["filter"]["type"] = params_.at("filter");
+  take(process_specs(), "process");
+  take(parameter_specs(), "parameters");
+  return evaluate_surface(series, settings_from(document));
+}
+
+void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& results,
+                                   const fs::path& out_dir) const {
+  // Figures of one profile are drawn by run_point next to its summary.json. A grid over one
+  // numeric key (e.g. filter.cutoff_upr) also gets the parameters against that key.
+  std::vector<std::size_t> varying;
+  for (std::size_t a = 0; a < study.grid.size(); ++a)
+    if (study.grid[a].values.size() > 1) varying.push_back(a);
+  if (varying.size() != 1) return;
+  const std::size_t axis = varying.front();
+  for (const auto& v : study.grid[axis].values)
+    if (!v.is_number()) return;
+  plot::Curves curves;
+  curves.title = "surface parameters against " + study.grid[axis].key;
+  curves.x_label = study.grid[axis].key;
+  curves.y_label = "parameter [um]";
+  for (std::size_t c = 0; c < results.output_columns.size(); ++c) {
+    plot::Series series{results.output_columns[c], {}, {}, "linespoints"};
+    for (const auto& row : results.rows) {
+      const Json& y = row[results.grid_columns.size() + c];
+      if (!y.is_number()) continue;  // failed point: listed in results.csv
+      series.x.push_back(row[axis].get<double>());
+      series.y.push_back(y.get<double>());
+    }
+    curves.series.push_back(std::move(series));
+  }
+  plot::render(curves, out_dir, "parameters");
+}
+
+}  // namespace chatterlab::surface
+
+CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::surface::SurfaceStudy);
+CHATTERLAB_REGISTER_ANALYSIS(chatterlab::surface::SurfaceAnalysis);
