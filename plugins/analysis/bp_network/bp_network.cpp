@@ -366,7 +366,7 @@ void BpNetworkAnalysis::check(const SampledSeries& series) const {
                                    range[0], range[1]));
     if (range[1] > end + 0.5 * series.sample_interval)
       throw InputError(fmt::format(
-          "bp_network.{} = [{}, {}]: outside the signal, which ends at t = {} s", key, range[0],
+          "bp_network.{} = [{}, {}]: outside the signal, which ends at t = {:.6g} s", key, range[0],
           range[1], end));
   }
   const LabelledWindows lw = labelled_windows(series, window_, *stable_s_, *onset_s_, train_fraction_);

@@ -314,7 +314,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     try {
       as_detector(*build_detector(name, table)).check(series);
     } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: {} (signal: {}, {} samples at {} Hz, {} s)",
+      throw InputError(fmt::format("{}: {} (signal: {}, {} samples at {} Hz, {:.6g} s)",
                                    sources.locate("monitor." + name).str(), e.what(),
                                    document["input"]["file"].get<std::string>(),
                                    series.values.size(), series.sample_rate(),
@@ -325,7 +325,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     for (const Json& t : own["snapshot_times_s"])
       if (t.get<double>() > monitor::end_time_s(series))
         throw InputError(fmt::format(
-            "{}: monitor.snapshot_times_s: {} s is after the end of the signal ({} s)",
+            "{}: monitor.snapshot_times_s: {} s is after the end of the signal ({:.6g} s)",
             sources.locate("monitor.snapshot_times_s").str(), t.get<double>(),
             monitor::end_time_s(series)));
   for (auto& [name, table] : validated_detectors.items()) own[name] = table;
