@@ -105,6 +105,39 @@ TEST(ChatterMonitor, SavedWeightsReproduceTheAlarm) {
   EXPECT_EQ(a[0], b[0]);
 }
 
+// A mono 16-bit PCM WAV recording of the transition: the sample rate comes from its header.
+TEST(ChatterMonitor, WavInputTakesTheRateFromTheHeader) {
+  monitor::TransitionSignal spec;
+  const std::vector<double> x = spec.samples();
+  std::string data;
+  for (double v : x) {
+    const auto sample = static_cast<std::int16_t>(std::lround(v / 12.0 * 32767.0));  // |x| < 12
+    for (int b = 0; b < 2; ++b) data += static_cast<char>((static_cast<std::uint16_t>(sample) >> (8 * b)) & 0xff);
+  }
+  std::string wav;
+  auto put = [&wav](std::uint32_t v, int bytes) {
+    for (int b = 0; b < bytes; ++b) wav += static_cast<char>((v >> (8 * b)) & 0xff);
+  };
+  wav += "RIFF";
+  put(static_cast<std::uint32_t>(36 + data.size()), 4);
+  wav += "WAVEfmt ";
+  for (auto [value, bytes] : {std::pair{16u, 4}, {1u, 2}, {1u, 2}, {8000u, 4}, {16000u, 4}, {2u, 2}, {16u, 2}})
+    put(value, bytes);  // fmt size, PCM, mono, rate, byte rate, block align, bits
+  wav += "data";
+  put(static_cast<std::uint32_t>(data.size()), 4);
+  wav += data;
+  TempDir dir;
+  dir.write("accel.wav", wav);
+  const Study study = load_study(dir.write(
+      "s.toml", study_text("file = \"accel.wav\"", "[monitor.rbf_density]\n")));
+  EXPECT_DOUBLE_EQ(study.document.at("input").at("sample_rate_hz").get<double>(), 8000.0);
+  EXPECT_EQ(study.document.at("input").at("column"), "1");  // the only channel
+  const auto out = ChatterMonitor().run_point(study.point_document(0), PointContext{});
+  ASSERT_TRUE(out[0].is_number());
+  EXPECT_GT(out[0].get<double>(), spec.time_of_amplitude(1.0));
+  EXPECT_LT(out[0].get<double>(), spec.onset_s + 0.3);
+}
+
 std::string error(const TempDir& dir, const std::string& text) { return testing::load_error(dir, text); }
 
 void expect_mentions(const std::string& message, const std::vector<std::string>& parts) {
@@ -147,6 +180,13 @@ TEST(ChatterMonitor, BadInputNamesFileKeyAndLimit) {
   expect_mentions(error(dir, study_text("file = \"signal.csv\"\ncolumn = \"displacement_m\"",
                                         "[monitor.rbf_density]\nrho = 1.5\n")),
                   {"monitor.rbf_density.rho = 1.5"});
+  expect_mentions(error(dir, study_text("file = \"signal.csv\"\ncolumn = \"displacement_m\"",
+                                        "[monitor]\nsnapshot_times_s = [2.0]\n[monitor.rbf_density]\n")),
+                  {"study.toml:8: monitor.snapshot_times_s: 2 s is after the end of the signal (0.999875 s)"});
+  dir.write("jitter.csv", "t_s,x\n0,1\n0.001,2\n0.0021,3\n0.003,4\n");
+  expect_mentions(error(dir, study_text("file = \"jitter.csv\"\ncolumn = \"x\"", "[monitor.rbf_density]\n")),
+                  {"study.toml:5:", "jitter.csv: line 4: t_s is not uniformly spaced",
+                   "give input.sample_rate_hz or resample the signal"});
 }
 
 }  // namespace
