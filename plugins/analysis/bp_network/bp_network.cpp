@@ -33,10 +33,6 @@ std::array<double, 2> range_param(const ParamValues& params, const char* key) {
   return {v[0], v[1]};
 }
 
-bool has_value(const ParamValues& params, const char* key) {
-  return params.has(key) && !params.json().at(key).is_null();
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------ scaling
@@ -330,9 +326,9 @@ BpNetworkAnalysis::BpNetworkAnalysis(const ParamValues& params)
       train_fraction_(params.real("train_fraction")),
       alarm_output_(params.real("alarm_output")),
       persistence_(static_cast<std::size_t>(params.integer("persistence_windows"))) {
-  if (has_value(params, "stable_s")) stable_s_ = range_param(params, "stable_s");
-  if (has_value(params, "onset_s")) onset_s_ = range_param(params, "onset_s");
-  if (has_value(params, "weights_file")) weights_file_ = params.string("weights_file");
+  if (params.has("stable_s")) stable_s_ = range_param(params, "stable_s");
+  if (params.has("onset_s")) onset_s_ = range_param(params, "onset_s");
+  if (params.has("weights_file")) weights_file_ = params.string("weights_file");
   options_.eta0 = params.real("eta0");
   options_.alpha = params.real("alpha");
   options_.target_error = params.real("target_error");

@@ -410,16 +410,17 @@ std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
                                  ? monitor.at("bp_network").at("window_samples").get<std::size_t>()
                                  : 10;
   if (series.values.size() >= window) {
-    const FeatureSeries fs = feature_series(series.values, window, window, series.sample_interval);
+    const FeatureSeries windows =
+        feature_series(series.values, window, window, series.sample_interval);
     std::vector<double> variance, rho1, residual;
-    for (const auto& f : fs.features) {
+    for (const auto& f : windows.features) {
       variance.push_back(f.variance);
       rho1.push_back(f.rho1);
       residual.push_back(f.residual_variance);
     }
     write_file_atomically(dir / "features.csv",
                           csv_text({"t_s", "variance", "rho1", "residual_variance"},
-                                   {fs.t_s, variance, rho1, residual}));
+                                   {windows.t_s, variance, rho1, residual}));
   }
   // A network trained here is saved for reuse (monitor.bp_network.weights_file).
   if (results.count("bp_network") && !ParamValues(monitor.at("bp_network")).has("weights_file"))

@@ -65,9 +65,8 @@ PluginInfo WindowFeaturesAnalysis::info() {
 
 WindowFeaturesAnalysis::WindowFeaturesAnalysis(const ParamValues& params)
     : window_(static_cast<std::size_t>(params.integer("window_samples"))),
-      hop_(params.has("hop_samples") && !params.json().at("hop_samples").is_null()
-               ? static_cast<std::size_t>(params.integer("hop_samples"))
-               : window_) {}
+      hop_(params.has("hop_samples") ? static_cast<std::size_t>(params.integer("hop_samples"))
+                                     : window_) {}
 
 Json WindowFeaturesAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
   monitor::require_samples(series, window_,
