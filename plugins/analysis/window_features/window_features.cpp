@@ -1,0 +1,110 @@
+#include "analysis/window_features/window_features.hpp"
+
+#include <fmt/format.h>
+
+#include "analysis/monitor_common/monitor_common.hpp"
+#include "chatterlab/plot.hpp"
+
+namespace chatterlab {
+
+WindowFeatures window_features(std::span<const double> x) {
+  const std::size_t n = x.size();
+  double mean = 0.0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  double sum_sq = 0.0, lag_product = 0.0, tail_sq = 0.0;  // tail: t = 2..N, as (5-8) prints it
+  for (std::size_t t = 0; t < n; ++t) {
+    const double d = x[t] - mean;
+    sum_sq += d * d;
+    if (t > 0) {
+      lag_product += d * (x[t - 1] - mean);
+      tail_sq += d * d;
+    }
+  }
+  WindowFeatures f;
+  f.variance = sum_sq / static_cast<double>(n);
+  f.rho1 = tail_sq > 0.0 ? lag_product / tail_sq : 0.0;
+  double residual = 0.0;
+  for (std::size_t t = 1; t < n; ++t) {
+    const double e = (x[t] - mean) - f.rho1 * (x[t - 1] - mean);
+    residual += e * e;
+  }
+  f.residual_variance = residual / static_cast<double>(n - 1);
+  return f;
+}
+
+FeatureSeries feature_series(std::span<const double> values, std::size_t window, std::size_t hop,
+                             double sample_interval) {
+  FeatureSeries out;
+  for (std::size_t start = 0; start + window <= values.size(); start += hop) {
+    out.first_sample.push_back(start);
+    out.t_s.push_back(static_cast<double>(start + window - 1) * sample_interval);
+    out.features.push_back(window_features(values.subspan(start, window)));
+  }
+  return out;
+}
+
+PluginInfo WindowFeaturesAnalysis::info() {
+  PluginInfo info;
+  info.name = "window_features";
+  info.description =
+      "per-window variance, lag-1 correlation and AR(1) residual variance of a signal";
+  info.models_md_ids = "C1";
+  const ParamSpec window =
+      monitor::count_spec("window_samples", "samples per window (the book uses 10)", 10, 3);
+  ParamSpec hop = param_spec("hop_samples", ValueKind::integer, "1",
+                             "samples between window starts (default: window_samples, i.e. "
+                             "consecutive non-overlapping windows)");
+  hop.min = 1;
+  hop.optional = true;
+  info.params = {window, hop};
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"window_samples", 10}};
+  return info;
+}
+
+WindowFeaturesAnalysis::WindowFeaturesAnalysis(const ParamValues& params)
+    : window_(static_cast<std::size_t>(params.integer("window_samples"))),
+      hop_(params.has("hop_samples") ? static_cast<std::size_t>(params.integer("hop_samples"))
+                                     : window_) {}
+
+Json WindowFeaturesAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+  monitor::require_samples(series, window_,
+                           fmt::format("window_features.window_samples = {}", window_));
+  const FeatureSeries fs = feature_series(series.values, window_, hop_, series.sample_interval);
+  Json variance = Json::array(), rho1 = Json::array(), residual = Json::array();
+  for (const auto& f : fs.features) {
+    variance.push_back(f.variance);
+    rho1.push_back(f.rho1);
+    residual.push_back(f.residual_variance);
+  }
+  return {{"window_samples", window_}, {"hop_samples", hop_}, {"t_s", fs.t_s},
+          {"variance", std::move(variance)}, {"rho1", std::move(rho1)},
+          {"residual_variance", std::move(residual)}};
+}
+
+void WindowFeaturesAnalysis::plot(const Json& result, const SampledSeries& series,
+                                  const std::filesystem::path& out_dir) const {
+  const auto t = result.at("t_s").get<std::vector<double>>();
+  const std::string unit = series.sample_unit;
+  plot::Curves variances;
+  variances.title = fmt::format("C1 window features ({} samples per window): variances",
+                                result.at("window_samples").get<std::size_t>());
+  variances.x_label = fmt::format("time of the window's last sample [{}]", unit);
+  variances.y_label = "variance [signal unit^2]";
+  variances.log_y = true;
+  variances.series.push_back({"variance sx2 (5-9)", t, result.at("variance").get<std::vector<double>>()});
+  variances.series.push_back({"AR(1) residual variance sa2 (5-10)", t,
+                              result.at("residual_variance").get<std::vector<double>>()});
+  plot::render(variances, out_dir, "window_features_variance");
+  plot::Curves rho;
+  rho.title = "C1 window features: lag-1 correlation rho1 (5-8)";
+  rho.x_label = variances.x_label;
+  rho.y_label = "rho1 [1]";
+  rho.series.push_back({"rho1", t, result.at("rho1").get<std::vector<double>>()});
+  plot::render(rho, out_dir, "window_features_rho1");
+}
+
+}  // namespace chatterlab
+
+CHATTERLAB_REGISTER_ANALYSIS(chatterlab::WindowFeaturesAnalysis);
