@@ -61,9 +61,12 @@ struct Design {
   bool orthogonal = true;
 };
 
+// Level labels as indices 0, 1, ... of the distinct values (ascending), for the balance check.
 std::vector<int> as_levels(const std::vector<double>& v) {
+  const std::set<double> distinct(v.begin(), v.end());
   std::vector<int> out;
-  for (double x : v) out.push_back(static_cast<int>(std::llround(x * 1e6)));  // labels, not values
+  for (double x : v)
+    out.push_back(static_cast<int>(std::distance(distinct.begin(), distinct.find(x))));
   return out;
 }
 

@@ -778,9 +778,12 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
     summary["weights"] = m.layout.weights;
     summary["max_harmonic"] = m.max_harmonic;
     summary["suppressed_harmonics"] = first.suppressed;
-    summary["roundness_um"] = first.roundness();
+    // Cylinder mode: the largest section roundness (as in results.csv); per section in
+    // sections.csv. Peak, valley and mean offset belong to one profile: the first section's.
+    summary["roundness_um"] = roundness;
     summary["roundness_reference"] =
-        "least-squares centre (first harmonic removed), peak-to-valley";
+        cyl ? "least-squares centre per section, peak-to-valley, largest over the sections"
+            : "least-squares centre (first harmonic removed), peak-to-valley";
     summary["peak_um"] = *std::max_element(first.profile.begin(), first.profile.end());
     summary["valley_um"] = *std::min_element(first.profile.begin(), first.profile.end());
     summary["mean_radius_offset_um"] = first.mean_radius_known ? Json(first.mean_radius) : Json();

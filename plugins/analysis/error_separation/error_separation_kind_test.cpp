@@ -171,6 +171,32 @@ TEST(ErrorSeparationKind, TimeRecursionAndNPointAgreeWithTheFrequencyMethod) {
     EXPECT_NEAR(np.column("deviation_um")[i], true_r(2 * pi * static_cast<double>(i) / 360), 1e-9);
 }
 
+TEST(ErrorSeparationKind, TwoPointApproximation) {
+  // Probes at 0 and 180 - 360/N degrees; the form has harmonics 3, 5, 18, 40. Even harmonics
+  // come out within ~pi/N (E5), so the 18- and 40-UPR content of the profile is close while the
+  // odd 3 and 5 are not: compare the 18/40 part through the profile's spectrum.
+  TempDir dir;
+  const std::size_t n = 360;
+  dir.write("probes.csv", probe_csv({0, 179}, n, 1, "A,C"));
+  const std::string text = "[study]\nkind = \"error_separation\"\n[input]\nfile = \"probes.csv\"\n"
+                           "columns = [\"A\", \"C\"]\n[probes]\nangles_deg = [0, 179]\nmethod = \"two_point\"\n";
+  run_single(load_text(dir, text), dir.path() / "out");
+  const Json summary = read_json(dir.path() / "out" / "summary.json");
+  EXPECT_EQ(summary.at("method"), "two_point");
+  EXPECT_EQ(summary.at("layout_angles_deg").size(), 3u);  // the three-point layout behind it
+  const DataTable profile = read_data_table(dir.path() / "out" / "profile.csv");
+  for (int l : {18, 40}) {
+    double a = 0, b = 0;  // Fourier coefficients of harmonic l
+    for (std::size_t i = 0; i < n; ++i) {
+      const double th = 2 * pi * static_cast<double>(i) / static_cast<double>(n);
+      a += 2.0 / n * profile.column("deviation_um")[i] * std::cos(l * th);
+      b += 2.0 / n * profile.column("deviation_um")[i] * std::sin(l * th);
+    }
+    const double amplitude = std::hypot(a, b), want = l == 18 ? 0.5 : 0.3;
+    EXPECT_NEAR(amplitude, want, 0.015 * want) << "harmonic " << l;
+  }
+}
+
 TEST(ErrorSeparationKind, ShippedStudiesReproduceTheirStatedTruth) {
   const fs::path studies = fs::path(CHATTERLAB_SOURCE_DIR) / "studies";
   TempDir dir;
