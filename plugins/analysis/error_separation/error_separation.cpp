@@ -259,7 +259,7 @@ WorstTransfer worst_q(const ProbeLayout& layout, int max_harmonic) {
   WorstTransfer worst;
   const Transfer t = transfer(layout, max_harmonic);
   for (std::size_t l = 2; l < t.q.size(); ++l)
-    if (t.q[l] > worst.q) worst = {t.q[l], static_cast<int>(l)};
+    if (std::isfinite(t.q[l]) && t.q[l] > worst.q) worst = {t.q[l], static_cast<int>(l)};
   return worst;
 }
 

@@ -59,7 +59,8 @@ Transfer transfer(const ProbeLayout& layout, int max_harmonic);
 std::vector<int> suppressed_harmonics(const ProbeLayout& layout, int max_harmonic,
                                       double tolerance);
 
-// The worst (largest) Q(l) over l = 2..max_harmonic and where it is.
+// The worst (largest) Q(l) over the harmonics l = 2..max_harmonic the layout sees (G(l) != 0;
+// a suppressed harmonic is reported by suppressed_harmonics, not as an infinite Q).
 struct WorstTransfer {
   double q = 0.0;
   int harmonic = 0;

@@ -390,15 +390,14 @@ std::vector<double> angles_deg_of(std::size_t n) {
   return a;
 }
 
-Json transfer_json(const es::Transfer& t, int top) {
-  es::WorstTransfer worst;
+// Worst Q and smallest |G| over the harmonics 2..top the layout sees.
+Json transfer_json(const es::ProbeLayout& layout, const es::Transfer& t, int top) {
+  const es::WorstTransfer worst = es::worst_q(layout, top);
   double min_g = std::numeric_limits<double>::infinity();
-  for (std::size_t l = 2; l < t.q.size() && static_cast<int>(l) <= top; ++l) {
-    if (t.q[l] > worst.q) worst = {t.q[l], static_cast<int>(l)};
-    min_g = std::min(min_g, t.g_abs[l]);
-  }
+  for (std::size_t l = 2; l < t.g_abs.size() && static_cast<int>(l) <= top; ++l)
+    if (t.g_abs[l] > 0) min_g = std::min(min_g, t.g_abs[l]);
   Json j;
-  j["worst_error_transfer_q"] = std::isfinite(worst.q) ? Json(worst.q) : Json("inf");
+  j["worst_error_transfer_q"] = worst.q;
   j["harmonic_of_worst_q"] = worst.harmonic;
   j["min_abs_g"] = min_g;
   return j;
@@ -791,7 +790,7 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
                                        {"limit_um", first.first_harmonic.limit},
                                        {"validity_fraction", c.validity_fraction},
                                        {"valid", all_valid}};
-    Json transfer = transfer_json(t, m.max_harmonic);
+    Json transfer = transfer_json(m.layout, t, m.max_harmonic);
     summary["transfer"] = transfer;
     if (c.method == "time_recursion") summary["recursion_passes"] = first.recursion_passes;
     if (m.options.fir)
@@ -814,7 +813,7 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
       opt["harmonic_of_worst_q"] = best.worst.harmonic;
     }
     const es::WorstTransfer this_worst = es::worst_q(m.layout, opt["max_harmonic"].get<int>());
-    opt["this_layout_worst_q"] = std::isfinite(this_worst.q) ? Json(this_worst.q) : Json("inf");
+    opt["this_layout_worst_q"] = this_worst.q;
     summary["angle_optimisation"] = opt;
     if (cyl) {
       Json cj;
@@ -845,7 +844,7 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
 
   std::vector<Json> out{roundness, first.mean_radius_known ? Json(first.mean_radius) : Json(),
                         first.suppressed.size(),
-                        std::isfinite(worst.q) ? Json(worst.q) : Json("inf"), all_valid};
+                        worst.q, all_valid};
   if (cyl) out.emplace_back(cyl->cylindricity);
   return out;
 }

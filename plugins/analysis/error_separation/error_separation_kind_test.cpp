@@ -128,6 +128,7 @@ TEST(ErrorSeparationKind, SuppressedHarmonicsAreReportedOrRefused) {
   EXPECT_EQ(suppressed[2], 71);
   EXPECT_EQ(suppressed[3], 73);
   EXPECT_EQ(row[2], suppressed.size());
+  EXPECT_TRUE(row[3].is_number());  // worst Q over the harmonics the probes see
   ASSERT_FALSE(summary.at("warnings").empty());
   EXPECT_NE(summary.at("warnings")[0].get<std::string>().find("harmonics 35, 37, 71"),
             std::string::npos);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -173,6 +174,10 @@ TEST(ErrorSeparation, OffsetsSharingAFactorWithNSuppressHarmonics) {
     if (36 * k + 1 <= 180) expected.push_back(36 * k + 1);
   }
   EXPECT_EQ(suppressed_harmonics(layout, 180, 1e-6), expected);
+  // The worst Q is taken over the harmonics the layout sees: finite, not at a suppressed one.
+  const WorstTransfer worst = worst_q(layout, 180);
+  EXPECT_TRUE(std::isfinite(worst.q));
+  EXPECT_EQ(std::count(expected.begin(), expected.end(), worst.harmonic), 0);
   // A coprime layout suppresses nothing.
   ProbeLayout coprime{samples_to_angles({0, 31, 100}, n), {}};
   coprime.weights = three_point_weights(coprime.angles_rad);
