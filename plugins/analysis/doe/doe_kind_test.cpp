@@ -93,6 +93,17 @@ TEST(DoeKind, MaximiseAndResidualError) {
   EXPECT_NEAR(s.at("anova").at("error").at("S").get<double>(), 71.428889, 1e-5);
 }
 
+TEST(DoeKind, ColumnsByIndex) {
+  // Columns may be named by 1-based index, as everywhere data tables are read.
+  TempDir dir;
+  dir.write("l9.csv", l9_csv);
+  const Json s = run_and_read(
+      load_text(dir, doe_study("response = \"6\"\nfactors = [\"2\", \"3\", \"5\"]\nerror_columns = [\"4\"]\n")),
+      dir.path() / "out");
+  EXPECT_NEAR(s.at("anova").at("5").at("S").get<double>(), 392.108889, 1e-5);  // C
+  EXPECT_EQ(s.at("best_combination"), "21 33 51");
+}
+
 TEST(DoeKind, BadInputIsRefusedWithItsReason) {
   TempDir dir;
   dir.write("l9.csv", l9_csv);

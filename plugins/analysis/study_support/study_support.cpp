@@ -80,11 +80,13 @@ DataTable read_table_at(const fs::path& file, const std::string& path, const Sou
 
 const std::vector<double>& column_at(const DataTable& table, const std::string& name,
                                      const std::string& path, const SourceMap& sources) {
-  if (std::find(table.names.begin(), table.names.end(), name) == table.names.end())
+  try {
+    return table.column(name);  // a header name or a 1-based index written as digits
+  } catch (const std::exception&) {  // InputError, or out_of_range for an absurd index
     throw InputError(fmt::format("{}: {}: no column \"{}\" in {} (columns: {})",
                                  sources.locate(path).str(), path, name, table.file.string(),
                                  fmt::join(table.names, ", ")));
-  return table.column(name);
+  }
 }
 
 std::string study_title(const Json& document, const fs::path& study_file) {

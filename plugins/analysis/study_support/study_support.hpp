@@ -36,7 +36,7 @@ std::filesystem::path resolve_data_file(const Json& value, const std::string& pa
 DataTable read_table_at(const std::filesystem::path& file, const std::string& path,
                         const SourceMap& sources);
 
-// A named column, or InputError "<study>:<line>: <path> = "<name>": no column '<name>' in
+// A column by header name or 1-based index ("2"), or InputError "<study>:<line>: <path> = "<name>": no column '<name>' in
 // <file> (columns: ...)".
 const std::vector<double>& column_at(const DataTable& table, const std::string& name,
                                      const std::string& path, const SourceMap& sources);
