@@ -182,6 +182,16 @@ TEST(ErrorSeparation, OffsetsSharingAFactorWithNSuppressHarmonics) {
   ProbeLayout coprime{samples_to_angles({0, 31, 100}, n), {}};
   coprime.weights = three_point_weights(coprime.angles_rad);
   EXPECT_TRUE(suppressed_harmonics(coprime, 180, 1e-6).empty());
+  // ... except when a weight vanishes: probes at 0 and 180 deg make c1 = -sin(180)/sin(83) = 0,
+  // G(l) = 1 + e^{j l pi}, and every odd harmonic is lost although gcd(97, 180, 360) = 1 (the
+  // gcd rule of MODELS.md E2 is about the periodicity of G, not a guarantee). The numerical
+  // check catches it.
+  ProbeLayout opposite{samples_to_angles({0, 97, 180}, n), {}};
+  opposite.weights = three_point_weights(opposite.angles_rad);
+  EXPECT_NEAR(opposite.weights[1], 0.0, 1e-15);
+  const auto odd = suppressed_harmonics(opposite, 180, 1e-6);
+  ASSERT_EQ(odd.size(), 89u);  // 3, 5, ..., 179
+  for (std::size_t k = 0; k < odd.size(); ++k) EXPECT_EQ(odd[k], static_cast<int>(3 + 2 * k));
 
   // Separation of a form containing harmonic 35 with the bad layout: 35 is lost (listed and
   // zeroed), every other harmonic is still exact.
