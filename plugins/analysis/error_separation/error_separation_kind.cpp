@@ -306,19 +306,21 @@ Method build_method(const Config& c, std::size_t n, const SourceMap& sources) {
       m.layout = {angles, es::three_point_weights(angles)};
     } else if (c.method == "time_recursion") {
       need(angles.size() == 3, fmt::format("{} angles; the time recursion takes 3", angles.size()));
-      const double p = (angles[1] - angles[0]) * static_cast<double>(n) / (2 * std::numbers::pi);
+      const double samples_per_rad = static_cast<double>(n) / (2 * std::numbers::pi);
+      const double p = (angles[1] - angles[0]) * samples_per_rad;
+      const double p0 = angles[0] * samples_per_rad;
       const double two_cos = 2.0 * std::cos(angles[1] - angles[0]);
       m.layout = {angles, {1.0, -two_cos, 1.0}};
-      need(std::abs(p - std::round(p)) < 1e-6 &&
+      need(std::abs(p - std::round(p)) < 1e-6 && std::abs(p0 - std::round(p0)) < 1e-6 &&
                std::abs((angles[2] - angles[1]) - (angles[1] - angles[0])) < 1e-9,
            fmt::format("the time recursion needs equally spaced probes 0, p, 2p whole samples "
                        "apart (one sample = {:.6g} deg)",
                        360.0 / static_cast<double>(n)));
-      const auto pi = static_cast<long>(std::llround(std::abs(p)));
-      need(std::gcd(pi, static_cast<long>(n)) == 1,
+      const auto spacing = static_cast<long>(std::llround(std::abs(p)));
+      need(std::gcd(spacing, static_cast<long>(n)) == 1,
            fmt::format("the probe spacing p = {} samples shares the factor {} with "
                        "samples_per_rev = {} (the recursion needs gcd(p, N) = 1)",
-                       pi, std::gcd(pi, static_cast<long>(n)), n));
+                       spacing, std::gcd(spacing, static_cast<long>(n)), n));
     } else if (c.method == "two_point") {
       need(angles.size() == 2,
            fmt::format("{} angles; the two-point approximation takes 2", angles.size()));

@@ -284,6 +284,9 @@ TEST(ErrorSeparationKind, BadInputIsRefusedWithItsReason) {
   m = error(study_text("angles_deg = [0, 99, 198]\nmethod = \"time_recursion\"\n"));
   expect_in(m, "shares the factor 9");
 
+  m = error(study_text("angles_deg = [0.5, 97.5, 194.5]\nmethod = \"time_recursion\"\n"));
+  expect_in(m, "equally spaced probes 0, p, 2p whole samples apart (one sample = 1 deg)");
+
   m = error(
       "[study]\nkind = \"error_separation\"\n[input]\nfile = \"probes.csv\"\ncolumns = [\"A\", "
       "\"C\"]\n"
