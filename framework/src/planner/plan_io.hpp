@@ -29,6 +29,11 @@ PlanRun compute_plan(const Json& document);
 void write_plan_files(const PlanRun& run, const Json& document, const std::filesystem::path& dir,
                       bool plots);
 
+// profile, error_along_x, pulse_rates (and wear_histogram with a sweep) in dir; failures are
+// appended to `failures` (a JSON array of messages).
+void draw_plan_plots(const PlanRun& run, const Json& document, const std::filesystem::path& dir,
+                     Json& failures);
+
 // The summary.json content (also what read_saved_plan reads back).
 Json plan_summary(const PlanRun& run, const Json& document);
 
