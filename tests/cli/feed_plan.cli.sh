@@ -27,6 +27,15 @@ sum=$(csv_column "$out/pulses.csv" upper_pulses | awk '{ s += $1 } END { print s
 [ "$sum" = "42000" ] || fail "upper pulses sum $sum (expected 42000)"
 expect_plots "$out" profile error_along_x pulse_rates
 
+# Problem 2: seed 000's first rates -27, 40, 55; the edge-radius limit of the concave part.
+out2="$work/p2"
+expect_exit 0 "$work/p2" "$bin" run "$src/studies/feed_plan_problem2.toml" --out "$out2"
+[ "$(sed -n 2p "$out2/pulses.csv" | cut -d, -f4-)" = "-27,40,55" ] || fail "problem 2 first row $(sed -n 2p "$out2/pulses.csv")"
+close_to "$(json_number "$out2/summary.json" total_time_s)" 3000 1e-6 || fail "problem 2 total time"
+close_to "$(json_number "$out2/summary.json" max_edge_radius_mm)" 722.7 0.5 || fail "problem 2 edge radius"
+error=$(json_number "$out2/summary.json" max_profile_error_mm)
+awk -v e="$error" 'BEGIN { exit !(e > 0 && e <= 0.005) }' || fail "problem 2 max profile error $error"
+
 # Bad input: exit 2, message with key and reason, nothing written.
 sed 's/^max_pulse_rate_hz = 100.0/max_pulse_rate_hz = 0.0/' "$src/studies/feed_plan_problem1.toml" > "$work/bad.toml"
 expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"
