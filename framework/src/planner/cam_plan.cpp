@@ -13,6 +13,7 @@
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
 #include "planner/parametric_spline.hpp"
+#include "planner/setup.hpp"
 
 namespace chatterlab::planner {
 
@@ -22,10 +23,7 @@ namespace fs = std::filesystem;
 constexpr double pi = std::numbers::pi;
 
 ParamSpec positive(std::string key, std::string unit, std::string description) {
-  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
-  spec.min = 0.0;
-  spec.min_exclusive = true;
-  return spec;
+  return positive_spec(std::move(key), std::move(unit), std::move(description));
 }
 
 std::vector<ParamSpec> part_specs() {

@@ -20,10 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 
 ParamSpec positive(std::string key, std::string unit, std::string description) {
-  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
-  spec.min = 0.0;
-  spec.min_exclusive = true;
-  return spec;
+  return positive_spec(std::move(key), std::move(unit), std::move(description));
 }
 
 std::vector<ParamSpec> machine_constraint_specs() {

@@ -2,6 +2,8 @@
 // The validated study tables turned into planner objects (shared by the feed_plan kind and the
 // saved-plan reader).
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "chatterlab/kinematics.hpp"
 #include "chatterlab/params.hpp"
@@ -10,6 +12,14 @@
 #include "planner/wheel_limits.hpp"
 
 namespace chatterlab::planner {
+
+// A real parameter > 0 (the planner kinds' settings).
+inline ParamSpec positive_spec(std::string key, std::string unit, std::string description) {
+  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
+  spec.min = 0.0;
+  spec.min_exclusive = true;
+  return spec;
+}
 
 // Keys of [machine] that the planner (not the kinematics plugin) owns.
 inline constexpr const char* machine_constraint_keys[] = {
