@@ -50,9 +50,15 @@ std::vector<ParamSpec> wheel_specs() {
 std::vector<ParamSpec> part_specs() {
   ParamSpec expression = param_spec("generatrix", ValueKind::string, "mm",
                                     "y = f(x): muparser expression in x (mm), _pi is pi");
+  expression.optional = true;
   ParamSpec range = param_spec("x_range_mm", ValueKind::real_list, "mm", "[a, b]: the x range to grind");
   range.min_items = 2;
-  return {expression, range};
+  range.optional = true;
+  ParamSpec points = param_spec("points_file", ValueKind::string, "",
+                                "instead of generatrix: CSV of x_mm, y_mm points (relative to the "
+                                "study file), natural cubic spline through them");
+  points.optional = true;
+  return {expression, range, points};
 }
 
 Json table_or_empty(const Json& document, const std::string& key, const SourceMap& sources) {
@@ -116,6 +122,27 @@ Json validate_machine(const Json& document, const SourceMap& sources) {
 
 Json validate_part(const Json& document, const SourceMap& sources) {
   Json part = validate_params(require_table(document, "part", sources), part_specs(), "part", sources);
+  const bool has_points = part["points_file"].is_string();
+  if (has_points == part["generatrix"].is_string() || has_points == part["x_range_mm"].is_array())
+    throw InputError(fmt::format("{}: [part] needs either generatrix and x_range_mm, or points_file "
+                                 "(not both)", sources.locate("part").str()));
+  if (has_points) {
+    const std::filesystem::path study_dir =
+        std::filesystem::path(sources.locate("part.points_file").file).parent_path();
+    part["points_file"] = std::filesystem::absolute(study_dir / part["points_file"].get<std::string>()).string();
+    try {
+      auto generatrix = build_generatrix(part);  // reads and checks the table (InputError)
+      for (int i = 0; i <= 64; ++i) {
+        const double x = generatrix->x_min_mm() + (generatrix->x_max_mm() - generatrix->x_min_mm()) * i / 64.0;
+        if (!(generatrix->evaluate(x).f >= 0))
+          throw std::invalid_argument(fmt::format("the radius must not be negative (f({}) < 0)", x));
+      }
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fmt::format("{}: part.points_file = \"{}\": {}", sources.locate("part.points_file").str(),
+                                   part["points_file"].get<std::string>(), e.what()));
+    }
+    return part;
+  }
   const auto range = part["x_range_mm"].get<std::vector<double>>();
   if (range.size() != 2 || !(range[0] < range[1]))
     throw InputError(fmt::format("{}: part.x_range_mm = {}: expected [a, b] with a < b",

@@ -2,6 +2,11 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/signal_io.hpp"
+
 namespace chatterlab::planner {
 
 std::unique_ptr<Kinematics> build_kinematics(const Json& machine) {
@@ -12,6 +17,13 @@ std::unique_ptr<Kinematics> build_kinematics(const Json& machine) {
 }
 
 std::unique_ptr<Generatrix> build_generatrix(const Json& part) {
+  if (part.contains("points_file") && part["points_file"].is_string()) {
+    // Point table: first column x (mm), second y (mm); natural cubic spline through the rows.
+    const DataTable table = read_data_table(part["points_file"].get<std::string>());
+    if (table.columns.size() < 2)
+      throw InputError(fmt::format("{}: needs two columns, x_mm and y_mm", table.file.string()));
+    return spline_generatrix(table.columns[0], table.columns[1]);
+  }
   const auto range = part.at("x_range_mm").get<std::vector<double>>();
   return expression_generatrix(part.at("generatrix").get<std::string>(), range.at(0), range.at(1));
 }
