@@ -36,6 +36,19 @@ close_to "$(json_number "$out2/summary.json" max_edge_radius_mm)" 722.7 0.5 || f
 error=$(json_number "$out2/summary.json" max_profile_error_mm)
 awk -v e="$error" 'BEGIN { exit !(e > 0 && e <= 0.005) }' || fail "problem 2 max profile error $error"
 
+# Problem 3: the sweep laws on a grid. Triangle spreads the wear evenly (uniformity > 0.9) but
+# brakes at each turn; the sine sweep is smoother (less time) and piles wear at the face's edges.
+out3="$work/p3"
+expect_exit 0 "$work/p3" "$bin" run "$src/studies/feed_plan_problem3.toml" --out "$out3"
+[ "$(csv_column "$out3/results.csv" status | sort -u)" = "ok" ] || fail "problem 3 points failed"
+tri_time=$(csv_column "$out3/results.csv" total_time_s | sed -n 1p)
+sine_time=$(csv_column "$out3/results.csv" total_time_s | sed -n 2p)
+awk -v t="$tri_time" -v s="$sine_time" 'BEGIN { exit !(s < t && t > 3000) }' || fail "sweep times $tri_time $sine_time"
+tri_u=$(json_number "$out3/points/000000/summary.json" uniformity)
+sine_u=$(json_number "$out3/points/000001/summary.json" uniformity)
+awk -v a="$tri_u" -v b="$sine_u" 'BEGIN { exit !(a > 0.9 && b < 0.5) }' || fail "uniformity $tri_u $sine_u"
+expect_plots "$out3/points/000000" wear_histogram
+
 # Bad input: exit 2, message with key and reason, nothing written.
 sed 's/^max_pulse_rate_hz = 100.0/max_pulse_rate_hz = 0.0/' "$src/studies/feed_plan_problem1.toml" > "$work/bad.toml"
 expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"

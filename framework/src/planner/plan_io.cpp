@@ -353,12 +353,22 @@ SavedPlan read_saved_plan(const fs::path& dir) {
   // on the wheel follows the saved sweep law as a function of x (fixed-point iteration).
   const auto sweep = sweep_function(build_sweep(summary.at("plan"), out.wheel), generatrix->x_min_mm());
   auto contact_x = [&](const std::vector<double>& positions, double& zeta) {
+    // Solve x = forward(positions, zeta(x)).x: secant iterations on the residual (the sweep can
+    // move the contact as fast as x itself, where plain fixed-point iteration stalls).
     double x = kinematics->forward(positions, 0.0).x_mm;
-    for (int i = 0; i < 4 && sweep; ++i) {
-      zeta = sweep(x);
-      x = kinematics->forward(positions, zeta).x_mm;
+    zeta = 0.0;
+    if (!sweep) return x;
+    auto residual = [&](double guess) { return kinematics->forward(positions, sweep(guess)).x_mm - guess; };
+    double x0 = x, r0 = residual(x0), x1 = x0 + 1e-3, r1 = residual(x1);
+    for (int i = 0; i < 50 && std::abs(r1) > 1e-10 && r1 != r0; ++i) {
+      const double next = x1 - r1 * (x1 - x0) / (r1 - r0);
+      x0 = x1;
+      r0 = r1;
+      x1 = next;
+      r1 = residual(x1);
     }
-    return x;
+    zeta = sweep(x1);
+    return x1;
   };
   double zeta0 = 0.0;
   std::vector<double> positions = out.plan.initial_position_mm;

@@ -249,6 +249,18 @@ TEST(FeedPlanStudy, WritesAPlanThatReadsBack) {
     EXPECT_NEAR(saved.segments[k].axial_speed_mm_per_s, 0.2, 0.02);
     EXPECT_NEAR(saved.segments[k].radius_mm, 130 + 30 * std::sin(0.25 * std::numbers::pi), 10.0);
   }
+  // With a wear sweep the reader recovers the contact's place on the wheel as well.
+  Json swept = study.document;
+  swept["plan"]["wear_sweep"] = "triangle";
+  swept["plan"]["wear_sweep_amplitude_mm"] = 5.0;
+  swept["plan"]["wear_sweep_period_mm"] = 20.0;
+  instance->run_point(swept, context);
+  const SavedPlan saved_swept = read_saved_plan(context.artifact_dir);
+  const auto sweep = sweep_function({"triangle", 5.0, 20.0, 5}, 0.0);
+  for (std::size_t k = 0; k < saved_swept.segments.size(); k += 23) {
+    const SegmentConditions& c = saved_swept.segments[k];
+    EXPECT_NEAR(c.contact_on_wheel_mm, sweep(0.5 * (c.x_start_mm + c.x_end_mm)), 0.05) << k;
+  }
   // A tampered file is an input error naming the file and line.
   dir.write("out/pulses.csv", "segment,start_s,duration_s,lower_pulses,middle_pulses,upper_pulses\n0,0,1,1.5,2,3\n");
   const std::string message = chatterlab::testing::input_error_of([&] { read_saved_plan(context.artifact_dir); });
