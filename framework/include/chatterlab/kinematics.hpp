@@ -31,6 +31,15 @@ struct MotorAxis {
   std::string position_name;    // what the position measures ("upper_nut"); empty: `name`
 };
 
+// Where on the tool the contact is (wear spreading moves it, MODELS.md P6): its position in the
+// machine's tool frame relative to the nominal contact point (along the base rails and across
+// them, towards the tool, mm) and the tilt of the tool surface's tangent there (rad, counter-
+// clockwise). {0, 0, 0}: the nominal contact (P4). A cylindrical wheel's face: {zeta, 0, 0}; a
+// profiled wheel's edge arc of radius r at arc angle phi: {r sin phi, r (1 - cos phi), phi}.
+struct ToolContact {
+  double along_mm = 0.0, across_mm = 0.0, tilt_rad = 0.0;
+};
+
 // The tool as seen from the part at one machine state: a disc of radius `radius_mm` centred on
 // (x_mm, y_mm) in the part frame (radius 0: the nominal contact point itself). The profile
 // deviation of that state is  (signed distance from the profile to the centre) - radius,
@@ -46,18 +55,18 @@ class Kinematics {
   // The motor-driven axes, in the order inverse()/forward() use.
   virtual std::vector<MotorAxis> motors() const = 0;
 
-  // Positions (mm, one per motor) that bring the tool into contact with the profile at `target`,
-  // with the contact at `contact_on_tool_mm` along the tool's working surface (0: the nominal
-  // contact point; wear spreading moves it, MODELS.md P6). Throws std::domain_error where the
-  // machine cannot reach the point (e.g. a tangent at or beyond 90 degrees).
-  virtual void inverse(const CurvePoint& target, double contact_on_tool_mm,
+  // Positions (axis units: mm, or deg for a rotary axis; one per motor) that bring the tool into
+  // contact with the profile at `target`, touching at `contact` on the tool. Throws
+  // std::domain_error where the machine cannot reach the point (e.g. a tangent at or beyond 90
+  // degrees).
+  virtual void inverse(const CurvePoint& target, const ToolContact& contact,
                        std::span<double> positions_mm) const = 0;
 
   // The tool in the part frame for given axis positions (the exact inverse of inverse() for the
-  // same contact_on_tool_mm): replaying a quantised plan through forward() gives the produced
-  // profile (MODELS.md P7).
+  // same contact): replaying a quantised plan through forward() gives the produced profile
+  // (MODELS.md P7).
   virtual ToolInPart forward(std::span<const double> positions_mm,
-                             double contact_on_tool_mm) const = 0;
+                             const ToolContact& contact) const = 0;
 };
 
 }  // namespace chatterlab

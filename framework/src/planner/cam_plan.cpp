@@ -166,7 +166,7 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     contact_l[k] = spline.parameter_at_polar_angle(phi);
     std::array<double, 2> p{}, d1{}, d2{};
     spline.evaluate(contact_l[k], p, d1, d2);
-    kinematics->inverse({p[0], p[1], d1[0], d1[1]}, 0.0, q[k]);
+    kinematics->inverse({p[0], p[1], d1[0], d1[1]}, {}, q[k]);
     if (k > 0) q[k][0] += 360.0 * std::round((q[k - 1][0] - q[k][0]) / 360.0);  // unwrap C
   }
   // Integer positions (remainders carried), durations: C at the mean cam speed, stretched where a
@@ -210,14 +210,14 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     std::sort(events.begin(), events.end());
     for (const auto& [u, m] : events) {
       position[m] += (pulses[k][m] > 0 ? 1.0 : -1.0) * motors[m].mm_per_pulse;
-      const double e = cam_deviation(spline, kinematics->forward(position, 0.0), l);
+      const double e = cam_deviation(spline, kinematics->forward(position, {}), l);
       max_error = std::max(max_error, std::abs(e));
       sum_sq += e * e;
       ++states;
     }
     double l_end = contact_l[k + 1];
     end_angle.push_back(360.0 * static_cast<double>(k + 1) / static_cast<double>(segments));
-    end_error.push_back(cam_deviation(spline, kinematics->forward(position, 0.0), l_end));
+    end_error.push_back(cam_deviation(spline, kinematics->forward(position, {}), l_end));
   }
   // Concave parts of the fitted profile: a wheel of larger radius gouges there (K2 tracking keeps
   // the tangency at the contact but the wheel then cuts the profile next to it).

@@ -252,16 +252,14 @@ void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
   Json plan = validate_params(table_or_empty(document, "plan", sources), info().params, "plan", sources);
   check_wheel_fits(wheel, part, sources);
   if (plan["wear_sweep"] != "none") {
-    if (wheel["type"] == "profiled")
-      throw InputError(fmt::format("{}: plan.wear_sweep = {}: sweeping along a profiled wheel's "
-                                   "edge arc is not implemented; use a cylindrical wheel",
-                                   sources.locate("plan.wear_sweep").str(), plan["wear_sweep"].dump()));
-    const double half = 0.5 * wheel["thickness_mm"].get<double>();
+    const WheelSection section = build_wheel(wheel);
+    const double half = sweep_half_width_mm(section);
     if (plan["wear_sweep_amplitude_mm"].is_number() && plan["wear_sweep_amplitude_mm"].get<double>() > half)
-      throw InputError(fmt::format("{}: plan.wear_sweep_amplitude_mm = {}: the contact would leave "
-                                   "the wheel face (at most half the thickness, {} mm)",
-                                   sources.locate("plan.wear_sweep_amplitude_mm").str(),
-                                   plan["wear_sweep_amplitude_mm"].get<double>(), half));
+      throw InputError(fmt::format(
+          "{}: plan.wear_sweep_amplitude_mm = {}: the contact would leave the wheel's {} (at most "
+          "{:.4g} mm: {})", sources.locate("plan.wear_sweep_amplitude_mm").str(),
+          plan["wear_sweep_amplitude_mm"].get<double>(), section.profiled ? "edge arc" : "face", half,
+          section.profiled ? "edge radius x half the opening angle" : "half the thickness"));
   }
   // The machine must reach every contact (e.g. a slope the upper table cannot turn to).
   auto kinematics = build_kinematics(machine);
@@ -271,7 +269,7 @@ void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
     const double x = generatrix->x_min_mm() + (generatrix->x_max_mm() - generatrix->x_min_mm()) * i / 64.0;
     const GeneratrixValue v = generatrix->evaluate(x);
     try {
-      kinematics->inverse({x, v.f, 1.0, v.d1}, 0.0, positions);
+      kinematics->inverse({x, v.f, 1.0, v.d1}, {}, positions);
     } catch (const std::domain_error& e) {
       throw InputError(fmt::format("{}: machine.type = {}: cannot reach the contact at x = {}: {}",
                                    sources.locate("machine.type").str(), machine["type"].dump(), x, e.what()));

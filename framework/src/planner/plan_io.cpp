@@ -7,11 +7,13 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <optional>
 #include <stdexcept>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/signal_io.hpp"
 
 namespace chatterlab::planner {
 
@@ -81,7 +83,8 @@ PlanRun compute_plan(const Json& document) {
   try {
     run.schedule = plan_feed(*run.generatrix, *run.kinematics, run.constraints,
                              segment_length_mm(plan, run.constraints),
-                             sweep_function(run.sweep, run.generatrix->x_min_mm()));
+                             sweep_function(run.sweep, run.generatrix->x_min_mm()), true,
+                             wheel_contact(build_wheel(wheel)));
   } catch (const std::exception& e) {
     throw PointFailure(fmt::format("no plan: {}", e.what()));
   }
@@ -92,7 +95,7 @@ PlanRun compute_plan(const Json& document) {
   std::vector<double> durations;
   for (const auto& seg : run.schedule.plan.segments) durations.push_back(seg.duration_s);
   run.wear = wear_distribution(run.schedule.contact_on_tool_mm, durations,
-                               0.5 * wheel.at("thickness_mm").get<double>());
+                               sweep_half_width_mm(build_wheel(wheel)));
   run.ramp_segments = ramp_segments(run.schedule.plan, run.constraints);
   if (!durations.empty())
     run.ramp_time_s = static_cast<double>(run.ramp_segments) * (durations.front() + durations.back());
@@ -352,13 +355,17 @@ SavedPlan read_saved_plan(const fs::path& dir) {
   // Conditions per segment by forward kinematics of the replayed positions; the contact offset
   // on the wheel follows the saved sweep law as a function of x (fixed-point iteration).
   const auto sweep = sweep_function(build_sweep(summary.at("plan"), out.wheel), generatrix->x_min_mm());
+  const auto contact = wheel_contact(build_wheel(out.wheel));
   auto contact_x = [&](const std::vector<double>& positions, double& zeta) {
     // Solve x = forward(positions, zeta(x)).x: secant iterations on the residual (the sweep can
     // move the contact as fast as x itself, where plain fixed-point iteration stalls).
-    double x = kinematics->forward(positions, 0.0).x_mm;
+    double x = kinematics->forward(positions, {}).x_mm;
     zeta = 0.0;
     if (!sweep) return x;
-    auto residual = [&](double guess) { return kinematics->forward(positions, sweep(guess)).x_mm - guess; };
+    auto residual = [&](double guess) {
+      const double s = sweep(guess);
+      return kinematics->forward(positions, contact ? contact(s) : ToolContact{s, 0.0, 0.0}).x_mm - guess;
+    };
     double x0 = x, r0 = residual(x0), x1 = x0 + 1e-3, r1 = residual(x1);
     for (int i = 0; i < 50 && std::abs(r1) > 1e-10 && r1 != r0; ++i) {
       const double next = x1 - r1 * (x1 - x0) / (r1 - r0);
@@ -370,6 +377,16 @@ SavedPlan read_saved_plan(const fs::path& dir) {
     zeta = sweep(x1);
     return x1;
   };
+  // segments.csv (written with the plan) gives x and the contact on the wheel directly; without it
+  // they are solved from the replayed positions (unique unless a fast sweep tilts the work).
+  const fs::path segments_path = dir / "segments.csv";
+  std::optional<DataTable> saved_segments;
+  if (fs::exists(segments_path)) {
+    saved_segments = read_data_table(segments_path);
+    if (saved_segments->rows() != out.plan.segments.size())
+      throw InputError(fmt::format("{}: {} rows, but pulses.csv has {} segments", segments_path.string(),
+                                   saved_segments->rows(), out.plan.segments.size()));
+  }
   double zeta0 = 0.0;
   std::vector<double> positions = out.plan.initial_position_mm;
   double x_prev = contact_x(positions, zeta0);
@@ -377,8 +394,15 @@ SavedPlan read_saved_plan(const fs::path& dir) {
     for (std::size_t m = 0; m < motors; ++m)
       positions[m] += static_cast<double>(out.plan.segments[k].pulses[m]) * out.plan.motors[m].mm_per_pulse;
     double zeta1 = 0.0;
-    const double x_next = contact_x(positions, zeta1);
+    double x_next = saved_segments ? 0.0 : contact_x(positions, zeta1);
     SegmentConditions c;
+    if (saved_segments) {
+      x_prev = saved_segments->column("x_start_mm")[k];
+      x_next = saved_segments->column("x_end_mm")[k];
+      c.contact_on_wheel_mm = saved_segments->column("contact_on_wheel_mm")[k];
+    } else {
+      c.contact_on_wheel_mm = 0.5 * (zeta0 + zeta1);
+    }
     c.start_s = out.plan.segments[k].start_s;
     c.duration_s = out.plan.segments[k].duration_s;
     c.x_start_mm = x_prev;
@@ -386,7 +410,6 @@ SavedPlan read_saved_plan(const fs::path& dir) {
     c.radius_mm = generatrix->evaluate(0.5 * (x_prev + x_next)).f;
     c.axial_speed_mm_per_s = (x_next - x_prev) / c.duration_s;
     c.spindle_speed_rpm = out.plan.spindle_speed_rpm;
-    c.contact_on_wheel_mm = 0.5 * (zeta0 + zeta1);
     out.segments.push_back(c);
     x_prev = x_next;
     zeta0 = zeta1;

@@ -92,14 +92,18 @@ TEST(Generatrix, DiscontinuitiesKinksAndDomainAreReported) {
 TEST(ThreeTableRevolution, ForwardInvertsInverse) {
   auto machine = seed_machine();
   std::vector<double> q(3);
-  for (double zeta : {0.0, 7.5}) {
-    machine->inverse({123.0, 140.0, 1.0, -0.3}, zeta, q);
-    const ToolInPart t = machine->forward(q, zeta);
+  for (const ToolContact contact : {ToolContact{}, ToolContact{7.5, 0, 0}, ToolContact{3.0, 0.5, 0.2}}) {
+    machine->inverse({123.0, 140.0, 1.0, -0.3}, contact, q);
+    const ToolInPart t = machine->forward(q, contact);
     EXPECT_NEAR(t.x_mm, 123.0, 1e-12);
     EXPECT_NEAR(t.y_mm, 140.0, 1e-12);
   }
+  machine->inverse({123.0, 140.0, 1.0, -0.3}, {}, q);
   EXPECT_NEAR(q[2], 90.0, 1e-12);  // z_g = -R f'
-  EXPECT_THROW(machine->inverse({0, 1, 0.0, 1.0}, 0.0, q), std::domain_error);
+  // Tilting the contact by phi turns the upper table by -phi: tan theta = tan(atan f' - phi).
+  machine->inverse({123.0, 140.0, 1.0, -0.3}, {0, 0, 0.1}, q);
+  EXPECT_NEAR(q[2], -300.0 * std::tan(std::atan(-0.3) - 0.1), 1e-12);
+  EXPECT_THROW(machine->inverse({0, 1, 0.0, 1.0}, {}, q), std::domain_error);
 }
 
 // MODELS.md P8: constant axial speed 0.2 mm/s, 1 s segments: first rates -54, 12, 14 (problem 1)
@@ -194,6 +198,7 @@ TEST(Wear, TriangleSweepDwellsUniformlySineAtTheEdges) {
   const WearDistribution sine = wear_distribution(zeta, durations, 10.0, 20);
   EXPECT_LT(sine.uniformity, 0.8);
   EXPECT_GT(sine.dwell_s.front(), 3 * sine.dwell_s[10]);  // arcsine law: edges dwell longest
+  EXPECT_NEAR(tri.used_width_mm, 20.0, 1e-9);
 }
 
 constexpr const char* study_text = R"(
@@ -252,14 +257,18 @@ TEST(FeedPlanStudy, WritesAPlanThatReadsBack) {
   // With a wear sweep the reader recovers the contact's place on the wheel as well.
   Json swept = study.document;
   swept["plan"]["wear_sweep"] = "triangle";
+  swept["wheel"]["type"] = "cylindrical";  // a face sweep: the reader can also solve it alone
   swept["plan"]["wear_sweep_amplitude_mm"] = 5.0;
   swept["plan"]["wear_sweep_period_mm"] = 20.0;
   instance->run_point(swept, context);
-  const SavedPlan saved_swept = read_saved_plan(context.artifact_dir);
   const auto sweep = sweep_function({"triangle", 5.0, 20.0, 5}, 0.0);
-  for (std::size_t k = 0; k < saved_swept.segments.size(); k += 23) {
-    const SegmentConditions& c = saved_swept.segments[k];
-    EXPECT_NEAR(c.contact_on_wheel_mm, sweep(0.5 * (c.x_start_mm + c.x_end_mm)), 0.05) << k;
+  for (bool with_segments_csv : {true, false}) {
+    if (!with_segments_csv) fs::remove(context.artifact_dir / "segments.csv");
+    const SavedPlan saved_swept = read_saved_plan(context.artifact_dir);
+    for (std::size_t k = 0; k < saved_swept.segments.size(); k += 23) {
+      const SegmentConditions& c = saved_swept.segments[k];
+      EXPECT_NEAR(c.contact_on_wheel_mm, sweep(0.5 * (c.x_start_mm + c.x_end_mm)), 0.05) << k;
+    }
   }
   // A tampered file is an input error naming the file and line.
   dir.write("out/pulses.csv", "segment,start_s,duration_s,lower_pulses,middle_pulses,upper_pulses\n0,0,1,1.5,2,3\n");

@@ -47,11 +47,12 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   auto visit = [&](std::size_t k, double u, double& lo, double& hi) {
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
-    const ToolInPart tool = kinematics.forward(position, zeta);
+    const ToolContact contact = schedule.contact_at(zeta);
+    const ToolInPart tool = kinematics.forward(position, contact);
     const double e = tool_deviation_mm(tool, generatrix);
     for (std::size_t m = 0; m < motors; ++m)
       exact[m] = schedule.target_mm[k][m] + u * (schedule.target_mm[k + 1][m] - schedule.target_mm[k][m]);
-    const double e_linear = tool_deviation_mm(kinematics.forward(exact, zeta), generatrix);
+    const double e_linear = tool_deviation_mm(kinematics.forward(exact, contact), generatrix);
     if (std::abs(e) > total.max_abs) out.x_at_max_mm = tool.x_mm;
     total.add(e);
     linear.add(e_linear);

@@ -41,13 +41,15 @@ std::vector<double> FeedPlan::positions_after(std::size_t segment_count) const {
 
 Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
                    const FeedConstraints& constraints, double segment_length_mm,
-                   const std::function<double(double)>& contact_on_tool, bool choose_knots) {
+                   const std::function<double(double)>& contact_on_tool, bool choose_knots,
+                   const std::function<ToolContact(double)>& tool_contact) {
   const double a = generatrix.x_min_mm(), b = generatrix.x_max_mm();
   if (!(segment_length_mm > 0.0) || !(b > a))
     throw std::invalid_argument("plan_feed: empty x range or segment length");
   const auto segment_count =
       static_cast<std::size_t>(std::max(1.0, std::ceil((b - a) / segment_length_mm - 1e-9)));
   Schedule out;
+  out.tool_contact = tool_contact;
   FeedPlan& plan = out.plan;
   plan.motors = kinematics.motors();
   plan.spindle_speed_rpm = constraints.spindle_speed_rpm;
@@ -62,7 +64,7 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
     const GeneratrixValue v = generatrix.evaluate(x);
     const double zeta = contact_on_tool ? contact_on_tool(x) : 0.0;
     out.contact_on_tool_mm[k] = zeta;
-    kinematics.inverse({x, v.f, 1.0, v.d1}, zeta, out.target_mm[k]);
+    kinematics.inverse({x, v.f, 1.0, v.d1}, out.contact_at(zeta), out.target_mm[k]);
   };
   const double spacing = (b - a) / static_cast<double>(segment_count);
   place(0, a);
@@ -86,13 +88,13 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
     place(k, nominal + w);
     ahead = out.target_mm[k];
     place(k, nominal);
-    const double zeta = out.contact_on_tool_mm[k];
-    const double here = tool_deviation_mm(kinematics.forward(out.target_mm[k], zeta), generatrix);
+    const ToolContact contact = out.contact_at(out.contact_on_tool_mm[k]);
+    const double here = tool_deviation_mm(kinematics.forward(out.target_mm[k], contact), generatrix);
     for (std::size_t m = 0; m < motors; ++m) {
       std::vector<double> moved = out.target_mm[k];
       moved[m] += plan.motors[m].mm_per_pulse;
       sensitivity[m] =
-          std::abs(tool_deviation_mm(kinematics.forward(moved, zeta), generatrix) - here);
+          std::abs(tool_deviation_mm(kinematics.forward(moved, contact), generatrix) - here);
     }
     double best_cost = std::numeric_limits<double>::infinity(), best_t = 0.0;
     for (int c = -knot_candidates; c <= knot_candidates; ++c) {

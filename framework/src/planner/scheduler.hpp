@@ -53,21 +53,26 @@ struct Certificate {
 struct Schedule {
   FeedPlan plan;
   std::vector<double> knots_mm;                   // x_k, k = 0..N
-  std::vector<double> contact_on_tool_mm;         // zeta at the knots
+  std::vector<double> contact_on_tool_mm;         // contact coordinate s on the tool at the knots
+  std::function<ToolContact(double)> tool_contact;  // s -> where on the tool (default {s, 0, 0})
+  ToolContact contact_at(double s) const { return tool_contact ? tool_contact(s) : ToolContact{s, 0.0, 0.0}; }
   std::vector<std::vector<double>> target_mm;     // q_m(x_k) [k][m]
   double lower_bound_s = 0.0;                     // continuous relaxation (no smoothness)
   std::size_t smoothing_passes = 0;
   Certificate certificate;
 };
 
-// contact_on_tool(x) gives zeta along the path (nullptr: 0). choose_knots: place each interior
+// contact_on_tool(x) gives the contact's coordinate s on the tool along the path (nullptr: 0), and
+// tool_contact(s) where that is on the tool (nullptr: s along the rails, no tilt: a cylindrical
+// wheel's face). choose_knots: place each interior
 // knot within +-25 % of the nominal spacing where the axes' rounding residues move the tool least
 // off the profile (false: uniform knots). Throws std::domain_error when the constraints admit no
 // plan (naming the constraint and where).
 Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
                    const FeedConstraints& constraints, double segment_length_mm,
                    const std::function<double(double)>& contact_on_tool = nullptr,
-                   bool choose_knots = true);
+                   bool choose_knots = true,
+                   const std::function<ToolContact(double)>& tool_contact = nullptr);
 
 // Signed normal distance of the tool from the generatrix (positive: material left).
 double tool_deviation_mm(const ToolInPart& tool, const Generatrix& generatrix);

@@ -1,6 +1,8 @@
 #include "planner/setup.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -58,12 +60,25 @@ WheelSection build_wheel(const Json& wheel) {
   return w;
 }
 
+std::function<ToolContact(double)> wheel_contact(const WheelSection& wheel) {
+  if (!wheel.profiled) return nullptr;
+  const double r = wheel.edge_radius_mm;
+  return [r](double s) {
+    const double phi = s / r;
+    return ToolContact{r * std::sin(phi), r * (1.0 - std::cos(phi)), phi};
+  };
+}
+
+double sweep_half_width_mm(const WheelSection& wheel) {
+  return wheel.profiled ? wheel.edge_radius_mm * 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0
+                        : 0.5 * wheel.thickness_mm;
+}
+
 WearSweep build_sweep(const Json& plan, const Json& wheel) {
   WearSweep s;
   s.law = plan.at("wear_sweep").get<std::string>();
   const Json& amplitude = plan.at("wear_sweep_amplitude_mm");
-  s.amplitude_mm = amplitude.is_number() ? amplitude.get<double>()
-                                         : 0.5 * wheel.at("thickness_mm").get<double>();
+  s.amplitude_mm = amplitude.is_number() ? amplitude.get<double>() : sweep_half_width_mm(build_wheel(wheel));
   s.period_mm = plan.at("wear_sweep_period_mm").get<double>();
   s.steps = plan.at("wear_sweep_steps").get<int>();
   return s;

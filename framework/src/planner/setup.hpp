@@ -1,6 +1,7 @@
 #pragma once
 // The validated study tables turned into planner objects (shared by the feed_plan kind and the
 // saved-plan reader).
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -30,6 +31,12 @@ std::unique_ptr<Generatrix> build_generatrix(const Json& part);
 FeedConstraints build_constraints(const Json& machine, const Json& plan,
                                   const Kinematics& kinematics);
 WheelSection build_wheel(const Json& wheel);
+// Where contact coordinate s (mm along the working surface) is on the wheel: nullptr for a
+// cylindrical face (s along the rails); on a profiled wheel's edge arc of radius r, arc angle
+// phi = s / r: {r sin phi, r (1 - cos phi), phi}.
+std::function<ToolContact(double)> wheel_contact(const WheelSection& wheel);
+// Half the length of the working surface a sweep may use: a/2 (face) or r alpha/2 (edge arc).
+double sweep_half_width_mm(const WheelSection& wheel);
 WearSweep build_sweep(const Json& plan, const Json& wheel);
 double segment_length_mm(const Json& plan, const FeedConstraints& constraints);
 

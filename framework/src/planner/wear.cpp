@@ -28,45 +28,41 @@ std::function<double(double)> sweep_function(const WearSweep& sweep, double x0_m
 
 WearDistribution wear_distribution(const std::vector<double>& zeta, const std::vector<double>& durations,
                                    double half_width, std::size_t bins) {
-  WearDistribution out;
-  out.dwell_s.assign(bins, 0.0);
-  const double width = 2 * half_width / static_cast<double>(bins);
-  for (std::size_t i = 0; i < bins; ++i)
-    out.bin_centre_mm.push_back(-half_width + (static_cast<double>(i) + 0.5) * width);
-  auto bin_of = [&](double z) {
-    const double u = std::clamp((z + half_width) / width, 0.0, static_cast<double>(bins) - 1e-9);
-    return static_cast<std::size_t>(u);
-  };
+  // Dwell spread along the linear zeta path of each segment (16 pieces per segment).
+  constexpr int pieces = 16;
   double lo = 0.0, hi = 0.0;
-  for (std::size_t k = 0; k < durations.size(); ++k) {
-    // Split the segment into small pieces: dwell spread along the linear zeta path.
-    const int pieces = 16;
-    for (int p = 0; p < pieces; ++p) {
-      const double u = (p + 0.5) / pieces;
-      const double z = zeta[k] + u * (zeta[k + 1] - zeta[k]);
-      out.dwell_s[bin_of(z)] += durations[k] / pieces;
-      lo = std::min(lo, z);
-      hi = std::max(hi, z);
-    }
+  for (double z : zeta) {
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
   }
+  WearDistribution out;
   out.used_width_mm = hi - lo;
-  // Uniformity over the bins the sweep covers (a sweep narrower than the face is judged on its
-  // own width; used_width_mm says how much of the face it uses).
-  double sum = 0.0, sum_sq = 0.0;
-  std::size_t used = 0;
-  for (std::size_t i = 0; i < bins; ++i) {
-    if (out.bin_centre_mm[i] + 0.5 * width < lo || out.bin_centre_mm[i] - 0.5 * width > hi) continue;
-    sum += out.dwell_s[i];
-    sum_sq += out.dwell_s[i] * out.dwell_s[i];
-    ++used;
+  // Bins over the swept range (a narrow sweep on a wide face is judged on its own width;
+  // used_width_mm says how much of the face it uses); no sweep: one circle, the whole face.
+  if (!(hi - lo > 1e-9)) {
+    lo = -half_width;
+    hi = half_width;
   }
-  if (used > 1 && sum > 0) {
-    const double mean = sum / static_cast<double>(used);
-    const double var = std::max(0.0, sum_sq / static_cast<double>(used) - mean * mean);
-    out.uniformity = 1.0 - std::sqrt(var) / mean;
-  } else {
-    out.uniformity = 0.0;  // all dwell on one circle of the wheel
-  }
+  out.dwell_s.assign(bins, 0.0);
+  const double width = (hi - lo) / static_cast<double>(bins);
+  for (std::size_t i = 0; i < bins; ++i)
+    out.bin_centre_mm.push_back(lo + (static_cast<double>(i) + 0.5) * width);
+  for (std::size_t k = 0; k < durations.size(); ++k)
+    for (int p = 0; p < pieces; ++p) {
+      const double z = zeta[k] + (p + 0.5) / pieces * (zeta[k + 1] - zeta[k]);
+      const double u = std::clamp((z - lo) / width, 0.0, static_cast<double>(bins) - 1e-9);
+      out.dwell_s[static_cast<std::size_t>(u)] += durations[k] / pieces;
+    }
+  if (out.used_width_mm > 1e-9) {
+    double sum = 0.0, sum_sq = 0.0;
+    for (double d : out.dwell_s) {
+      sum += d;
+      sum_sq += d * d;
+    }
+    const double mean = sum / static_cast<double>(bins);
+    const double var = std::max(0.0, sum_sq / static_cast<double>(bins) - mean * mean);
+    out.uniformity = mean > 0 ? 1.0 - std::sqrt(var) / mean : 0.0;
+  }  // else 0: all dwell on one circle of the wheel
   return out;
 }
 

@@ -20,12 +20,12 @@ struct WearSweep {
 // zeta(x) for the sweep starting at x0 (nullptr for "none").
 std::function<double(double)> sweep_function(const WearSweep& sweep, double x0_mm);
 
-// Dwell of the contact over the face: time the contact spends in each of `bins` equal bins of
-// [-half_width, half_width], from knot positions zeta_k and segment durations (zeta linear in
-// time inside a segment).
+// Dwell of the contact on the wheel: time the contact spends in each of `bins` equal bins of the
+// swept range of zeta ([-half_width, half_width] without a sweep), from knot positions zeta_k and
+// segment durations (zeta linear in time inside a segment).
 struct WearDistribution {
   std::vector<double> bin_centre_mm, dwell_s;
-  double uniformity = 0.0;  // 1 - (coefficient of variation of dwell over the swept bins)
+  double uniformity = 0.0;  // 1 - (coefficient of variation of dwell over the bins); 0: no sweep
   double used_width_mm = 0.0;  // range of zeta actually swept
 };
 WearDistribution wear_distribution(const std::vector<double>& zeta_at_knots_mm,

@@ -65,8 +65,9 @@ Interference check_interference(const Generatrix& generatrix, const WheelSection
         qx = p.x + t * p.tx;
         qy = p.y + t * p.ty;
       } else {
+        // The arc spans +-alpha/2 about its middle; the contact sits at arc angle zeta / r.
         const double half = 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0;
-        const double phi = -half + 2 * half * i / samples;
+        const double phi = -half + 2 * half * i / samples - zeta / wheel.edge_radius_mm;
         const double r = wheel.edge_radius_mm;
         // Arc centre at P + r n; arc point at angle phi from the contact direction -n.
         const double cx = p.x + r * p.nx, cy = p.y + r * p.ny;

@@ -47,24 +47,27 @@ std::vector<MotorAxis> ThreeTableRevolution::motors() const {
           {"upper", mm_per_pulse_, max_pulse_rate_hz_, "upper_nut"}};
 }
 
-void ThreeTableRevolution::inverse(const CurvePoint& target, double contact_on_tool_mm,
+void ThreeTableRevolution::inverse(const CurvePoint& target, const ToolContact& contact,
                                    std::span<double> positions_mm) const {
   if (!(target.tangent_x > 0.0))
     throw std::domain_error("three_table_revolution: the generatrix tangent must point along +x");
-  const double slope = target.tangent_y / target.tangent_x;  // f'(x_s) = tan theta
+  // theta = atan f'(x_s) - tilt; without tilt tan theta = f'(x_s) exactly (P4).
+  const double slope = contact.tilt_rad == 0.0
+                           ? target.tangent_y / target.tangent_x
+                           : std::tan(std::atan2(target.tangent_y, target.tangent_x) - contact.tilt_rad);
   const double c = 1.0 / std::sqrt(1.0 + slope * slope), s = slope * c;
   const double u = fixture_to_pivot_mm_ - target.x_mm, v = -target.y_mm;
-  positions_mm[0] = c * u + s * v + contact_on_tool_mm;
-  positions_mm[1] = -s * u + c * v;
+  positions_mm[0] = c * u + s * v + contact.along_mm;
+  positions_mm[1] = -s * u + c * v + contact.across_mm;
   positions_mm[2] = -pivot_to_nut_mm_ * slope;
 }
 
 ToolInPart ThreeTableRevolution::forward(std::span<const double> positions_mm,
-                                         double contact_on_tool_mm) const {
+                                         const ToolContact& contact) const {
   const double slope = -positions_mm[2] / pivot_to_nut_mm_;
   const double c = 1.0 / std::sqrt(1.0 + slope * slope), s = slope * c;
-  // (b - x_s, -y_s) = Rot(-theta) (x_g - zeta, y_g), Rot(-theta) = [[c, -s], [s, c]].
-  const double gx = positions_mm[0] - contact_on_tool_mm, gy = positions_mm[1];
+  // (b - x_s, -y_s) = Rot(-theta) ((x_g, y_g) - C), Rot(-theta) = [[c, -s], [s, c]].
+  const double gx = positions_mm[0] - contact.along_mm, gy = positions_mm[1] - contact.across_mm;
   return {fixture_to_pivot_mm_ - (c * gx - s * gy), -(s * gx + c * gy), 0.0};
 }
 

@@ -7,10 +7,11 @@
 // the base frame (origin) and the wheel tangent parallel to the rails (P4):
 //
 //   tan theta = f'(x_s),   z_g = -R f'(x_s),
-//   (x_g, y_g) = [[cos th, sin th], [-sin th, cos th]] (b - x_s, -y_s) + (zeta, 0)
+//   (x_g, y_g) = [[cos th, sin th], [-sin th, cos th]] (b - x_s, -y_s)
 //
-// where zeta is the contact's offset along the wheel face (0 in P4; wear spreading, P6, sweeps it
-// across a cylindrical wheel's face). Docs: docs/kinematics/three_table_revolution.md.
+// Wear spreading (P6) moves the contact on the wheel to C = (along, across) with the wheel's
+// tangent tilted by phi there (ToolContact): then theta = atan f'(x_s) - phi and
+// (x_g, y_g) = C + Rot(theta) (b - x_s, -y_s). Docs: docs/kinematics/three_table_revolution.md.
 #include <span>
 #include <vector>
 
@@ -25,10 +26,10 @@ class ThreeTableRevolution final : public Kinematics {
   explicit ThreeTableRevolution(const ParamValues& params);
 
   std::vector<MotorAxis> motors() const override;
-  void inverse(const CurvePoint& target, double contact_on_tool_mm,
+  void inverse(const CurvePoint& target, const ToolContact& contact,
                std::span<double> positions_mm) const override;
   ToolInPart forward(std::span<const double> positions_mm,
-                     double contact_on_tool_mm) const override;
+                     const ToolContact& contact) const override;
 
   double mm_per_pulse() const { return mm_per_pulse_; }
 

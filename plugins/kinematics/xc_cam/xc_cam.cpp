@@ -40,7 +40,7 @@ std::vector<MotorAxis> XcCam::motors() const {
           {"x_slide", x_mm_per_pulse_, max_pulse_rate_hz_, "x_slide"}};
 }
 
-void XcCam::inverse(const CurvePoint& target, double /*contact_on_tool_mm*/,
+void XcCam::inverse(const CurvePoint& target, const ToolContact& /*contact*/,
                     std::span<double> positions) const {
   const double length = std::hypot(target.tangent_x, target.tangent_y);
   if (!(length > 0)) throw std::domain_error("xc_cam: zero tangent");
@@ -50,7 +50,7 @@ void XcCam::inverse(const CurvePoint& target, double /*contact_on_tool_mm*/,
   positions[1] = std::hypot(cx, cy);
 }
 
-ToolInPart XcCam::forward(std::span<const double> positions, double /*contact_on_tool_mm*/) const {
+ToolInPart XcCam::forward(std::span<const double> positions, const ToolContact& /*contact*/) const {
   const double theta = positions[0] * std::numbers::pi / 180.0;
   return {positions[1] * std::cos(theta), positions[1] * std::sin(theta), wheel_radius_mm_};
 }

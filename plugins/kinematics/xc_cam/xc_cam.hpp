@@ -20,9 +20,10 @@ class XcCam final : public Kinematics {
   explicit XcCam(const ParamValues& params);
 
   std::vector<MotorAxis> motors() const override;
-  void inverse(const CurvePoint& target, double contact_on_tool_mm,
+  // The wheel is a disc: the contact on it does not change the geometry (ignored).
+  void inverse(const CurvePoint& target, const ToolContact& contact,
                std::span<double> positions) const override;
-  ToolInPart forward(std::span<const double> positions, double contact_on_tool_mm) const override;
+  ToolInPart forward(std::span<const double> positions, const ToolContact& contact) const override;
 
  private:
   double wheel_radius_mm_;

@@ -16,10 +16,10 @@ TEST(XcCam, CircularCamPutsTheCentreOnTheRadius) {
   for (double deg : {0.0, 37.0, 135.0, -100.0}) {
     const double a = deg * std::numbers::pi / 180;
     // Counter-clockwise circle of radius 20: tangent (-sin a, cos a).
-    machine.inverse({20 * std::cos(a), 20 * std::sin(a), -std::sin(a), std::cos(a)}, 0.0, q);
+    machine.inverse({20 * std::cos(a), 20 * std::sin(a), -std::sin(a), std::cos(a)}, {}, q);
     EXPECT_NEAR(q[0], deg, 1e-12);
     EXPECT_NEAR(q[1], 220.0, 1e-12);
-    const ToolInPart wheel = machine.forward(q, 0.0);
+    const ToolInPart wheel = machine.forward(q, {});
     EXPECT_NEAR(std::hypot(wheel.x_mm - 20 * std::cos(a), wheel.y_mm - 20 * std::sin(a)), wheel.radius_mm, 1e-12);
   }
 }
