@@ -1,0 +1,330 @@
+#include "planner/cam_plan.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <limits>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/kinematics.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/plot.hpp"
+#include "chatterlab/signal_io.hpp"
+#include "planner/parametric_spline.hpp"
+#include "planner/setup.hpp"
+
+namespace chatterlab::planner {
+
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double pi = std::numbers::pi;
+
+ParamSpec positive(std::string key, std::string unit, std::string description) {
+  return positive_spec(std::move(key), std::move(unit), std::move(description));
+}
+
+std::vector<ParamSpec> part_specs() {
+  ParamSpec file = param_spec("lift_table_file", ValueKind::string, "",
+                              "CSV angle_deg,radius_mm (relative to the study file)");
+  ParamSpec chosen = param_spec("chosen_angles_deg", ValueKind::real_list, "deg",
+                                "table rows the spline starts from (default: every row)");
+  chosen.optional = true;
+  chosen.min = 0.0;
+  chosen.max = 360.0;
+  ParamSpec target = param_spec("target_fit_error_mm", ValueKind::real, "mm",
+                                "add table rows until every row is fitted within this (0: none)");
+  target.min = 0.0;
+  target.default_value = 5e-4;
+  return {file, chosen, target};
+}
+
+LiftTable read_lift_table(const Json& part, const fs::path& study_dir) {
+  const fs::path file = study_dir / part.at("lift_table_file").get<std::string>();
+  const DataTable data = read_data_table(file);
+  LiftTable table{data.column("angle_deg"), data.column("radius_mm")};
+  for (std::size_t i = 0; i < table.angle_deg.size(); ++i)
+    if (!(table.angle_deg[i] > 0 && table.angle_deg[i] <= 360 && table.radius_mm[i] > 0))
+      throw InputError(fmt::format("{}:{}: angle {} deg, radius {} mm: angles must lie in (0, 360] "
+                                   "and radii be > 0", file.string(), data.source_lines[i],
+                                   table.angle_deg[i], table.radius_mm[i]));
+  return table;
+}
+
+std::vector<double> chosen_angles(const Json& part, const LiftTable& table) {
+  if (part.contains("chosen_angles_deg") && part["chosen_angles_deg"].is_array())
+    return part["chosen_angles_deg"].get<std::vector<double>>();
+  return table.angle_deg;
+}
+
+std::unique_ptr<Kinematics> build(const Json& machine) {
+  Json params = machine;
+  params.erase("type");
+  params.erase("cam_speed_rpm");
+  return kinematics_registry().at(machine.at("type").get<std::string>()).create(ParamValues(params));
+}
+
+// Signed distance from the closed profile to the wheel centre minus the wheel radius (positive:
+// material left), nearest point by Newton on the spline parameter from `l`.
+double cam_deviation(const ParametricSpline& spline, const ToolInPart& wheel, double& l) {
+  // Safeguarded Newton: steps of at most 0.5 mm, a fixed downhill step where the distance is not
+  // locally convex in l (concave flanks seen from a large wheel).
+  std::array<double, 2> p{}, d1{}, d2{};
+  for (int i = 0; i < 40; ++i) {
+    spline.evaluate(l, p, d1, d2);
+    const double rx = p[0] - wheel.x_mm, ry = p[1] - wheel.y_mm;
+    const double g = rx * d1[0] + ry * d1[1];
+    const double dg = d1[0] * d1[0] + d1[1] * d1[1] + rx * d2[0] + ry * d2[1];
+    const double step = dg > 0 ? std::clamp(-g / dg, -0.5, 0.5) : (g > 0 ? -0.1 : 0.1);
+    l += step;
+    if (std::abs(step) < 1e-12) break;
+  }
+  spline.evaluate(l, p, d1, d2);
+  const double distance = std::hypot(p[0] - wheel.x_mm, p[1] - wheel.y_mm);
+  // Outside (wheel side) when the centre lies along the outward normal (d1.y, -d1.x).
+  const double side = (wheel.x_mm - p[0]) * d1[1] - (wheel.y_mm - p[1]) * d1[0];
+  return (side >= 0 ? distance : -distance) - wheel.radius_mm;
+}
+
+constexpr const char* columns[] = {"seed_points_max_fit_error_mm", "max_fit_error_mm", "inserted_points",
+                                   "total_time_s", "max_profile_error_mm", "max_per_degree_error_mm"};
+
+}  // namespace
+
+PluginInfo CamPlanKind::info() {
+  PluginInfo info;
+  info.name = "cam_plan";
+  info.description = "X-C cam grinding: spline fit of a lift table with adaptive insertion, "
+                     "tangent-point tracking, pulses and replayed profile error";
+  info.models_md_ids = "K1-K3";
+  ParamSpec step = positive("segment_angle_deg", "deg", "polar angle of the contact per segment");
+  step.default_value = 0.5;
+  step.max = 10.0;
+  info.params = {step};
+  info.thread_safety = ThreadSafety::copy_per_thread;
+  info.example_params = {{"segment_angle_deg", 1.0}};
+  return info;
+}
+
+void CamPlanKind::validate(Json& document, const SourceMap& sources) const {
+  auto table_of = [&](const char* key) {
+    if (!document.contains(key) || !document[key].is_object())
+      throw InputError(fmt::format("{}: missing table [{}] (the cam_plan study needs it)",
+                                   sources.locate("study").str(), key));
+    return document[key];
+  };
+  Json machine = table_of("machine");
+  Json speed = machine.contains("cam_speed_rpm") ? machine["cam_speed_rpm"] : Json(60.0);
+  machine.erase("cam_speed_rpm");
+  ParamSpec speed_spec = positive("cam_speed_rpm", "rpm", "mean cam (C axis) speed");
+  speed = validate_params(Json{{"cam_speed_rpm", speed}}, {speed_spec}, "machine", sources)["cam_speed_rpm"];
+  Json validated = validate_component(Json{{"machine", machine}}, "machine", kinematics_registry(), sources);
+  if (validated["type"] != "xc_cam")
+    throw InputError(fmt::format("{}: machine.type = {}: a cam_plan needs the xc_cam machine",
+                                 sources.locate("machine.type").str(), validated["type"].dump()));
+  validated["cam_speed_rpm"] = speed;
+  Json part = validate_params(table_of("part"), part_specs(), "part", sources);
+  Json plan = validate_params(document.contains("plan") ? document["plan"] : Json::object(),
+                              info().params, "plan", sources);
+  const fs::path study_dir = fs::path(sources.locate("part.lift_table_file").file).parent_path();
+  part["lift_table_file"] = fs::absolute(study_dir / part["lift_table_file"].get<std::string>()).string();
+  const LiftTable table = read_lift_table(part, "");
+  try {
+    fit_cam(table, chosen_angles(part, table), 0.0);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: part = lift table {}: {}", sources.locate("part").str(),
+                                 part["lift_table_file"].get<std::string>(), e.what()));
+  }
+  document["machine"] = std::move(validated);
+  document["part"] = std::move(part);
+  document["plan"] = std::move(plan);
+}
+
+std::vector<std::string> CamPlanKind::output_columns(const Json&) const {
+  return {std::begin(columns), std::end(columns)};
+}
+
+std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& context) const {
+  const Json& part = doc.at("part");
+  const LiftTable table = read_lift_table(part, "");
+  const std::vector<double> chosen = chosen_angles(part, table);
+  ParametricSpline seed_spline({{1, 0}, {0, 1}, {-1, 0}}, SplineEnds::periodic), spline = seed_spline;
+  const CamFit seed = fit_cam(table, chosen, 0.0, &seed_spline);
+  const CamFit fit = fit_cam(table, chosen, part.at("target_fit_error_mm").get<double>(), &spline);
+
+  // Tangent-point tracking at equal steps of the contact's polar angle.
+  auto kinematics = build(doc.at("machine"));
+  const auto motors = kinematics->motors();
+  const double step_deg = doc.at("plan").at("segment_angle_deg").get<double>();
+  const auto segments = static_cast<std::size_t>(std::ceil(360.0 / step_deg - 1e-9));
+  std::vector<std::vector<double>> q(segments + 1, std::vector<double>(2));
+  std::vector<double> contact_l(segments + 1);
+  for (std::size_t k = 0; k <= segments; ++k) {
+    const double phi = 2 * pi * static_cast<double>(k) / static_cast<double>(segments);
+    contact_l[k] = spline.parameter_at_polar_angle(phi);
+    std::array<double, 2> p{}, d1{}, d2{};
+    spline.evaluate(contact_l[k], p, d1, d2);
+    kinematics->inverse({p[0], p[1], d1[0], d1[1]}, {}, q[k]);
+    if (k > 0) q[k][0] += 360.0 * std::round((q[k - 1][0] - q[k][0]) / 360.0);  // unwrap C
+  }
+  // Integer positions (remainders carried), durations: C at the mean cam speed, stretched where a
+  // motor would exceed its pulse rate.
+  const double c_speed_deg_s = doc.at("machine").at("cam_speed_rpm").get<double>() * 6.0;
+  std::vector<std::vector<double>> cols(5);
+  std::vector<std::int64_t> previous{0, 0};
+  double t = 0.0;
+  std::vector<std::vector<std::int64_t>> pulses;
+  std::vector<double> durations;
+  for (std::size_t k = 0; k < segments; ++k) {
+    std::vector<std::int64_t> n(2);
+    double duration = std::abs(q[k + 1][0] - q[k][0]) / c_speed_deg_s;
+    for (std::size_t m = 0; m < 2; ++m) {
+      const auto now = std::llround((q[k + 1][m] - q[0][m]) / motors[m].mm_per_pulse);
+      n[m] = now - previous[m];
+      previous[m] = now;
+      duration = std::max(duration, static_cast<double>(std::llabs(n[m])) / motors[m].max_pulse_rate_hz);
+    }
+    cols[0].push_back(static_cast<double>(k));
+    cols[1].push_back(t);
+    cols[2].push_back(duration);
+    cols[3].push_back(static_cast<double>(n[0]));
+    cols[4].push_back(static_cast<double>(n[1]));
+    pulses.push_back(n);
+    durations.push_back(duration);
+    t += duration;
+  }
+  // Replay every state (pulses spread evenly per segment) through the forward kinematics.
+  std::vector<double> position = q[0];
+  double max_error = 0.0, sum_sq = 0.0;
+  std::size_t states = 0;
+  std::vector<double> end_angle, end_error;
+  std::vector<std::pair<double, std::size_t>> events;
+  for (std::size_t k = 0; k < segments; ++k) {
+    double l = contact_l[k];
+    events.clear();
+    for (std::size_t m = 0; m < 2; ++m)
+      for (std::int64_t j = 1; j <= std::llabs(pulses[k][m]); ++j)
+        events.emplace_back((static_cast<double>(j) - 0.5) / static_cast<double>(std::llabs(pulses[k][m])), m);
+    std::sort(events.begin(), events.end());
+    for (const auto& [u, m] : events) {
+      position[m] += (pulses[k][m] > 0 ? 1.0 : -1.0) * motors[m].mm_per_pulse;
+      const double e = cam_deviation(spline, kinematics->forward(position, {}), l);
+      max_error = std::max(max_error, std::abs(e));
+      sum_sq += e * e;
+      ++states;
+    }
+    double l_end = contact_l[k + 1];
+    end_angle.push_back(360.0 * static_cast<double>(k + 1) / static_cast<double>(segments));
+    end_error.push_back(cam_deviation(spline, kinematics->forward(position, {}), l_end));
+  }
+  // Concave parts of the fitted profile: a wheel of larger radius gouges there (K2 tracking keeps
+  // the tangency at the contact but the wheel then cuts the profile next to it).
+  double min_concave_radius = std::numeric_limits<double>::infinity(), concave_at_deg = 0.0;
+  for (int i = 0; i < 20000; ++i) {
+    std::array<double, 2> p{}, d1{}, d2{};
+    spline.evaluate(spline.length() * i / 20000.0, p, d1, d2);
+    const double speed = std::hypot(d1[0], d1[1]);
+    const double curvature = (d1[0] * d2[1] - d1[1] * d2[0]) / (speed * speed * speed);
+    if (curvature < 0 && -1 / curvature < min_concave_radius) {
+      min_concave_radius = -1 / curvature;
+      concave_at_deg = std::fmod(std::atan2(p[1], p[0]) * 180 / pi + 360.0, 360.0);
+    }
+  }
+  // Per-degree lift error: change of the deviation over one degree of cam angle.
+  double per_degree = 0.0;
+  const auto per = static_cast<std::size_t>(std::max(1.0, std::round(1.0 / step_deg)));
+  for (std::size_t k = per; k < end_error.size(); ++k)
+    per_degree = std::max(per_degree, std::abs(end_error[k] - end_error[k - per]));
+
+  if (!context.artifact_dir.empty()) {
+    const fs::path dir = context.artifact_dir;
+    write_file_atomically(dir / "pulses.csv",
+                          csv_text({"segment", "start_s", "duration_s", "c_axis_pulses", "x_slide_pulses"}, cols));
+    std::vector<std::vector<double>> fit_cols(4);
+    for (std::size_t i = 0; i < table.angle_deg.size(); ++i) {
+      const double phi = table.angle_deg[i] * pi / 180;
+      fit_cols[0].push_back(table.angle_deg[i]);
+      fit_cols[1].push_back(table.radius_mm[i]);
+      fit_cols[2].push_back(seed_spline.polar_radius(phi) - table.radius_mm[i]);
+      fit_cols[3].push_back(spline.polar_radius(phi) - table.radius_mm[i]);
+    }
+    write_file_atomically(dir / "fit_errors.csv",
+                          csv_text({"angle_deg", "radius_mm", "chosen_points_error_mm", "adaptive_error_mm"}, fit_cols));
+    Json summary = {
+        {"chosen_points", seed.chosen_angles_deg.size()},
+        {"chosen_points_fit", {{"max_radius_error_mm", seed.max_radius_error_mm},
+                               {"mean_abs_radius_error_mm", seed.mean_abs_radius_error_mm},
+                               {"max_x_error_mm", seed.max_x_error_mm}, {"max_y_error_mm", seed.max_y_error_mm},
+                               {"worst_angle_deg", seed.worst_angle_deg}}},
+        {"adaptive_fit", {{"points", fit.chosen_angles_deg.size()}, {"inserted", fit.inserted},
+                          {"inserted_angles_deg", fit.chosen_angles_deg},
+                          {"max_radius_error_mm", fit.max_radius_error_mm},
+                          {"mean_abs_radius_error_mm", fit.mean_abs_radius_error_mm},
+                          {"max_x_error_mm", fit.max_x_error_mm}, {"max_y_error_mm", fit.max_y_error_mm},
+                          {"worst_angle_deg", fit.worst_angle_deg}}},
+        {"total_time_s", t},
+        {"segments", segments},
+        {"initial_position", {{"c_axis_deg", q[0][0]}, {"x_slide_mm", q[0][1]}}},
+        {"max_profile_error_mm", max_error},
+        {"rms_profile_error_mm", states ? std::sqrt(sum_sq / static_cast<double>(states)) : 0.0},
+        {"max_per_degree_error_mm", per_degree},
+        {"min_concave_radius_mm", std::isfinite(min_concave_radius) ? Json(min_concave_radius) : Json()},
+        {"min_concave_radius_at_deg", concave_at_deg},
+        {"wheel_gouges_concave_parts",
+         std::isfinite(min_concave_radius) &&
+             doc.at("machine").at("wheel_radius_mm").get<double>() > min_concave_radius},
+        {"requirements", {{"total_lift_error_mm", 0.015}, {"per_degree_lift_error_mm", 0.004}}},
+        {"machine", doc.at("machine")}, {"part", part}, {"plan", doc.at("plan")}};
+    Json plot_errors = Json::array();
+    if (context.plots) {
+      auto draw = [&](const plot::Curves& c, const std::string& stem) {
+        try {
+          plot::render(c, dir, stem);
+        } catch (const std::exception& e) {
+          plot_errors.push_back(fmt::format("{}: {}", stem, e.what()));
+        }
+      };
+      plot::Curves f;
+      f.title = "cam fit error at the lift-table rows";
+      f.x_label = "cam angle [deg]";
+      f.y_label = "fitted - table radius [um]";
+      plot::Series a{fmt::format("{} chosen points", seed.chosen_angles_deg.size()), fit_cols[0], {}, "linespoints"};
+      plot::Series b{fmt::format("after adaptive insertion ({} points)", fit.chosen_angles_deg.size()), fit_cols[0], {}, "linespoints"};
+      for (std::size_t i = 0; i < fit_cols[0].size(); ++i) {
+        a.y.push_back(1000 * fit_cols[2][i]);
+        b.y.push_back(1000 * fit_cols[3][i]);
+      }
+      f.series = {a, b};
+      draw(f, "fit_error");
+      plot::Curves e;
+      e.title = "replayed profile error (segment ends)";
+      e.x_label = "contact polar angle [deg]";
+      e.y_label = "normal deviation [um] (+ material left)";
+      plot::Series s{"deviation", end_angle, {}, "lines"};
+      for (double v : end_error) s.y.push_back(1000 * v);
+      e.series = {s};
+      draw(e, "profile_error");
+      plot::Curves x;
+      x.title = "X slide position (tangent-point tracking)";
+      x.x_label = "contact polar angle [deg]";
+      x.y_label = "wheel centre distance from the C axis [mm]";
+      plot::Series xs{"X slide", {}, {}, "lines"};
+      for (std::size_t k = 0; k <= segments; ++k) {
+        xs.x.push_back(360.0 * static_cast<double>(k) / static_cast<double>(segments));
+        xs.y.push_back(q[k][1]);
+      }
+      x.series = {xs};
+      draw(x, "x_slide");
+    }
+    summary["plot_errors"] = plot_errors;
+    write_json_file(dir / "summary.json", summary);
+  }
+  return {seed.max_radius_error_mm, fit.max_radius_error_mm, static_cast<double>(fit.inserted), t,
+          max_error, per_degree};
+}
+
+}  // namespace chatterlab::planner
+
+CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::planner::CamPlanKind);

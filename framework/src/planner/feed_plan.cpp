@@ -1,0 +1,310 @@
+#include "planner/feed_plan.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/plot.hpp"
+#include "planner/plan_io.hpp"
+#include "planner/replay.hpp"
+#include "planner/setup.hpp"
+
+namespace chatterlab::planner {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+ParamSpec positive(std::string key, std::string unit, std::string description) {
+  return positive_spec(std::move(key), std::move(unit), std::move(description));
+}
+
+std::vector<ParamSpec> machine_constraint_specs() {
+  ParamSpec delta = positive("max_relative_rate_change", "1",
+                             "delta: largest relative change of a motor's pulse rate between "
+                             "consecutive segments, |f_q - f_h| / f_q");
+  delta.max = 1.0;
+  delta.max_exclusive = true;
+  return {delta,
+          positive("max_axial_advance_mm_per_100_rev", "mm",
+                   "largest advance of the contact point along the work axis per 100 work "
+                   "revolutions")};
+}
+
+std::vector<ParamSpec> wheel_specs() {
+  ParamSpec type = param_spec("type", ValueKind::string, "", "cylindrical or profiled (edge arc)");
+  type.choices = {"cylindrical", "profiled"};
+  ParamSpec radius = positive("edge_radius_mm", "mm", "profiled wheel: radius r of the edge arc");
+  radius.optional = true;
+  ParamSpec angle = positive("edge_angle_deg", "deg", "profiled wheel: opening angle of the edge arc");
+  angle.max = 180.0;
+  angle.default_value = 180.0;
+  return {type, positive("diameter_mm", "mm", "largest section diameter phi"),
+          positive("thickness_mm", "mm", "wheel thickness a (face width)"), radius, angle};
+}
+
+std::vector<ParamSpec> part_specs() {
+  ParamSpec expression = param_spec("generatrix", ValueKind::string, "mm",
+                                    "y = f(x): muparser expression in x (mm), _pi is pi");
+  expression.optional = true;
+  ParamSpec range = param_spec("x_range_mm", ValueKind::real_list, "mm", "[a, b]: the x range to grind");
+  range.min_items = 2;
+  range.optional = true;
+  ParamSpec points = param_spec("points_file", ValueKind::string, "",
+                                "instead of generatrix: CSV of x_mm, y_mm points (relative to the "
+                                "study file), natural cubic spline through them");
+  points.optional = true;
+  return {expression, range, points};
+}
+
+Json table_or_empty(const Json& document, const std::string& key, const SourceMap& sources) {
+  if (!document.contains(key)) return Json::object();
+  const Json& t = document.at(key);
+  if (!t.is_object())
+    throw InputError(fmt::format("{}: {} = {}: expected a table [{}]", sources.locate(key).str(), key,
+                                 t.dump(), key));
+  return t;
+}
+
+Json require_table(const Json& document, const std::string& key, const SourceMap& sources) {
+  if (!document.contains(key))
+    throw InputError(fmt::format("{}: missing table [{}] (the feed_plan study needs it)",
+                                 sources.locate("study").str(), key));
+  return table_or_empty(document, key, sources);
+}
+
+// spindle_speed_rpm = 300 or { from = 250, to = 300 }.
+Json validate_spindle_speed(const Json& machine, const SourceMap& sources) {
+  const std::string where = sources.locate("machine.spindle_speed_rpm").str();
+  if (!machine.contains("spindle_speed_rpm"))
+    throw InputError(fmt::format("{}: missing key 'machine.spindle_speed_rpm' (rpm, a value or "
+                                 "{{ from, to }})", sources.locate("machine").str()));
+  const Json& v = machine.at("spindle_speed_rpm");
+  auto check = [&](const Json& x, const std::string& key) {
+    if (!x.is_number() || !std::isfinite(x.get<double>()) || !(x.get<double>() > 0))
+      throw InputError(fmt::format("{}: {} = {}: must be a number > 0 (rpm)", where, key, x.dump()));
+    return x.get<double>();
+  };
+  if (v.is_number()) {
+    check(v, "machine.spindle_speed_rpm");
+    return v;
+  }
+  if (!v.is_object() || !v.contains("from") || !v.contains("to") || v.size() != 2)
+    throw InputError(fmt::format("{}: machine.spindle_speed_rpm = {}: expected a number or "
+                                 "{{ from = ..., to = ... }}", where, v.dump()));
+  const double from = check(v["from"], "machine.spindle_speed_rpm.from");
+  const double to = check(v["to"], "machine.spindle_speed_rpm.to");
+  if (from > to)
+    throw InputError(fmt::format("{}: machine.spindle_speed_rpm = {}: from must not exceed to", where, v.dump()));
+  return Json{{"from", from}, {"to", to}};
+}
+
+Json validate_machine(const Json& document, const SourceMap& sources) {
+  Json machine = require_table(document, "machine", sources);
+  Json constraints = Json::object(), rest = Json::object();
+  for (auto it = machine.begin(); it != machine.end(); ++it) {
+    bool owned = false;
+    for (const char* key : machine_constraint_keys) owned = owned || it.key() == key;
+    (owned ? constraints : rest)[it.key()] = it.value();
+  }
+  Json spindle = validate_spindle_speed(machine, sources);
+  constraints.erase("spindle_speed_rpm");
+  constraints = validate_params(constraints, machine_constraint_specs(), "machine", sources);
+  Json validated = validate_component(Json{{"machine", rest}}, "machine", kinematics_registry(), sources);
+  for (auto it = constraints.begin(); it != constraints.end(); ++it) validated[it.key()] = it.value();
+  validated["spindle_speed_rpm"] = spindle;
+  return validated;
+}
+
+Json validate_part(const Json& document, const SourceMap& sources) {
+  Json part = validate_params(require_table(document, "part", sources), part_specs(), "part", sources);
+  const bool has_points = part["points_file"].is_string();
+  if (has_points == part["generatrix"].is_string() || has_points == part["x_range_mm"].is_array())
+    throw InputError(fmt::format("{}: [part] needs either generatrix and x_range_mm, or points_file "
+                                 "(not both)", sources.locate("part").str()));
+  if (has_points) {
+    const std::filesystem::path study_dir =
+        std::filesystem::path(sources.locate("part.points_file").file).parent_path();
+    part["points_file"] = std::filesystem::absolute(study_dir / part["points_file"].get<std::string>()).string();
+    try {
+      auto generatrix = build_generatrix(part);  // reads and checks the table (InputError)
+      for (int i = 0; i <= 64; ++i) {
+        const double x = generatrix->x_min_mm() + (generatrix->x_max_mm() - generatrix->x_min_mm()) * i / 64.0;
+        if (!(generatrix->evaluate(x).f >= 0))
+          throw std::invalid_argument(fmt::format("the radius must not be negative (f({}) < 0)", x));
+      }
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fmt::format("{}: part.points_file = \"{}\": {}", sources.locate("part.points_file").str(),
+                                   part["points_file"].get<std::string>(), e.what()));
+    }
+    return part;
+  }
+  const auto range = part["x_range_mm"].get<std::vector<double>>();
+  if (range.size() != 2 || !(range[0] < range[1]))
+    throw InputError(fmt::format("{}: part.x_range_mm = {}: expected [a, b] with a < b",
+                                 sources.locate("part.x_range_mm").str(), part["x_range_mm"].dump()));
+  try {
+    auto generatrix = build_generatrix(part);
+    check_smooth(*generatrix);
+    for (int i = 0; i <= 64; ++i) {
+      const double x = range[0] + (range[1] - range[0]) * i / 64.0;
+      if (!(generatrix->evaluate(x).f >= 0))  // 0: an apex on the axis (problem 1 at x = 600)
+        throw std::invalid_argument(fmt::format("the radius f(x) must not be negative (f({}) = {})", x,
+                                                generatrix->evaluate(x).f));
+    }
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: part.generatrix = \"{}\" on x_range_mm = [{}, {}]: {}",
+                                 sources.locate("part.generatrix").str(),
+                                 part["generatrix"].get<std::string>(), range[0], range[1], e.what()));
+  }
+  return part;
+}
+
+// The wheel must fit the part (MODELS.md P5): edge radius within the computed limit, face or arc
+// clear of the part at every contact.
+void check_wheel_fits(const Json& wheel, const Json& part, const SourceMap& sources) {
+  auto generatrix = build_generatrix(part);
+  const WheelSection section = build_wheel(wheel);
+  if (section.profiled) {
+    if (!wheel["edge_radius_mm"].is_number())
+      throw InputError(fmt::format("{}: missing key 'wheel.edge_radius_mm' (a profiled wheel needs "
+                                   "its edge arc radius, mm)", sources.locate("wheel").str()));
+    const EdgeRadiusLimit limit = largest_edge_radius(*generatrix);
+    if (section.edge_radius_mm > limit.radius_mm)
+      throw InputError(fmt::format(
+          "{}: wheel.edge_radius_mm = {}: the wheel is too large for the part: the largest edge "
+          "radius that touches the part only at the contact is {:.2f} mm ({} at x = {:.2f} mm)",
+          sources.locate("wheel.edge_radius_mm").str(), section.edge_radius_mm, limit.radius_mm,
+          limit.local ? "radius of curvature of a concave part" : "distant part of the profile",
+          limit.x_mm));
+    const double arc_width = 2 * section.edge_radius_mm *
+                             std::sin(0.5 * section.edge_angle_deg * 3.14159265358979323846 / 180.0);
+    if (arc_width > section.thickness_mm * (1 + 1e-12))
+      throw InputError(fmt::format(
+          "{}: wheel.edge_radius_mm = {}: an arc of radius {} mm and opening {} deg is {:.4g} mm "
+          "wide, more than wheel.thickness_mm = {}", sources.locate("wheel.edge_radius_mm").str(),
+          section.edge_radius_mm, section.edge_radius_mm, section.edge_angle_deg, arc_width,
+          section.thickness_mm));
+  }
+  std::vector<double> contacts;
+  const double a = generatrix->x_min_mm(), b = generatrix->x_max_mm();
+  for (int i = 0; i <= 600; ++i) contacts.push_back(a + (b - a) * i / 600.0);
+  const Interference hit = check_interference(*generatrix, section, contacts, {});
+  if (hit.depth_mm > 0)
+    throw InputError(fmt::format(
+        "{}: wheel = {} wheel, thickness_mm = {}: the wheel is too large for the part: its {} cuts "
+        "{:.4g} mm into the part with the contact at x = {:.2f} mm ({} of 601 contacts interfere)",
+        sources.locate("wheel").str(), section.profiled ? "profiled" : "cylindrical",
+        section.thickness_mm, section.profiled ? "edge arc" : "flat face", hit.depth_mm, hit.x_mm,
+        hit.contacts_with_interference));
+}
+
+constexpr const char* columns[] = {"total_time_s", "lower_bound_s", "gap_percent", "segments",
+                                   "max_profile_error_mm", "rms_profile_error_mm",
+                                   "max_edge_radius_mm", "certified"};
+
+}  // namespace
+
+PluginInfo FeedPlanKind::info() {
+  PluginInfo info;
+  info.name = "feed_plan";
+  info.description =
+      "certified time-optimal stepper pulse schedule for a solid of revolution, with replayed "
+      "profile error, wheel limits and wear distribution";
+  info.models_md_ids = "P1-P8";
+  ParamSpec length = positive("segment_length_mm", "mm",
+                              "axial length of a plan segment (default: 1 s at the axial-speed bound)");
+  length.optional = true;
+  ParamSpec start_stop = positive(
+      "start_stop_rate_hz", "1/s",
+      "start-stop rate: a motor may change its rate by this much in one step where the relative "
+      "rule does not apply (start, stop, reversal, low rates); default delta x max pulse rate");
+  start_stop.optional = true;
+  ParamSpec sweep = param_spec("wear_sweep", ValueKind::string, "",
+                               "contact sweep across the wheel face (MODELS.md P6)");
+  sweep.choices = {"none", "triangle", "sine", "stepped"};
+  sweep.default_value = "none";
+  ParamSpec amplitude = param_spec("wear_sweep_amplitude_mm", ValueKind::real, "mm",
+                                   "sweep amplitude A (default: half the wheel thickness)");
+  amplitude.min = 0.0;
+  amplitude.optional = true;
+  ParamSpec period = positive("wear_sweep_period_mm", "mm", "axial travel per sweep cycle");
+  period.default_value = 40.0;
+  ParamSpec steps = param_spec("wear_sweep_steps", ValueKind::integer, "1",
+                               "stepped sweep: number of contact positions");
+  steps.min = 2;
+  steps.max = 1000;
+  steps.default_value = 5;
+  info.params = {length, start_stop, sweep, amplitude, period, steps};
+  info.thread_safety = ThreadSafety::copy_per_thread;
+  info.example_params = {{"segment_length_mm", 0.2}};
+  return info;
+}
+
+void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
+  Json machine = validate_machine(document, sources);
+  Json part = validate_part(document, sources);
+  Json wheel = validate_params(require_table(document, "wheel", sources), wheel_specs(), "wheel", sources);
+  Json plan = validate_params(table_or_empty(document, "plan", sources), info().params, "plan", sources);
+  check_wheel_fits(wheel, part, sources);
+  if (plan["wear_sweep"] != "none") {
+    const WheelSection section = build_wheel(wheel);
+    const double half = sweep_half_width_mm(section);
+    if (plan["wear_sweep_amplitude_mm"].is_number() && plan["wear_sweep_amplitude_mm"].get<double>() > half)
+      throw InputError(fmt::format(
+          "{}: plan.wear_sweep_amplitude_mm = {}: the contact would leave the wheel's {} (at most "
+          "{:.4g} mm: {})", sources.locate("plan.wear_sweep_amplitude_mm").str(),
+          plan["wear_sweep_amplitude_mm"].get<double>(), section.profiled ? "edge arc" : "face", half,
+          section.profiled ? "edge radius x half the opening angle" : "half the thickness"));
+  }
+  // The machine must reach every contact (e.g. a slope the upper table cannot turn to).
+  auto kinematics = build_kinematics(machine);
+  auto generatrix = build_generatrix(part);
+  std::vector<double> positions(kinematics->motors().size());
+  for (int i = 0; i <= 64; ++i) {
+    const double x = generatrix->x_min_mm() + (generatrix->x_max_mm() - generatrix->x_min_mm()) * i / 64.0;
+    const GeneratrixValue v = generatrix->evaluate(x);
+    try {
+      kinematics->inverse({x, v.f, 1.0, v.d1}, {}, positions);
+    } catch (const std::domain_error& e) {
+      throw InputError(fmt::format("{}: machine.type = {}: cannot reach the contact at x = {}: {}",
+                                   sources.locate("machine.type").str(), machine["type"].dump(), x, e.what()));
+    }
+  }
+  document["machine"] = std::move(machine);
+  document["part"] = std::move(part);
+  document["wheel"] = std::move(wheel);
+  document["plan"] = std::move(plan);
+}
+
+std::vector<std::string> FeedPlanKind::output_columns(const Json& /*document*/) const {
+  return {std::begin(columns), std::end(columns)};
+}
+
+std::vector<Json> FeedPlanKind::run_point(const Json& doc, const PointContext& context) const {
+  const PlanRun run = compute_plan(doc);
+  if (!context.artifact_dir.empty()) write_plan_files(run, doc, context.artifact_dir, context.plots);
+  const Schedule& s = run.schedule;
+  const double total = s.plan.total_time_s();
+  return {total,
+          s.lower_bound_s,
+          100.0 * (total - s.lower_bound_s) / s.lower_bound_s,
+          static_cast<double>(s.plan.segments.size()),
+          run.errors.total.max_abs_mm,
+          run.errors.total.rms_mm,
+          std::isfinite(run.edge_limit.radius_mm) ? Json(run.edge_limit.radius_mm) : Json(),
+          s.certificate.ok};
+}
+
+void FeedPlanKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
+                                   const fs::path& /*out_dir*/) const {
+  // Every figure belongs to one plan and is drawn by run_point into its artefact directory.
+}
+
+}  // namespace chatterlab::planner
+
+CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::planner::FeedPlanKind);

@@ -1,0 +1,420 @@
+#include "planner/plan_io.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <optional>
+#include <stdexcept>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/plot.hpp"
+#include "chatterlab/signal_io.hpp"
+
+namespace chatterlab::planner {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string position_key(const MotorAxis& m) {
+  return (m.position_name.empty() ? m.name : m.position_name) + "_mm";
+}
+
+Json error_stats(const ErrorStats& s) {
+  return {{"max_abs_mm", s.max_abs_mm}, {"mean_mm", s.mean_mm}, {"mean_abs_mm", s.mean_abs_mm},
+          {"rms_mm", s.rms_mm}};
+}
+
+Json certificate_json(const Certificate& c, const FeedPlan& plan, const FeedConstraints& k) {
+  Json rates = Json::object();
+  for (std::size_t m = 0; m < plan.motors.size(); ++m) rates[plan.motors[m].name] = c.max_pulse_rate_hz[m];
+  return {{"ok", c.ok},
+          {"checked", "every segment and motor after integerisation: pulse rate <= max_pulse_rate_hz, "
+                      "axial speed <= max_axial_advance_mm_per_100_rev/100 * spindle rev/s, "
+                      "|r' - r| <= max(delta |r|, start_stop_rate_hz), position drift <= 1/2 step"},
+          {"max_pulse_rate_hz", rates},
+          {"max_axial_speed_mm_per_s", c.max_axial_speed_mm_per_s},
+          {"axial_speed_limit_mm_per_s", k.max_axial_speed_mm_per_s()},
+          {"max_relative_rate_change", c.max_relative_rate_change},
+          {"relative_rate_change_limit", k.max_relative_rate_change},
+          {"start_stop_rate_hz", k.start_stop_rate_hz},
+          {"rate_changes_under_start_stop_allowance", c.rate_changes_under_start_stop_allowance},
+          {"max_rate_change_under_allowance_hz", c.max_rate_change_at_low_rate_hz},
+          {"reversals", c.reversals},
+          {"max_position_drift_steps", c.max_position_drift_steps},
+          {"violations", c.violations}};
+}
+
+// Pre-motion (P2: "the plan starts after a short pre-motion"): on the approach, before the
+// wheel reaches the part, every motor ramps from rest along the first segment's direction with
+// all rates scaled by c_0 = f_ss / max|r| and then c_{j+1} = (1 + delta) c_j: each step meets
+// the relative rule, the first the start-stop rate. The run-out mirrors it after the last segment.
+std::size_t ramp_segments(const FeedPlan& plan, const FeedConstraints& k) {
+  if (plan.segments.empty()) return 0;
+  double fastest = 0.0;
+  const PlanSegment& first = plan.segments.front();
+  for (std::size_t m = 0; m < plan.motors.size(); ++m)
+    fastest = std::max(fastest, std::abs(static_cast<double>(first.pulses[m])) / first.duration_s);
+  double scale = fastest > 0 ? k.start_stop_rate_hz / fastest : 1.0;
+  std::size_t n = 0;
+  while (scale < 1.0) {
+    ++n;
+    scale *= 1.0 + k.max_relative_rate_change;
+  }
+  return n;
+}
+
+}  // namespace
+
+PlanRun compute_plan(const Json& document) {
+  PlanRun run;
+  const Json& machine = document.at("machine");
+  const Json& plan = document.at("plan");
+  const Json& wheel = document.at("wheel");
+  run.generatrix = build_generatrix(document.at("part"));
+  run.kinematics = build_kinematics(machine);
+  run.constraints = build_constraints(machine, plan, *run.kinematics);
+  run.sweep = build_sweep(plan, wheel);
+  try {
+    run.schedule = plan_feed(*run.generatrix, *run.kinematics, run.constraints,
+                             segment_length_mm(plan, run.constraints),
+                             sweep_function(run.sweep, run.generatrix->x_min_mm()), true,
+                             wheel_contact(build_wheel(wheel)));
+  } catch (const std::exception& e) {
+    throw PointFailure(fmt::format("no plan: {}", e.what()));
+  }
+  run.errors = replay_errors(run.schedule, *run.generatrix, *run.kinematics);
+  run.edge_limit = largest_edge_radius(*run.generatrix);
+  run.interference = check_interference(*run.generatrix, build_wheel(wheel), run.schedule.knots_mm,
+                                        run.schedule.contact_on_tool_mm);
+  std::vector<double> durations;
+  for (const auto& seg : run.schedule.plan.segments) durations.push_back(seg.duration_s);
+  run.wear = wear_distribution(run.schedule.contact_on_tool_mm, durations,
+                               sweep_half_width_mm(build_wheel(wheel)));
+  run.ramp_segments = ramp_segments(run.schedule.plan, run.constraints);
+  if (!durations.empty())
+    run.ramp_time_s = static_cast<double>(run.ramp_segments) * (durations.front() + durations.back());
+  return run;
+}
+
+Json plan_summary(const PlanRun& run, const Json& document) {
+  const Schedule& s = run.schedule;
+  const FeedPlan& plan = s.plan;
+  const double total = plan.total_time_s();
+  Json initial = Json::object(), rates = Json::object(), steps = Json::object();
+  for (std::size_t m = 0; m < plan.motors.size(); ++m) {
+    initial[position_key(plan.motors[m])] = plan.initial_position_mm[m];
+    rates[plan.motors[m].name] = s.certificate.max_pulse_rate_hz[m];
+    steps[plan.motors[m].name] = plan.motors[m].mm_per_pulse;
+  }
+  const bool edge_limited = std::isfinite(run.edge_limit.radius_mm);
+  Json summary = {
+      {"total_time_s", total},
+      {"lower_bound_s", s.lower_bound_s},
+      {"lower_bound_kind", "continuous relaxation: the exact path at the largest speed each "
+                           "per-segment bound allows, without smoothness"},
+      {"gap_percent", 100.0 * (total - s.lower_bound_s) / s.lower_bound_s},
+      {"segments", plan.segments.size()},
+      {"spindle_speed_rpm", plan.spindle_speed_rpm},
+      {"x_start_mm", s.knots_mm.front()},
+      {"x_end_mm", s.knots_mm.back()},
+      {"initial_position", initial},
+      {"mm_per_pulse", steps},
+      {"max_pulse_rate_hz", rates},
+      {"max_edge_radius_mm", edge_limited ? Json(run.edge_limit.radius_mm) : Json()},
+      {"max_edge_radius_note",
+       edge_limited ? fmt::format("set at x = {:.3f} mm by {}", run.edge_limit.x_mm,
+                                  run.edge_limit.local ? "the radius of curvature of a concave part"
+                                                       : "a distant part of the profile (normal-line condition)")
+                    : std::string("no concave part: any edge radius fits")},
+      {"max_profile_error_mm", run.errors.total.max_abs_mm},
+      {"mean_profile_error_mm", run.errors.total.mean_mm},
+      {"mean_abs_profile_error_mm", run.errors.total.mean_abs_mm},
+      {"rms_profile_error_mm", run.errors.total.rms_mm},
+      {"max_profile_error_at_x_mm", run.errors.x_at_max_mm},
+      {"area_error_percent", run.errors.area_percent},
+      {"error_split", {{"linearisation", error_stats(run.errors.linearisation)},
+                       {"quantisation", error_stats(run.errors.quantisation)},
+                       {"replayed_states", run.errors.states}}},
+      {"certificate", certificate_json(s.certificate, plan, run.constraints)},
+      {"interference", {{"max_depth_mm", run.interference.depth_mm},
+                        {"at_x_mm", run.interference.x_mm},
+                        {"contacts_with_interference", run.interference.contacts_with_interference}}},
+      {"wear", {{"sweep", run.sweep.law},
+                {"amplitude_mm", run.sweep.law == "none" ? 0.0 : run.sweep.amplitude_mm},
+                {"period_mm", run.sweep.period_mm},
+                {"used_face_width_mm", run.wear.used_width_mm},
+                {"uniformity", run.wear.uniformity}}},
+      {"pre_motion", {{"ramp_segments_each_end", run.ramp_segments},
+                      {"ramp_time_s", run.ramp_time_s},
+                      {"note", "approach and run-out ramps outside the part, not in total_time_s"}}},
+      {"smoothing_passes", s.smoothing_passes},
+      {"machine", document.at("machine")},
+      {"part", document.at("part")},
+      {"wheel", document.at("wheel")},
+      {"plan", document.at("plan")}};
+  return summary;
+}
+
+void write_plan_files(const PlanRun& run, const Json& document, const fs::path& dir, bool plots) {
+  const Schedule& s = run.schedule;
+  const FeedPlan& plan = s.plan;
+  const std::size_t n = plan.segments.size(), motors = plan.motors.size();
+  std::vector<std::string> header{"segment", "start_s", "duration_s"};
+  for (const auto& m : plan.motors) header.push_back(m.name + "_pulses");
+  std::vector<std::vector<double>> columns(header.size(), std::vector<double>(n));
+  std::vector<std::vector<double>> seg_columns(6, std::vector<double>(n));
+  for (std::size_t k = 0; k < n; ++k) {
+    const PlanSegment& seg = plan.segments[k];
+    columns[0][k] = static_cast<double>(k);
+    columns[1][k] = seg.start_s;
+    columns[2][k] = seg.duration_s;
+    for (std::size_t m = 0; m < motors; ++m) columns[3 + m][k] = static_cast<double>(seg.pulses[m]);
+    const double x0 = s.knots_mm[k], x1 = s.knots_mm[k + 1];
+    seg_columns[0][k] = static_cast<double>(k);
+    seg_columns[1][k] = x0;
+    seg_columns[2][k] = x1;
+    seg_columns[3][k] = run.generatrix->evaluate(0.5 * (x0 + x1)).f;
+    seg_columns[4][k] = (x1 - x0) / seg.duration_s;
+    seg_columns[5][k] = 0.5 * (s.contact_on_tool_mm[k] + s.contact_on_tool_mm[k + 1]);
+  }
+  write_file_atomically(dir / "pulses.csv", csv_text(header, columns));
+  write_file_atomically(dir / "segments.csv",
+                        csv_text({"segment", "x_start_mm", "x_end_mm", "radius_mm",
+                                  "axial_speed_mm_per_s", "contact_on_wheel_mm"},
+                                 seg_columns));
+  // Plots first: a figure that fails (gnuplot missing) is listed in summary.json's plot_errors
+  // and does not fail the plan, whose files are complete without it.
+  Json summary = plan_summary(run, document);
+  summary["plot_errors"] = Json::array();
+  if (plots) draw_plan_plots(run, document, dir, summary["plot_errors"]);
+  write_json_file(dir / "summary.json", summary);
+}
+
+void draw_plan_plots(const PlanRun& run, const Json& document, const fs::path& dir, Json& failures) {
+  const Schedule& s = run.schedule;
+  const FeedPlan& plan = s.plan;
+  const std::size_t n = plan.segments.size(), motors = plan.motors.size();
+  auto draw = [&](const plot::Curves& figure, const std::string& stem) {
+    try {
+      plot::render(figure, dir, stem);
+    } catch (const std::exception& e) {
+      failures.push_back(fmt::format("{}: {}", stem, e.what()));
+    }
+  };
+  const std::string name = document.contains("study") && document["study"].contains("name")
+                               ? document["study"]["name"].get<std::string>() : "feed plan";
+  // Generatrix and produced path, the deviation exaggerated to be visible at the part's scale.
+  constexpr double exaggeration = 1000.0;
+  plot::Curves profile;
+  profile.title = fmt::format("{}: generatrix and produced path (deviation x{:.0f})", name, exaggeration);
+  profile.x_label = "axial position x [mm]";
+  profile.y_label = "radius y [mm]";
+  plot::Series nominal{"generatrix f(x)", {}, {}, "lines"}, produced{
+      fmt::format("produced path, deviation x{:.0f} (segment max)", exaggeration), {}, {}, "lines"};
+  for (std::size_t k = 0; k < n; ++k) {
+    const double x = run.errors.segment_x_mm[k], f = run.generatrix->evaluate(x).f;
+    nominal.x.push_back(x);
+    nominal.y.push_back(f);
+    const double e = std::abs(run.errors.segment_max_mm[k]) > std::abs(run.errors.segment_min_mm[k])
+                         ? run.errors.segment_max_mm[k] : run.errors.segment_min_mm[k];
+    produced.x.push_back(x);
+    produced.y.push_back(f + exaggeration * e);
+  }
+  profile.series = {nominal, produced};
+  draw(profile, "profile");
+
+  plot::Curves error;
+  error.title = fmt::format("{}: replayed profile error along x", name);
+  error.x_label = "axial position x [mm]";
+  error.y_label = "normal deviation [um] (+ material left)";
+  plot::Series hi{"largest in segment", run.errors.segment_x_mm, {}, "lines"};
+  plot::Series lo{"smallest in segment", run.errors.segment_x_mm, {}, "lines"};
+  for (std::size_t k = 0; k < n; ++k) {
+    hi.y.push_back(1000.0 * run.errors.segment_max_mm[k]);
+    lo.y.push_back(1000.0 * run.errors.segment_min_mm[k]);
+  }
+  error.series = {hi, lo};
+  error.reference_y = 0.0;
+  error.reference_label = "generatrix";
+  draw(error, "error_along_x");
+
+  plot::Curves rates;
+  rates.title = fmt::format("{}: pulse rate per motor", name);
+  rates.x_label = "time t [s]";
+  rates.y_label = "pulse rate [pulses/s] (signed)";
+  for (std::size_t m = 0; m < motors; ++m) {
+    plot::Series series{plan.motors[m].name + " motor", {}, {}, "lines"};
+    for (std::size_t k = 0; k < n; ++k) {
+      series.x.push_back(plan.segments[k].start_s + 0.5 * plan.segments[k].duration_s);
+      series.y.push_back(static_cast<double>(plan.segments[k].pulses[m]) / plan.segments[k].duration_s);
+    }
+    rates.series.push_back(std::move(series));
+  }
+  draw(rates, "pulse_rates");
+
+  if (run.sweep.law != "none") {
+    plot::Curves wear;
+    wear.title = fmt::format("{}: wear (contact dwell) over the wheel face", name);
+    wear.x_label = "contact position on the wheel face [mm]";
+    wear.y_label = "dwell time per bin [s]";
+    wear.series = {{fmt::format("{} sweep, uniformity {:.3f}", run.sweep.law, run.wear.uniformity),
+                    run.wear.bin_centre_mm, run.wear.dwell_s, "steps"}};
+    draw(wear, "wear_histogram");
+  }
+}
+
+// ------------------------------------------------------------------------------ reading back
+
+namespace {
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream in(line);
+  std::string cell;
+  while (std::getline(in, cell, ',')) cells.push_back(cell);
+  return cells;
+}
+
+}  // namespace
+
+SavedPlan read_saved_plan(const fs::path& dir) {
+  const fs::path summary_path = dir / "summary.json", pulses_path = dir / "pulses.csv";
+  SavedPlan out;
+  Json summary;
+  {
+    std::ifstream in(summary_path);
+    if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs summary.json)", summary_path.string()));
+    try {
+      summary = Json::parse(in);
+      out.machine = summary.at("machine");
+      out.part = summary.at("part");
+      out.wheel = summary.at("wheel");
+      out.plan.spindle_speed_rpm = summary.at("spindle_speed_rpm").get<double>();
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: not a feed_plan summary: {}", summary_path.string(), e.what()));
+    }
+  }
+  std::unique_ptr<Kinematics> kinematics;
+  std::unique_ptr<Generatrix> generatrix;
+  try {
+    kinematics = build_kinematics(out.machine);
+    generatrix = build_generatrix(out.part);
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: machine/part tables unusable: {}", summary_path.string(), e.what()));
+  }
+  out.plan.motors = kinematics->motors();
+  const std::size_t motors = out.plan.motors.size();
+  for (const auto& m : out.plan.motors) {
+    const Json& initial = summary.at("initial_position");
+    if (!initial.contains(position_key(m)) || !initial[position_key(m)].is_number())
+      throw InputError(fmt::format("{}: initial_position has no number '{}'", summary_path.string(), position_key(m)));
+    out.plan.initial_position_mm.push_back(initial[position_key(m)].get<double>());
+  }
+
+  std::ifstream in(pulses_path);
+  if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs pulses.csv)", pulses_path.string()));
+  std::string line;
+  std::getline(in, line);
+  const auto header = split_csv_line(line);
+  std::vector<std::string> expected{"segment", "start_s", "duration_s"};
+  for (const auto& m : out.plan.motors) expected.push_back(m.name + "_pulses");
+  if (header != expected)
+    throw InputError(fmt::format("{}:1: header '{}' does not match the machine's motors (expected '{}')",
+                                 pulses_path.string(), line, fmt::join(expected, ",")));
+  int line_number = 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    const auto cells = split_csv_line(line);
+    if (cells.size() != expected.size())
+      throw InputError(fmt::format("{}:{}: {} cells, expected {}", pulses_path.string(), line_number,
+                                   cells.size(), expected.size()));
+    PlanSegment seg;
+    try {
+      seg.start_s = std::stod(cells[1]);
+      seg.duration_s = std::stod(cells[2]);
+      for (std::size_t m = 0; m < motors; ++m) {
+        std::size_t used = 0;
+        seg.pulses.push_back(std::stoll(cells[3 + m], &used));
+        if (used != cells[3 + m].size()) throw std::invalid_argument("not an integer");
+      }
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{}:{}: '{}': times must be numbers and pulse counts integers",
+                                   pulses_path.string(), line_number, line));
+    }
+    if (!(seg.duration_s > 0))
+      throw InputError(fmt::format("{}:{}: duration_s = {}: must be > 0", pulses_path.string(), line_number, cells[2]));
+    out.plan.segments.push_back(std::move(seg));
+  }
+  // Conditions per segment by forward kinematics of the replayed positions; the contact offset
+  // on the wheel follows the saved sweep law as a function of x (fixed-point iteration).
+  const auto sweep = sweep_function(build_sweep(summary.at("plan"), out.wheel), generatrix->x_min_mm());
+  const auto contact = wheel_contact(build_wheel(out.wheel));
+  auto contact_x = [&](const std::vector<double>& positions, double& zeta) {
+    // Solve x = forward(positions, zeta(x)).x: secant iterations on the residual (the sweep can
+    // move the contact as fast as x itself, where plain fixed-point iteration stalls).
+    double x = kinematics->forward(positions, {}).x_mm;
+    zeta = 0.0;
+    if (!sweep) return x;
+    auto residual = [&](double guess) {
+      const double s = sweep(guess);
+      return kinematics->forward(positions, contact ? contact(s) : ToolContact{s, 0.0, 0.0}).x_mm - guess;
+    };
+    double x0 = x, r0 = residual(x0), x1 = x0 + 1e-3, r1 = residual(x1);
+    for (int i = 0; i < 50 && std::abs(r1) > 1e-10 && r1 != r0; ++i) {
+      const double next = x1 - r1 * (x1 - x0) / (r1 - r0);
+      x0 = x1;
+      r0 = r1;
+      x1 = next;
+      r1 = residual(x1);
+    }
+    zeta = sweep(x1);
+    return x1;
+  };
+  // segments.csv (written with the plan) gives x and the contact on the wheel directly; without it
+  // they are solved from the replayed positions (unique unless a fast sweep tilts the work).
+  const fs::path segments_path = dir / "segments.csv";
+  std::optional<DataTable> saved_segments;
+  if (fs::exists(segments_path)) {
+    saved_segments = read_data_table(segments_path);
+    if (saved_segments->rows() != out.plan.segments.size())
+      throw InputError(fmt::format("{}: {} rows, but pulses.csv has {} segments", segments_path.string(),
+                                   saved_segments->rows(), out.plan.segments.size()));
+  }
+  double zeta0 = 0.0;
+  std::vector<double> positions = out.plan.initial_position_mm;
+  double x_prev = contact_x(positions, zeta0);
+  for (std::size_t k = 0; k < out.plan.segments.size(); ++k) {
+    for (std::size_t m = 0; m < motors; ++m)
+      positions[m] += static_cast<double>(out.plan.segments[k].pulses[m]) * out.plan.motors[m].mm_per_pulse;
+    double zeta1 = 0.0;
+    double x_next = saved_segments ? 0.0 : contact_x(positions, zeta1);
+    SegmentConditions c;
+    if (saved_segments) {
+      x_prev = saved_segments->column("x_start_mm")[k];
+      x_next = saved_segments->column("x_end_mm")[k];
+      c.contact_on_wheel_mm = saved_segments->column("contact_on_wheel_mm")[k];
+    } else {
+      c.contact_on_wheel_mm = 0.5 * (zeta0 + zeta1);
+    }
+    c.start_s = out.plan.segments[k].start_s;
+    c.duration_s = out.plan.segments[k].duration_s;
+    c.x_start_mm = x_prev;
+    c.x_end_mm = x_next;
+    c.radius_mm = generatrix->evaluate(0.5 * (x_prev + x_next)).f;
+    c.axial_speed_mm_per_s = (x_next - x_prev) / c.duration_s;
+    c.spindle_speed_rpm = out.plan.spindle_speed_rpm;
+    out.segments.push_back(c);
+    x_prev = x_next;
+    zeta0 = zeta1;
+  }
+  return out;
+}
+
+}  // namespace chatterlab::planner

@@ -1,0 +1,338 @@
+// Feed planner (MODELS.md P): generatrix derivatives against analytic ones, smoothness checks, the
+// P8 first-segment rates, certified schedules (problems 1 and 2 of P3 in 3000 s, error <= 5 um),
+// smoothness at reversals, edge-radius limit against a known curvature, wear dwell of the sweep
+// laws, the saved-plan reader, and bad-input messages.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/planner/plan.hpp"
+#include "chatterlab/study.hpp"
+#include "chatterlab/study_kind.hpp"
+#include "planner/plan_io.hpp"
+#include "planner/replay.hpp"
+#include "planner/setup.hpp"
+#include "planner/scheduler.hpp"
+#include "planner/wear.hpp"
+#include "planner/wheel_limits.hpp"
+#include "unit/study_test_support.hpp"
+
+namespace chatterlab::planner {
+namespace {
+
+namespace fs = std::filesystem;
+using chatterlab::testing::TempDir;
+
+constexpr const char* problem1 = "-7/18000*(600 - x)^2 + 0.45*(600 - x)";
+constexpr const char* problem2 = "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130";
+
+std::unique_ptr<Kinematics> seed_machine() {
+  return kinematics_registry().at("three_table_revolution").create(ParamValues(p2_machine_params()));
+}
+
+FeedConstraints seed_constraints() { return p2_constraints(); }
+
+TEST(Generatrix, DerivativesMatchAnalyticOnes) {
+  auto g = expression_generatrix(problem2, 0.0, 600.0);
+  for (double x : {0.0, 54.04, 123.4, 368.2, 600.0}) {
+    const double e = std::exp(-x / 400), arg = (x + 25 * std::numbers::pi) / 100;
+    const double f = 30 * e * std::sin(arg) + 130;
+    const double d1 = 30 * e * (-std::sin(arg) / 400 + std::cos(arg) / 100);
+    const double d2 = 30 * e * (std::sin(arg) / 160000 - 2 * std::cos(arg) / 40000 - std::sin(arg) / 10000);
+    const GeneratrixValue v = g->evaluate(x);
+    EXPECT_NEAR(v.f, f, 1e-13 * f);  // muparser rounds differently
+    EXPECT_NEAR(v.d1, d1, 1e-10) << x;
+    EXPECT_NEAR(v.d2, d2, 1e-8 * std::abs(d2) + 1e-10) << x;
+  }
+  auto p = expression_generatrix(problem1, 0.0, 600.0);
+  EXPECT_NEAR(p->evaluate(0.0).d1, 1.0 / 60, 1e-11);  // seed 000: a1 = 1/60
+  EXPECT_NEAR(p->evaluate(300.0).d2, -7.0 / 9000, 1e-10);
+}
+
+TEST(Generatrix, SplineReproducesACubicInsideAndIsNatural) {
+  std::vector<double> x, y;
+  for (int i = 0; i <= 20; ++i) {
+    x.push_back(i * 5.0);
+    y.push_back(100 + 0.1 * x.back());
+  }
+  auto s = spline_generatrix(x, y);
+  EXPECT_NEAR(s->evaluate(37.5).f, 103.75, 1e-12);
+  EXPECT_NEAR(s->evaluate(37.5).d1, 0.1, 1e-12);
+  EXPECT_NEAR(s->evaluate(0.0).d2, 0.0, 1e-12);
+  EXPECT_THROW(spline_generatrix({0, 1, 1}, {1, 2, 3}), std::invalid_argument);
+}
+
+std::string smooth_error(const std::string& expression, double a, double b) {
+  try {
+    check_smooth(*expression_generatrix(expression, a, b));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Generatrix, DiscontinuitiesKinksAndDomainAreReported) {
+  EXPECT_EQ(smooth_error(problem2, 0, 600), "");
+  const std::string jump = smooth_error("x < 300 ? 100 : 103", 0, 600);
+  EXPECT_NE(jump.find("f jumps by 3"), std::string::npos) << jump;
+  EXPECT_NE(jump.find("near x = 300"), std::string::npos) << jump;
+  const std::string kink = smooth_error("100 + abs(x - 250)", 0, 600);
+  EXPECT_NE(kink.find("slope f' jumps by 2"), std::string::npos) << kink;
+  const auto at = kink.find("near x = ");
+  ASSERT_NE(at, std::string::npos) << kink;
+  EXPECT_NEAR(std::stod(kink.substr(at + 9)), 250.0, 0.01) << kink;
+  const std::string domain = smooth_error("sqrt(x)", 0, 100);
+  EXPECT_NE(domain.find("not finite"), std::string::npos) << domain;
+  EXPECT_THROW(expression_generatrix("x +* 2", 0, 1), std::invalid_argument);
+}
+
+TEST(ThreeTableRevolution, ForwardInvertsInverse) {
+  auto machine = seed_machine();
+  std::vector<double> q(3);
+  for (const ToolContact contact : {ToolContact{}, ToolContact{7.5, 0, 0}, ToolContact{3.0, 0.5, 0.2}}) {
+    machine->inverse({123.0, 140.0, 1.0, -0.3}, contact, q);
+    const ToolInPart t = machine->forward(q, contact);
+    EXPECT_NEAR(t.x_mm, 123.0, 1e-12);
+    EXPECT_NEAR(t.y_mm, 140.0, 1e-12);
+  }
+  machine->inverse({123.0, 140.0, 1.0, -0.3}, {}, q);
+  EXPECT_NEAR(q[2], 90.0, 1e-12);  // z_g = -R f'
+  // Tilting the contact by phi turns the upper table by -phi: tan theta = tan(atan f' - phi).
+  machine->inverse({123.0, 140.0, 1.0, -0.3}, {0, 0, 0.1}, q);
+  EXPECT_NEAR(q[2], -300.0 * std::tan(std::atan(-0.3) - 0.1), 1e-12);
+  EXPECT_THROW(machine->inverse({0, 1, 0.0, 1.0}, {}, q), std::domain_error);
+}
+
+// MODELS.md P8: constant axial speed 0.2 mm/s, 1 s segments: first rates -54, 12, 14 (problem 1)
+// and -27, 40, 55 (problem 2). Both from the scheduler's first segment.
+TEST(FeedPlanner, FirstSegmentRatesOfSeed000) {
+  auto machine = seed_machine();
+  const std::pair<const char*, std::vector<std::int64_t>> cases[] = {{problem1, {-54, 12, 14}},
+                                                                      {problem2, {-27, 40, 55}}};
+  for (const auto& [expression, rates] : cases) {
+    auto g = expression_generatrix(expression, 0.0, 600.0);
+    // Uniform knots: every segment is the seed's 0.2 mm in 1 s.
+    const Schedule uniform = plan_feed(*g, *machine, seed_constraints(), 0.2, nullptr, false);
+    EXPECT_EQ(uniform.plan.segments.front().pulses, rates) << expression;
+    EXPECT_NEAR(uniform.plan.segments.front().duration_s, 1.0, 1e-9);
+    EXPECT_NEAR(uniform.plan.total_time_s(), 3000.0, 1e-6);
+    // Chosen knots leave the first one in place.
+    const Schedule s = plan_feed(*g, *machine, seed_constraints(), 0.2);
+    EXPECT_EQ(s.plan.segments.front().pulses, rates) << expression;
+    EXPECT_NEAR(s.plan.segments.front().duration_s, 1.0, 1e-9);
+  }
+}
+
+TEST(FeedPlannerAccuracy, ProblemsOneAndTwoIn3000sWithin5um) {
+  auto machine = seed_machine();
+  for (const char* expression : {problem1, problem2}) {
+    auto g = expression_generatrix(expression, 0.0, 600.0);
+    const Schedule s = plan_feed(*g, *machine, seed_constraints(), 0.2);
+    EXPECT_TRUE(s.certificate.ok) << (s.certificate.violations.empty() ? "" : s.certificate.violations[0]);
+    EXPECT_LE(s.plan.total_time_s(), 3000.0 + 1e-6);
+    EXPECT_NEAR(s.lower_bound_s, 3000.0, 1e-6);
+    EXPECT_LE(s.certificate.max_position_drift_steps, 0.5 + 1e-9);
+    for (double rate : s.certificate.max_pulse_rate_hz) EXPECT_LE(rate, 100.0);
+    const ProfileErrors e = replay_errors(s, *g, *machine);
+    EXPECT_LE(e.total.max_abs_mm, 0.005) << expression;
+    // Linearisation over 0.2 mm chords is far below a step; quantisation dominates.
+    EXPECT_LT(e.linearisation.max_abs_mm, 1e-4);
+    EXPECT_GT(e.quantisation.max_abs_mm, 1e-4);
+  }
+}
+
+// Slow motors make the pulse-rate bound bind where the slope is steep, and a triangle wear sweep
+// turns the lower table's rate abruptly at each turn: the plan must brake and speed up within the
+// smoothness rule, and stay certified after integerisation.
+TEST(FeedPlanner, SmoothnessBindsAndIsCertified) {
+  Json slow = p2_machine_params();
+  slow["max_pulse_rate_hz"] = 60.0;
+  auto machine = kinematics_registry().at("three_table_revolution").create(ParamValues(slow));
+  auto g = expression_generatrix(problem2, 0.0, 600.0);
+  const Schedule s =
+      plan_feed(*g, *machine, seed_constraints(), 0.2, sweep_function({"triangle", 10.0, 80.0, 5}, 0.0));
+  EXPECT_TRUE(s.certificate.ok) << (s.certificate.violations.empty() ? "" : s.certificate.violations[0]);
+  EXPECT_GT(s.plan.total_time_s(), s.lower_bound_s + 10.0);  // smoothness costs time here
+  EXPECT_GT(s.lower_bound_s, 3000.0);                 // the rate bound binds somewhere
+  EXPECT_GT(s.certificate.reversals, 0u);             // the lower table reverses (P8)
+  EXPECT_NEAR(s.certificate.max_relative_rate_change, 0.1, 1e-6);
+  // Greatest solution: shortening any binding segment by 1 % breaks a constraint.
+  Schedule faster = s;
+  std::size_t broken = 0, tried = 0;
+  for (std::size_t k = 1; k + 1 < s.plan.segments.size(); k += 97) {
+    faster.plan.segments[k].duration_s *= 0.99;
+    broken += certify(faster, seed_constraints()).ok ? 0 : 1;
+    ++tried;
+    faster.plan.segments[k].duration_s = s.plan.segments[k].duration_s;
+  }
+  EXPECT_EQ(broken, tried);
+}
+
+TEST(WheelLimits, EdgeRadiusIsTheConcaveRadiusOfCurvature) {
+  // y = 100 + x^2 / 1000: radius of curvature 500 mm at x = 0, larger elsewhere.
+  auto g = expression_generatrix("100 + x^2/1000", -50.0, 50.0);
+  const EdgeRadiusLimit limit = largest_edge_radius(*g);
+  EXPECT_NEAR(limit.radius_mm, 500.0, 0.5);
+  EXPECT_NEAR(limit.x_mm, 0.0, 0.1);
+  // A convex part limits nothing.
+  EXPECT_TRUE(std::isinf(largest_edge_radius(*expression_generatrix(problem1, 0, 600)).radius_mm));
+  // A flat face of width a on that valley cuts a^2/(8 rho) deep: 20 mm -> 0.1 mm.
+  WheelSection face;
+  face.thickness_mm = 20.0;
+  const Interference hit = check_interference(*g, face, {0.0}, {});
+  EXPECT_NEAR(hit.depth_mm, 0.1, 2e-3);
+}
+
+TEST(Wear, TriangleSweepDwellsUniformlySineAtTheEdges) {
+  WearSweep sweep{"triangle", 10.0, 80.0, 5};
+  std::vector<double> zeta, durations;
+  for (int k = 0; k <= 4000; ++k) zeta.push_back(sweep_function(sweep, 0.0)(k * 0.2));
+  durations.assign(4000, 1.0);
+  const WearDistribution tri = wear_distribution(zeta, durations, 10.0, 20);
+  EXPECT_GT(tri.uniformity, 0.97);
+  sweep.law = "sine";
+  for (int k = 0; k <= 4000; ++k) zeta[static_cast<std::size_t>(k)] = sweep_function(sweep, 0.0)(k * 0.2);
+  const WearDistribution sine = wear_distribution(zeta, durations, 10.0, 20);
+  EXPECT_LT(sine.uniformity, 0.8);
+  EXPECT_GT(sine.dwell_s.front(), 3 * sine.dwell_s[10]);  // arcsine law: edges dwell longest
+  EXPECT_NEAR(tri.used_width_mm, 20.0, 1e-9);
+}
+
+constexpr const char* study_text = R"(
+[study]
+kind = "feed_plan"
+[machine]
+type = "three_table_revolution"
+pivot_to_nut_mm = 300.0
+fixture_to_pivot_mm = 250.0
+screw_pitch_mm = 12.0
+gear_ratio = 10.0
+step_angle_deg = 1.0
+max_pulse_rate_hz = 100.0
+max_relative_rate_change = 0.1
+spindle_speed_rpm = { from = 250.0, to = 300.0 }
+max_axial_advance_mm_per_100_rev = 4.0
+[part]
+generatrix = "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130"
+x_range_mm = [0.0, 600.0]
+[wheel]
+type = "profiled"
+diameter_mm = 400.0
+thickness_mm = 40.0
+edge_radius_mm = 20.0
+edge_angle_deg = 180.0
+)";
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return at == std::string::npos ? text : text.replace(at, from.size(), to);
+}
+
+TEST(FeedPlanStudy, WritesAPlanThatReadsBack) {
+  TempDir dir;
+  const Study study = chatterlab::testing::load_text(
+      dir, replace(study_text, "x_range_mm = [0.0, 600.0]", "x_range_mm = [0.0, 60.0]"));
+  const auto& kind = study_kind_registry().at("feed_plan");
+  auto instance = kind.create(ParamValues());
+  PointContext context;
+  context.artifact_dir = dir.path() / "out";
+  context.plots = false;
+  fs::create_directories(context.artifact_dir);
+  const auto values = instance->run_point(study.document, context);
+  EXPECT_NEAR(values[0].get<double>(), 300.0, 1e-6);  // 60 mm at 0.2 mm/s
+  EXPECT_EQ(values.back(), Json(true));
+  const SavedPlan saved = read_saved_plan(context.artifact_dir);
+  ASSERT_EQ(saved.segments.size(), 300u);
+  EXPECT_DOUBLE_EQ(saved.plan.spindle_speed_rpm, 300.0);
+  EXPECT_EQ(saved.plan.segments[0].pulses, (std::vector<std::int64_t>{-27, 40, 55}));
+  for (std::size_t k = 0; k < saved.segments.size(); k += 37) {
+    EXPECT_NEAR(saved.segments[k].x_start_mm, 0.2 * static_cast<double>(k), 0.051);  // knots move
+    EXPECT_NEAR(saved.segments[k].axial_speed_mm_per_s, 0.2, 0.02);
+    EXPECT_NEAR(saved.segments[k].radius_mm, 130 + 30 * std::sin(0.25 * std::numbers::pi), 10.0);
+  }
+  // With a wear sweep the reader recovers the contact's place on the wheel as well.
+  Json swept = study.document;
+  swept["plan"]["wear_sweep"] = "triangle";
+  swept["wheel"]["type"] = "cylindrical";  // a face sweep: the reader can also solve it alone
+  swept["plan"]["wear_sweep_amplitude_mm"] = 5.0;
+  swept["plan"]["wear_sweep_period_mm"] = 20.0;
+  instance->run_point(swept, context);
+  const auto sweep = sweep_function({"triangle", 5.0, 20.0, 5}, 0.0);
+  for (bool with_segments_csv : {true, false}) {
+    if (!with_segments_csv) fs::remove(context.artifact_dir / "segments.csv");
+    const SavedPlan saved_swept = read_saved_plan(context.artifact_dir);
+    for (std::size_t k = 0; k < saved_swept.segments.size(); k += 23) {
+      const SegmentConditions& c = saved_swept.segments[k];
+      EXPECT_NEAR(c.contact_on_wheel_mm, sweep(0.5 * (c.x_start_mm + c.x_end_mm)), 0.05) << k;
+    }
+  }
+  // A tampered file is an input error naming the file and line.
+  dir.write("out/pulses.csv", "segment,start_s,duration_s,lower_pulses,middle_pulses,upper_pulses\n0,0,1,1.5,2,3\n");
+  const std::string message = chatterlab::testing::input_error_of([&] { read_saved_plan(context.artifact_dir); });
+  EXPECT_NE(message.find("pulses.csv:2"), std::string::npos) << message;
+  EXPECT_NE(message.find("integers"), std::string::npos) << message;
+}
+
+TEST(FeedPlanStudy, BadInputNamesKeyValueAndReason) {
+  TempDir dir;
+  auto error = [&](const std::string& text) { return chatterlab::testing::load_error(dir, text); };
+  std::string m = error(replace(study_text, "pivot_to_nut_mm = 300.0", "pivot_to_nut_mm = -3.0"));
+  EXPECT_NE(m.find("machine.pivot_to_nut_mm = -3"), std::string::npos) << m;
+  m = error(replace(study_text, "x_range_mm = [0.0, 600.0]", "x_range_mm = [60.0, 0.0]"));
+  EXPECT_NE(m.find("part.x_range_mm"), std::string::npos) << m;
+  EXPECT_NE(m.find("a < b"), std::string::npos) << m;
+  m = error(replace(study_text, "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130", "log(x - 10)"));
+  EXPECT_NE(m.find("part.generatrix"), std::string::npos) << m;
+  EXPECT_NE(m.find("not finite"), std::string::npos) << m;
+  m = error(replace(study_text, "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130", "x < 30 ? 120 : 125"));
+  EXPECT_NE(m.find("jumps by 5"), std::string::npos) << m;
+  m = error(replace(study_text, "edge_radius_mm = 20.0", "edge_radius_mm = 2000.0"));
+  EXPECT_NE(m.find("wheel.edge_radius_mm = 2000"), std::string::npos) << m;
+  EXPECT_NE(m.find("too large for the part"), std::string::npos) << m;
+  m = error(replace(study_text, "spindle_speed_rpm = { from = 250.0, to = 300.0 }",
+                    "spindle_speed_rpm = { from = 350.0, to = 300.0 }"));
+  EXPECT_NE(m.find("machine.spindle_speed_rpm"), std::string::npos) << m;
+  m = error(replace(study_text, "max_relative_rate_change = 0.1", "max_relative_rate_change = 0.0"));
+  EXPECT_NE(m.find("machine.max_relative_rate_change = 0"), std::string::npos) << m;
+  m = error(replace(study_text, "type = \"profiled\"", "type = \"cylindrical\""));
+  EXPECT_NE(m.find("flat face cuts"), std::string::npos) << m;
+}
+
+}  // namespace
+}  // namespace chatterlab::planner
+
+namespace chatterlab::planner {
+namespace {
+
+// [part] points_file: problem 1's parabola sampled every 10 mm; the natural spline through it
+// plans like the expression (3000 s, certified) and a table with x not increasing is refused.
+TEST(FeedPlanStudy, PointTableGeneratrix) {
+  TempDir dir;
+  std::string points = "x_mm,y_mm\n";
+  for (int i = 0; i <= 60; ++i) {
+    const double x = 10.0 * i;
+    points += fmt::format("{},{}\n", x, -7.0 / 18000 * (600 - x) * (600 - x) + 0.45 * (600 - x));
+  }
+  dir.write("points.csv", points);
+  std::string text = study_text;
+  text = replace(text, "generatrix = \"30*exp(-x/400)*sin((x + 25*_pi)/100) + 130\"\nx_range_mm = [0.0, 600.0]",
+                 "points_file = \"points.csv\"");
+  text = replace(text, "type = \"profiled\"", "type = \"cylindrical\"");
+  const Study study = chatterlab::testing::load_text(dir, text);
+  auto kind = study_kind_registry().at("feed_plan").create(ParamValues());
+  const auto values = kind->run_point(study.document, PointContext{0, 1, {}, false});
+  EXPECT_NEAR(values[0].get<double>(), 3000.0, 1e-6);
+  EXPECT_EQ(values.back(), Json(true));
+  EXPECT_LT(values[4].get<double>(), 0.005);
+  dir.write("points.csv", "x_mm,y_mm\n0,130\n10,131\n10,132\n20,133\n");
+  const std::string message = chatterlab::testing::load_error(dir, text);
+  EXPECT_NE(message.find("part.points_file"), std::string::npos) << message;
+  EXPECT_NE(message.find("x must increase strictly"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace chatterlab::planner

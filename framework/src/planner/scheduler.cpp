@@ -1,0 +1,269 @@
+#include "planner/scheduler.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace chatterlab::planner {
+
+namespace {
+
+// Bounds are met exactly in real arithmetic; durations computed as 1/s may round a rate a few ulp
+// above its bound, so the certificate allows check_tolerance (relative) and reports the values
+// actually used.
+constexpr double check_tolerance = 1e-9;
+// Knot choice: window (fraction of the nominal spacing) and candidates per half window.
+constexpr double knot_window = 0.25;
+constexpr int knot_candidates = 100;
+
+double rate_change_allowed(double rate_before, double delta, double start_stop_hz) {
+  return std::max(delta * std::abs(rate_before), start_stop_hz);
+}
+
+}  // namespace
+
+double FeedPlan::total_time_s() const {
+  return segments.empty() ? 0.0 : segments.back().start_s + segments.back().duration_s;
+}
+
+std::vector<double> FeedPlan::positions_after(std::size_t segment_count) const {
+  std::vector<double> out = initial_position_mm;
+  std::vector<std::int64_t> steps(motors.size(), 0);
+  for (std::size_t k = 0; k < segment_count && k < segments.size(); ++k)
+    for (std::size_t m = 0; m < motors.size(); ++m) steps[m] += segments[k].pulses[m];
+  for (std::size_t m = 0; m < motors.size(); ++m)
+    out[m] += static_cast<double>(steps[m]) * motors[m].mm_per_pulse;
+  return out;
+}
+
+Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
+                   const FeedConstraints& constraints, double segment_length_mm,
+                   const std::function<double(double)>& contact_on_tool, bool choose_knots,
+                   const std::function<ToolContact(double)>& tool_contact) {
+  const double a = generatrix.x_min_mm(), b = generatrix.x_max_mm();
+  if (!(segment_length_mm > 0.0) || !(b > a))
+    throw std::invalid_argument("plan_feed: empty x range or segment length");
+  const auto segment_count =
+      static_cast<std::size_t>(std::max(1.0, std::ceil((b - a) / segment_length_mm - 1e-9)));
+  Schedule out;
+  out.tool_contact = tool_contact;
+  FeedPlan& plan = out.plan;
+  plan.motors = kinematics.motors();
+  plan.spindle_speed_rpm = constraints.spindle_speed_rpm;
+  const std::size_t motors = plan.motors.size();
+
+  // 1. Knots and exact targets.
+  out.knots_mm.resize(segment_count + 1);
+  out.contact_on_tool_mm.resize(segment_count + 1);
+  out.target_mm.assign(segment_count + 1, std::vector<double>(motors));
+  auto place = [&](std::size_t k, double x) {
+    out.knots_mm[k] = x;
+    const GeneratrixValue v = generatrix.evaluate(x);
+    const double zeta = contact_on_tool ? contact_on_tool(x) : 0.0;
+    out.contact_on_tool_mm[k] = zeta;
+    kinematics.inverse({x, v.f, 1.0, v.d1}, out.contact_at(zeta), out.target_mm[k]);
+  };
+  const double spacing = (b - a) / static_cast<double>(segment_count);
+  place(0, a);
+  std::vector<double> behind(motors), ahead(motors), sensitivity(motors);
+  for (std::size_t k = 1; k <= segment_count; ++k) {
+    const double nominal = k == segment_count ? b : a + spacing * static_cast<double>(k);
+    // x_1 stays nominal: the first segment is then the seed's (0.2 mm in 1 s at the bound),
+    // comparable row for row with seed 000's table (MODELS.md P8).
+    if (k == 1 || k == segment_count || !choose_knots) {
+      place(k, nominal);
+      continue;
+    }
+    // Knot choice: within +-window of the nominal spacing, the x where the rounding residues of
+    // the axes, weighted by how far a step of each moves the tool off the profile, are
+    // smallest. An axis is then off by at most |residue| + 1/2 step inside a segment (pulses
+    // spread evenly) instead of up to a whole step. Positions over the window come from a
+    // quadratic through three exact evaluations (error ~ w^3 q'''/6: micro-steps).
+    const double w = knot_window * spacing;
+    place(k, nominal - w);
+    behind = out.target_mm[k];
+    place(k, nominal + w);
+    ahead = out.target_mm[k];
+    place(k, nominal);
+    const ToolContact contact = out.contact_at(out.contact_on_tool_mm[k]);
+    const double here = tool_deviation_mm(kinematics.forward(out.target_mm[k], contact), generatrix);
+    for (std::size_t m = 0; m < motors; ++m) {
+      std::vector<double> moved = out.target_mm[k];
+      moved[m] += plan.motors[m].mm_per_pulse;
+      sensitivity[m] =
+          std::abs(tool_deviation_mm(kinematics.forward(moved, contact), generatrix) - here);
+    }
+    double best_cost = std::numeric_limits<double>::infinity(), best_t = 0.0;
+    for (int c = -knot_candidates; c <= knot_candidates; ++c) {
+      const double t = static_cast<double>(c) / knot_candidates;  // x = nominal + t w
+      double cost = 0.0;
+      for (std::size_t m = 0; m < motors; ++m) {
+        const double q0 = out.target_mm[k][m];
+        const double q = q0 + 0.5 * t * (ahead[m] - behind[m]) +
+                         0.5 * t * t * (ahead[m] - 2 * q0 + behind[m]);
+        const double steps = (q - out.target_mm[0][m]) / plan.motors[m].mm_per_pulse;
+        cost += sensitivity[m] * std::abs(steps - std::round(steps));
+      }
+      if (cost < best_cost - 1e-15) {
+        best_cost = cost;
+        best_t = t;
+      }
+    }
+    place(k, nominal + best_t * w);
+  }
+  plan.initial_position_mm = out.target_mm[0];
+
+  // 2. Integer positions relative to the start, remainders carried by rounding the cumulative
+  //    target (never the increments).
+  std::vector<std::vector<std::int64_t>> steps(segment_count + 1, std::vector<std::int64_t>(motors));
+  for (std::size_t k = 0; k <= segment_count; ++k)
+    for (std::size_t m = 0; m < motors; ++m)
+      steps[k][m] = std::llround((out.target_mm[k][m] - out.target_mm[0][m]) / plan.motors[m].mm_per_pulse);
+  plan.segments.resize(segment_count);
+  for (std::size_t k = 0; k < segment_count; ++k) {
+    plan.segments[k].pulses.resize(motors);
+    for (std::size_t m = 0; m < motors; ++m)
+      plan.segments[k].pulses[m] = steps[k + 1][m] - steps[k][m];
+  }
+
+  // 3. Per-segment speed bounds (s = 1/duration) and the continuous relaxation.
+  const double delta = constraints.max_relative_rate_change, fss = constraints.start_stop_rate_hz;
+  const double v_axial = constraints.max_axial_speed_mm_per_s();
+  std::vector<double> s(segment_count);
+  for (std::size_t k = 0; k < segment_count; ++k) {
+    const double dx = out.knots_mm[k + 1] - out.knots_mm[k];
+    double bound = v_axial / dx, relaxed = v_axial / dx;
+    for (std::size_t m = 0; m < motors; ++m) {
+      const auto n = static_cast<double>(std::llabs(plan.segments[k].pulses[m]));
+      if (n > 0) bound = std::min(bound, plan.motors[m].max_pulse_rate_hz / n);
+      const double exact = std::abs(out.target_mm[k + 1][m] - out.target_mm[k][m]) / plan.motors[m].mm_per_pulse;
+      if (exact > 0) relaxed = std::min(relaxed, plan.motors[m].max_pulse_rate_hz / exact);
+    }
+    s[k] = bound;
+    out.lower_bound_s += 1.0 / relaxed;
+  }
+  // Smoothness rules that bound one segment alone: starts, stops and reversals.
+  for (std::size_t k = 0; k + 1 < segment_count; ++k)
+    for (std::size_t m = 0; m < motors; ++m) {
+      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
+      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
+      if (n0 == 0 && n1 != 0) s[k + 1] = std::min(s[k + 1], fss / std::abs(n1));
+      if (n1 == 0 && n0 != 0) s[k] = std::min(s[k], fss / std::abs(n0));
+      if (n0 * n1 < 0) {
+        s[k] = std::min(s[k], 0.5 * fss / std::abs(n0));
+        s[k + 1] = std::min(s[k + 1], 0.5 * fss / std::abs(n1));
+      }
+    }
+
+  // 4. Same-sign rate changes: forward (acceleration) and backward (deceleration) passes.
+  auto forward_bound = [&](std::size_t k) {  // largest s[k+1] given s[k]
+    double bound = std::numeric_limits<double>::infinity();
+    for (std::size_t m = 0; m < motors; ++m) {
+      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
+      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
+      if (n0 * n1 <= 0) continue;
+      const double r = std::abs(n0) * s[k];
+      bound = std::min(bound, (r + rate_change_allowed(r, delta, fss)) / std::abs(n1));
+    }
+    return bound;
+  };
+  auto backward_bound = [&](std::size_t k) {  // largest s[k] given s[k+1]
+    double bound = std::numeric_limits<double>::infinity();
+    for (std::size_t m = 0; m < motors; ++m) {
+      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
+      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
+      if (n0 * n1 <= 0) continue;
+      const double r1 = std::abs(n1) * s[k + 1];
+      bound = std::min(bound, std::max(r1 / (1.0 - delta), r1 + fss) / std::abs(n0));
+    }
+    return bound;
+  };
+  for (std::size_t pass = 0; pass < 1000; ++pass) {
+    bool changed = false;
+    auto lower = [&](std::size_t k, double bound) {
+      if (bound < s[k] * (1.0 - 1e-13)) changed = true;
+      s[k] = std::min(s[k], bound);
+    };
+    for (std::size_t k = 0; k + 1 < segment_count; ++k) lower(k + 1, forward_bound(k));
+    for (std::size_t k = segment_count - 1; k-- > 0;) lower(k, backward_bound(k));
+    out.smoothing_passes = pass + 1;
+    if (!changed) break;
+  }
+
+  double t = 0.0, carry = 0.0;  // compensated sum: 3000 segments end at the bound's time
+  for (std::size_t k = 0; k < segment_count; ++k) {
+    if (!(s[k] > 0.0) || !std::isfinite(1.0 / s[k]))
+      throw std::domain_error(fmt::format("no admissible speed for the segment at x = {} mm",
+                                          out.knots_mm[k]));
+    plan.segments[k].start_s = t;
+    plan.segments[k].duration_s = 1.0 / s[k];
+    const double y = plan.segments[k].duration_s - carry, sum = t + y;
+    carry = (sum - t) - y;
+    t = sum;
+  }
+  out.certificate = certify(out, constraints);
+  return out;
+}
+
+Certificate certify(const Schedule& schedule, const FeedConstraints& constraints) {
+  const FeedPlan& plan = schedule.plan;
+  const std::size_t motors = plan.motors.size();
+  Certificate c;
+  c.max_pulse_rate_hz.assign(motors, 0.0);
+  const double delta = constraints.max_relative_rate_change, fss = constraints.start_stop_rate_hz;
+  const double v_axial = constraints.max_axial_speed_mm_per_s();
+  auto violation = [&](std::string what) {
+    c.ok = false;
+    if (c.violations.size() < 10) c.violations.push_back(std::move(what));
+  };
+  std::vector<std::int64_t> position(motors, 0);
+  std::vector<int> last_sign(motors, 0);
+  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
+    const PlanSegment& seg = plan.segments[k];
+    const double dx = schedule.knots_mm[k + 1] - schedule.knots_mm[k];
+    const double axial = std::abs(dx) / seg.duration_s;
+    c.max_axial_speed_mm_per_s = std::max(c.max_axial_speed_mm_per_s, axial);
+    if (axial > v_axial * (1 + check_tolerance))
+      violation(fmt::format("segment {}: axial speed {} mm/s > {} mm/s", k, axial, v_axial));
+    for (std::size_t m = 0; m < motors; ++m) {
+      const double rate = static_cast<double>(seg.pulses[m]) / seg.duration_s;
+      c.max_pulse_rate_hz[m] = std::max(c.max_pulse_rate_hz[m], std::abs(rate));
+      if (std::abs(rate) > plan.motors[m].max_pulse_rate_hz * (1 + check_tolerance))
+        violation(fmt::format("segment {}: {} motor at {} pulses/s > {}", k, plan.motors[m].name,
+                              std::abs(rate), plan.motors[m].max_pulse_rate_hz));
+      position[m] += seg.pulses[m];
+      const double exact = (schedule.target_mm[k + 1][m] - schedule.target_mm[0][m]) /
+                           plan.motors[m].mm_per_pulse;
+      c.max_position_drift_steps = std::max(c.max_position_drift_steps,
+                                            std::abs(static_cast<double>(position[m]) - exact));
+      if (k + 1 == plan.segments.size()) continue;
+      const PlanSegment& next = plan.segments[k + 1];
+      const double next_rate = static_cast<double>(next.pulses[m]) / next.duration_s;
+      const double change = std::abs(next_rate - rate);
+      if (seg.pulses[m] != 0) {
+        const int sign = seg.pulses[m] > 0 ? 1 : -1;
+        if (last_sign[m] != 0 && sign != last_sign[m]) ++c.reversals;
+        last_sign[m] = sign;
+      }
+      if (change <= delta * std::abs(rate)) {
+        if (rate != 0.0) c.max_relative_rate_change = std::max(c.max_relative_rate_change, change / std::abs(rate));
+      } else {
+        ++c.rate_changes_under_start_stop_allowance;
+        c.max_rate_change_at_low_rate_hz = std::max(c.max_rate_change_at_low_rate_hz, change);
+        if (change > rate_change_allowed(rate, delta, fss) * (1 + check_tolerance))
+          violation(fmt::format("segments {}-{}: {} motor rate {} -> {} pulses/s changes by more "
+                                "than max({} x {}, start-stop rate {})",
+                                k, k + 1, plan.motors[m].name, rate, next_rate, delta,
+                                std::abs(rate), fss));
+      }
+    }
+  }
+  if (c.max_position_drift_steps > 0.5 + 1e-6)
+    violation(fmt::format("positions drift by {} steps", c.max_position_drift_steps));
+  return c;
+}
+
+}  // namespace chatterlab::planner

@@ -1,0 +1,111 @@
+#include "planner/setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/signal_io.hpp"
+
+namespace chatterlab::planner {
+
+std::unique_ptr<Kinematics> build_kinematics(const Json& machine) {
+  Json params = machine;
+  params.erase("type");
+  for (const char* key : machine_constraint_keys) params.erase(key);
+  return kinematics_registry().at(machine.at("type").get<std::string>()).create(ParamValues(std::move(params)));
+}
+
+std::unique_ptr<Generatrix> build_generatrix(const Json& part) {
+  if (part.contains("points_file") && part["points_file"].is_string()) {
+    // Point table: first column x (mm), second y (mm); natural cubic spline through the rows.
+    const DataTable table = read_data_table(part["points_file"].get<std::string>());
+    if (table.columns.size() < 2)
+      throw InputError(fmt::format("{}: needs two columns, x_mm and y_mm", table.file.string()));
+    return spline_generatrix(table.columns[0], table.columns[1]);
+  }
+  const auto range = part.at("x_range_mm").get<std::vector<double>>();
+  return expression_generatrix(part.at("generatrix").get<std::string>(), range.at(0), range.at(1));
+}
+
+FeedConstraints build_constraints(const Json& machine, const Json& plan, const Kinematics& kinematics) {
+  FeedConstraints c;
+  const Json& speed = machine.at("spindle_speed_rpm");
+  // A range: the highest speed, since the axial-advance bound per revolution is the only
+  // planning constraint that depends on it and it grows with the speed (docs/planner.md).
+  c.spindle_speed_rpm = speed.is_object() ? speed.at("to").get<double>() : speed.get<double>();
+  c.max_axial_advance_mm_per_100_rev = machine.at("max_axial_advance_mm_per_100_rev").get<double>();
+  c.max_relative_rate_change = machine.at("max_relative_rate_change").get<double>();
+  if (plan.contains("start_stop_rate_hz") && plan["start_stop_rate_hz"].is_number()) {
+    c.start_stop_rate_hz = plan["start_stop_rate_hz"].get<double>();
+  } else {
+    // Default: the change the relative rule allows at the slowest motor's top rate, so the
+    // allowance never permits more than the seed rule permits at full speed.
+    double slowest = 1e300;
+    for (const MotorAxis& m : kinematics.motors()) slowest = std::min(slowest, m.max_pulse_rate_hz);
+    c.start_stop_rate_hz = c.max_relative_rate_change * slowest;
+  }
+  return c;
+}
+
+WheelSection build_wheel(const Json& wheel) {
+  WheelSection w;
+  w.profiled = wheel.at("type").get<std::string>() == "profiled";
+  w.thickness_mm = wheel.at("thickness_mm").get<double>();
+  if (wheel.contains("edge_radius_mm") && wheel["edge_radius_mm"].is_number())
+    w.edge_radius_mm = wheel["edge_radius_mm"].get<double>();
+  w.edge_angle_deg = wheel.at("edge_angle_deg").get<double>();
+  return w;
+}
+
+std::function<ToolContact(double)> wheel_contact(const WheelSection& wheel) {
+  if (!wheel.profiled) return nullptr;
+  const double r = wheel.edge_radius_mm;
+  return [r](double s) {
+    const double phi = s / r;
+    return ToolContact{r * std::sin(phi), r * (1.0 - std::cos(phi)), phi};
+  };
+}
+
+double sweep_half_width_mm(const WheelSection& wheel) {
+  return wheel.profiled ? wheel.edge_radius_mm * 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0
+                        : 0.5 * wheel.thickness_mm;
+}
+
+WearSweep build_sweep(const Json& plan, const Json& wheel) {
+  WearSweep s;
+  s.law = plan.at("wear_sweep").get<std::string>();
+  const Json& amplitude = plan.at("wear_sweep_amplitude_mm");
+  s.amplitude_mm = amplitude.is_number() ? amplitude.get<double>() : sweep_half_width_mm(build_wheel(wheel));
+  s.period_mm = plan.at("wear_sweep_period_mm").get<double>();
+  s.steps = plan.at("wear_sweep_steps").get<int>();
+  return s;
+}
+
+double segment_length_mm(const Json& plan, const FeedConstraints& constraints) {
+  const Json& length = plan.at("segment_length_mm");
+  // Default: one second at the axial-speed bound (seed 000's 1 s segments).
+  return length.is_number() ? length.get<double>() : constraints.max_axial_speed_mm_per_s() * 1.0;
+}
+
+}  // namespace chatterlab::planner
+
+namespace chatterlab::planner {
+
+Json p2_machine_params() {
+  return {{"pivot_to_nut_mm", 300.0}, {"fixture_to_pivot_mm", 250.0}, {"screw_pitch_mm", 12.0},
+          {"gear_ratio", 10.0},       {"step_angle_deg", 1.0},        {"max_pulse_rate_hz", 100.0}};
+}
+
+FeedConstraints p2_constraints() {
+  FeedConstraints c;
+  c.spindle_speed_rpm = 300.0;
+  c.max_axial_advance_mm_per_100_rev = 4.0;
+  c.max_relative_rate_change = 0.1;
+  c.start_stop_rate_hz = 10.0;
+  return c;
+}
+
+}  // namespace chatterlab::planner

@@ -1,0 +1,53 @@
+#pragma once
+// The validated study tables turned into planner objects (shared by the feed_plan kind and the
+// saved-plan reader).
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "chatterlab/kinematics.hpp"
+#include "chatterlab/params.hpp"
+#include "planner/scheduler.hpp"
+#include "planner/wear.hpp"
+#include "planner/wheel_limits.hpp"
+
+namespace chatterlab::planner {
+
+// A real parameter > 0 (the planner kinds' settings).
+inline ParamSpec positive_spec(std::string key, std::string unit, std::string description) {
+  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
+  spec.min = 0.0;
+  spec.min_exclusive = true;
+  return spec;
+}
+
+// Keys of [machine] that the planner (not the kinematics plugin) owns.
+inline constexpr const char* machine_constraint_keys[] = {
+    "max_relative_rate_change", "spindle_speed_rpm", "max_axial_advance_mm_per_100_rev"};
+
+std::unique_ptr<Kinematics> build_kinematics(const Json& machine);
+std::unique_ptr<Generatrix> build_generatrix(const Json& part);
+FeedConstraints build_constraints(const Json& machine, const Json& plan,
+                                  const Kinematics& kinematics);
+WheelSection build_wheel(const Json& wheel);
+// Where contact coordinate s (mm along the working surface) is on the wheel: nullptr for a
+// cylindrical face (s along the rails); on a profiled wheel's edge arc of radius r, arc angle
+// phi = s / r: {r sin phi, r (1 - cos phi), phi}.
+std::function<ToolContact(double)> wheel_contact(const WheelSection& wheel);
+// Half the length of the working surface a sweep may use: a/2 (face) or r alpha/2 (edge arc).
+double sweep_half_width_mm(const WheelSection& wheel);
+WearSweep build_sweep(const Json& plan, const Json& wheel);
+double segment_length_mm(const Json& plan, const FeedConstraints& constraints);
+
+}  // namespace chatterlab::planner
+
+namespace chatterlab::planner {
+
+// The machine of MODELS.md P2 (R = 300 mm, b = 250 mm, 12 mm screws, 10:1 gears, 1 deg steps,
+// 100 pulses/s) as three_table_revolution parameters, and its rules (300 rpm, 4 mm per 100 rev,
+// delta = 0.1, start-stop rate 10 pulses/s): the tests' and benchmarks' reference machine.
+Json p2_machine_params();
+FeedConstraints p2_constraints();
+
+}  // namespace chatterlab::planner

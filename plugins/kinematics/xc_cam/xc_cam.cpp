@@ -1,0 +1,60 @@
+#include "kinematics/xc_cam/xc_cam.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "models/model_params.hpp"
+
+namespace chatterlab {
+
+PluginInfo XcCam::info() {
+  using model_params::positive;
+  PluginInfo info;
+  info.name = "xc_cam";
+  info.description =
+      "X-C cam grinder: C axis turns the cam so the wheel centre lies on the X slide (K2 tangent "
+      "point tracking)";
+  info.models_md_ids = "K2";
+  info.params = {positive("wheel_radius_mm", "mm", "grinding wheel radius R"),
+                 positive("c_deg_per_pulse", "deg", "C axis rotation per pulse"),
+                 positive("x_mm_per_pulse", "mm", "X slide travel per pulse"),
+                 positive("max_pulse_rate_hz", "1/s", "largest pulse rate of each motor")};
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"wheel_radius_mm", 200.0},
+                         {"c_deg_per_pulse", 0.001},
+                         {"x_mm_per_pulse", 0.0001},
+                         {"max_pulse_rate_hz", 100000.0}};
+  return info;
+}
+
+XcCam::XcCam(const ParamValues& params)
+    : wheel_radius_mm_(params.real("wheel_radius_mm")),
+      c_deg_per_pulse_(params.real("c_deg_per_pulse")),
+      x_mm_per_pulse_(params.real("x_mm_per_pulse")),
+      max_pulse_rate_hz_(params.real("max_pulse_rate_hz")) {}
+
+std::vector<MotorAxis> XcCam::motors() const {
+  // mm_per_pulse of the rotary C axis is in degrees (MotorAxis: axis units per pulse).
+  return {{"c_axis", c_deg_per_pulse_, max_pulse_rate_hz_, "c_axis_deg"},
+          {"x_slide", x_mm_per_pulse_, max_pulse_rate_hz_, "x_slide"}};
+}
+
+void XcCam::inverse(const CurvePoint& target, const ToolContact& /*contact*/,
+                    std::span<double> positions) const {
+  const double length = std::hypot(target.tangent_x, target.tangent_y);
+  if (!(length > 0)) throw std::domain_error("xc_cam: zero tangent");
+  const double cx = target.x_mm + wheel_radius_mm_ * target.tangent_y / length;
+  const double cy = target.y_mm - wheel_radius_mm_ * target.tangent_x / length;
+  positions[0] = std::atan2(cy, cx) * 180.0 / std::numbers::pi;
+  positions[1] = std::hypot(cx, cy);
+}
+
+ToolInPart XcCam::forward(std::span<const double> positions, const ToolContact& /*contact*/) const {
+  const double theta = positions[0] * std::numbers::pi / 180.0;
+  return {positions[1] * std::cos(theta), positions[1] * std::sin(theta), wheel_radius_mm_};
+}
+
+}  // namespace chatterlab
+
+CHATTERLAB_REGISTER_KINEMATICS(chatterlab::XcCam);

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# cam_plan end to end (MODELS.md K, docs/planner.md "Cams"): the seed-002 cam study fits the
+# 27 chosen points, inserts lift-table rows until every row is within 5e-4 mm, and writes pulses,
+# fit errors, summary and plots; a chosen angle that is not a table row exits 2.
+source "$(dirname "$0")/lib.sh"
+bin=$1 work=$2 src=$3
+rm -rf "$work" && mkdir -p "$work"
+out="$work/cam"
+expect_exit 0 "$work/cam" "$bin" run "$src/studies/cam_seed002.toml" --out "$out"
+fit=$(csv_column "$out/results.csv" max_fit_error_mm)
+awk -v e="$fit" 'BEGIN { exit !(e > 0 && e <= 5e-4) }' || fail "adaptive fit error $fit"
+seed=$(csv_column "$out/results.csv" seed_points_max_fit_error_mm)
+awk -v e="$seed" 'BEGIN { exit !(e > 5e-4) }' || fail "27-point fit error $seed should exceed the target"
+[ "$(csv_header "$out/pulses.csv")" = "segment,start_s,duration_s,c_axis_pulses,x_slide_pulses" ] ||
+  fail "pulses.csv header"
+sum=$(csv_column "$out/pulses.csv" c_axis_pulses | awk '{ s += $1 } END { print s }')
+[ "$sum" = "360000" ] || fail "C axis turns $sum pulses (expected one turn, 360000)"
+expect_plots "$out" fit_error profile_error x_slide
+sed 's/^chosen_angles_deg = \[360, 10, 21,/chosen_angles_deg = [360, 10, 22,/' "$src/studies/cam_seed002.toml" > "$work/bad.toml"
+sed -i "s|\.\./tests/data|$src/tests/data|" "$work/bad.toml"
+expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"
+grep -q "chosen angle 22 deg is not a row of the lift table" "$work/bad.err" || fail "message: $(cat "$work/bad.err")"
+[ ! -e "$work/bad_out" ] || fail "bad input wrote files"
+finish
