@@ -254,6 +254,23 @@ Json SignalAnalysis::analyse(const Json& point_document, const fs::path& plot_di
                                               "failed",
                                               fmt::format("method '{}' was not run", h.method));
   }
+  // The largest exponent has two routes: the divergence methods (`lyapunov`) and the first
+  // exponent of `lyapunov_spectrum`. The headline is the divergence estimate unless its quality
+  // is worse than the spectrum's (e.g. Kantz and Rosenstein disagree on a short series).
+  auto rank = [](const Json& e) {
+    const std::string q = e.is_object() ? e.value("quality", "failed") : "failed";
+    return q == "good" ? 2 : q == "uncertain" ? 1 : 0;
+  };
+  if (context.contains("lyapunov_spectrum") &&
+      context["lyapunov_spectrum"].contains("lyapunov_max_per_s")) {
+    Json alternative = context["lyapunov_spectrum"]["lyapunov_max_per_s"];
+    if (rank(alternative) > rank(summary["lyapunov_max_per_s"])) {
+      alternative["reason"] = fmt::format(
+          "from lyapunov_spectrum (better quality than lyapunov: {}): {}",
+          summary["lyapunov_max_per_s"].value("reason", ""), alternative.value("reason", ""));
+      summary["lyapunov_max_per_s"] = alternative;
+    }
+  }
   // Without `embedding`, a later method's own embedding choice is the best headline.
   for (const char* key : {"delay_samples", "embedding_dimension"})
     if (!context.contains("embedding"))
