@@ -63,6 +63,9 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
           double dist = 0;
           for (std::size_t d = 0; d < dims; ++d) {
             dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));
+            // The running maximum only grows: this pair is beyond the cut in every higher
+            // dimension too, and is counted there through the pair total (overflow bin).
+            if (dist >= CorrelationSums::cut) break;
             ++h[d * bins + bin_of(dist)];
           }
         }
@@ -79,6 +82,15 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
       for (std::size_t b = 0; b < blocks; ++b) out.pairs[b] += local_pairs[b];
     }
   }
+  // Pairs at or beyond the cut go to the last bin, so that the cumulative count reaches the
+  // pair total.
+  for (std::size_t b = 0; b < blocks; ++b)
+    for (std::size_t d = 0; d < dims; ++d) {
+      std::uint64_t* h = out.counts.data() + (b * dims + d) * bins;
+      std::uint64_t counted = 0;
+      for (std::size_t k = 0; k < bins; ++k) counted += h[k];
+      h[bins - 1] += std::uint64_t(out.pairs[b]) - counted;
+    }
   return out;
 }
 
@@ -107,7 +119,8 @@ Curve curve(const CorrelationSums& sums, int d, const std::vector<double>& weigh
   for (std::size_t k = 0; k < bins; ++k) {
     c.log_r.push_back(std::log(sums.range * CorrelationSums::edge(k)));
     c.count.push_back(cumulative[k]);
-    c.log_c.push_back(cumulative[k] > 0 ? std::log(cumulative[k] / pairs) : nan);
+    const bool counted = CorrelationSums::edge(k) <= CorrelationSums::cut;
+    c.log_c.push_back(counted && cumulative[k] > 0 ? std::log(cumulative[k] / pairs) : nan);
   }
   return c;
 }
@@ -166,21 +179,6 @@ DimensionFit fit_dimension(const CorrelationSums& sums, int d, double min_pairs,
   return f;
 }
 
-ParamSpec count_param(const char* key, const char* text, long def, long lo) {
-  ParamSpec s = param_spec(key, ValueKind::integer, "1", text);
-  s.default_value = def;
-  s.min = double(lo);
-  return s;
-}
-ParamSpec fraction_param(const char* key, const char* text, double def) {
-  ParamSpec s = param_spec(key, ValueKind::real, "1", text);
-  s.default_value = def;
-  s.min = 0;
-  s.min_exclusive = true;
-  s.max = 1;
-  return s;
-}
-
 }  // namespace
 
 PluginInfo CorrelationDimension::info() {
@@ -190,25 +188,31 @@ PluginInfo CorrelationDimension::info() {
       "correlation dimension D2 (Grassberger-Procaccia, Theiler window) from an automatically "
       "detected scaling region, versus embedding dimension until saturation";
   info.models_md_ids = "N2";
-  ParamSpec max_dimension = param_spec(
-      "max_dimension", ValueKind::integer, "1",
-      "largest embedding dimension of the D2 sweep (absent: max(8, 2 x embedding dimension + 2))");
-  max_dimension.min = 1;
-  max_dimension.max = 30;
-  max_dimension.optional = true;
+  using nonlinear::numeric_spec;
   info.params = {
       nonlinear::delay_spec(),
       nonlinear::dimension_spec(),
       nonlinear::theiler_spec(),
-      max_dimension,
-      count_param("max_reference_points", "reference vectors compared with all others (sampled "
-                  "references: cost references x N x dimensions, memory O(N))", 2000, 10),
-      count_param("min_pairs", "a correlation sum counts only where at least this many pairs lie "
-                  "within r (statistical floor of the scaling region)", 2000, 1),
-      fraction_param("slope_tolerance", "the scaling region is the longest range of r whose "
-                     "local slopes stay within this fraction of their median", 0.05),
-      fraction_param("saturation_tolerance", "D2 has saturated when three successive embedding "
-                     "dimensions agree within this fraction", 0.05),
+      numeric_spec("max_dimension", ValueKind::integer, "1",
+                   "largest embedding dimension of the D2 sweep (absent: max(8, 2 x embedding "
+                   "dimension + 2))",
+                   Json(), 1, 30),
+      numeric_spec("max_reference_points", ValueKind::integer, "1",
+                   "reference vectors compared with all others (sampled references: cost "
+                   "references x N x dimensions, memory O(N))",
+                   2000, 10),
+      numeric_spec("min_pairs", ValueKind::integer, "1",
+                   "a correlation sum counts only where at least this many pairs lie within r "
+                   "(statistical floor of the scaling region)",
+                   2000, 1),
+      numeric_spec("slope_tolerance", ValueKind::real, "1",
+                   "the scaling region is the longest range of r whose local slopes stay within "
+                   "this fraction of their median",
+                   0.05, 0, 1, true),
+      numeric_spec("saturation_tolerance", ValueKind::real, "1",
+                   "D2 has saturated when three successive embedding dimensions agree within "
+                   "this fraction",
+                   0.05, 0, 1, true),
       nonlinear::bootstrap_spec(),
       nonlinear::seed_spec(),
   };
@@ -220,10 +224,8 @@ PluginInfo CorrelationDimension::info() {
 Json CorrelationDimension::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
-  const int max_dimension =
-      params_.json().contains("max_dimension") && params_.json()["max_dimension"].is_number()
-          ? int(params_.integer("max_dimension"))
-          : std::max(8, 2 * embedding.dimension + 2);
+  const auto given_max = nonlinear::given_integer(params_, "max_dimension");
+  const int max_dimension = given_max ? int(*given_max) : std::max(8, 2 * embedding.dimension + 2);
   const std::string name = series.name.empty() ? std::string("series") : series.name;
   nonlinear::check_series(x, max_dimension, embedding.delay, name);
 

@@ -15,12 +15,17 @@ namespace chatterlab {
 // distance in dimension d is the running maximum over the first d coordinates, so one pass
 // serves every dimension). Sampled-reference scheme: `references` vectors evenly spread over the
 // series are each compared with every other vector outside the Theiler window; memory is
-// O(N + dimensions x bins x blocks). Bins: 8 per octave of r / (max - min of the series).
+// O(N + dimensions x bins x blocks). Bins: 8 per octave of r / (max - min of the series), exact
+// below `cut`.
 struct CorrelationSums {
   static constexpr int bins_per_octave = 8;
   static constexpr int octaves = 30;        // r from 2^-30 of the signal range up
   static constexpr std::size_t bins = std::size_t(octaves * bins_per_octave + 2);
   static constexpr std::size_t blocks = 20;  // reference blocks for the bootstrap
+  // Distances from half the range up are not binned (the last bin holds them): scaling regions
+  // lie far below (C <= 0.1), and most pairs of a large series stop there after one or two
+  // coordinates, which halves the cost.
+  static constexpr double cut = 0.5;
   int max_dimension = 0;
   double range = 1;  // max - min of the series: r = range x edge
   // counts[(block * max_dimension + (d - 1)) * bins + bin]

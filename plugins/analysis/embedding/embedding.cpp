@@ -168,24 +168,6 @@ DimensionChoice choose_dimension(const std::vector<double>& x, int delay, int ma
 }
 
 namespace {
-ParamSpec integer_param(const char* key, const char* unit, const char* text, long def, long lo,
-                        long hi) {
-  ParamSpec s = param_spec(key, ValueKind::integer, unit, text);
-  s.default_value = def;
-  s.min = double(lo);
-  s.max = double(hi);
-  return s;
-}
-ParamSpec real_param(const char* key, const char* unit, const char* text, double def, double lo,
-                     double hi) {
-  ParamSpec s = param_spec(key, ValueKind::real, unit, text);
-  s.default_value = def;
-  s.min = lo;
-  s.max = hi;
-  s.min_exclusive = true;
-  return s;
-}
-
 // Defaults of the `embedding` analysis, also used when another analysis embeds without one.
 constexpr int default_bins = 16;
 constexpr int default_max_dimension = 10;
@@ -291,28 +273,27 @@ PluginInfo EmbeddingAnalysis::info() {
       "delay by average mutual information, embedding dimension by false nearest neighbours and "
       "Cao's method, Theiler window by space-time separation";
   info.models_md_ids = "N1";
-  ParamSpec max_lag = param_spec("max_delay_samples", ValueKind::integer, "samples",
-                                 "largest lag searched for the AMI minimum (absent: N/10, at "
-                                 "most 1000)");
-  max_lag.min = 2;
-  max_lag.optional = true;
+  using nonlinear::numeric_spec;
   ParamSpec delay = nonlinear::delay_spec();
   delay.description = "fixed delay instead of the AMI choice (absent: automatic)";
   info.params = {
-      max_lag,
+      numeric_spec("max_delay_samples", ValueKind::integer, "samples",
+                   "largest lag searched for the AMI minimum (absent: N/10, at most 1000)", Json(),
+                   2),
       delay,
-      integer_param("histogram_bins", "1", "bins of the AMI histogram estimator", default_bins, 4,
-                    256),
-      integer_param("max_dimension", "1", "largest embedding dimension examined by FNN and Cao",
-                    default_max_dimension, 2, 30),
-      real_param("fnn_distance_ratio", "1",
-                 "a neighbour is false when the added coordinate separates it by more than this "
-                 "times the distance (Kennel's R_tol)",
-                 default_distance_ratio, 0, 1000),
-      real_param("fnn_threshold", "1",
-                 "the embedding dimension is the first whose false-neighbour fraction is at most "
-                 "this",
-                 default_fnn_threshold, 0, 1),
+      numeric_spec("histogram_bins", ValueKind::integer, "1", "bins of the AMI histogram estimator",
+                   default_bins, 4, 256),
+      numeric_spec("max_dimension", ValueKind::integer, "1",
+                   "largest embedding dimension examined by FNN and Cao", default_max_dimension, 2,
+                   30),
+      numeric_spec("fnn_distance_ratio", ValueKind::real, "1",
+                   "a neighbour is false when the added coordinate separates it by more than this "
+                   "times the distance (Kennel's R_tol)",
+                   default_distance_ratio, 0, 1000, true),
+      numeric_spec("fnn_threshold", ValueKind::real, "1",
+                   "the embedding dimension is the first whose false-neighbour fraction is at most "
+                   "this",
+                   default_fnn_threshold, 0, 1, true),
   };
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_dimension", 6}};
@@ -324,10 +305,8 @@ Json EmbeddingAnalysis::analyse(const SampledSeries& series, const Json& /*conte
   const std::string name = series.name.empty() ? std::string("series") : series.name;
   const int max_dimension = int(params_.integer("max_dimension"));
   nonlinear::check_series(x, 2, 1, name);
-  const std::size_t max_lag = params_.has("max_delay_samples") &&
-                                      params_.json()["max_delay_samples"].is_number_integer()
-                                  ? std::size_t(params_.integer("max_delay_samples"))
-                                  : default_max_lag(x.size());
+  const auto given_lag = nonlinear::given_integer(params_, "max_delay_samples");
+  const std::size_t max_lag = given_lag ? std::size_t(*given_lag) : default_max_lag(x.size());
   const Choice c =
       choose_all(x, std::max<std::size_t>(max_lag, 3), int(params_.integer("histogram_bins")),
                  max_dimension, params_.real("fnn_distance_ratio"), params_.real("fnn_threshold"),

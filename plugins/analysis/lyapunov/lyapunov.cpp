@@ -71,13 +71,13 @@ DivergenceCurves divergence_curves(const std::vector<double>& x, int dimension, 
           }
         }
       }
-      auto near = search.within(i, radius, theiler, limit);
+      // The nearest max_kantz_neighbours inside eps: a bounded k-nearest search prunes the tree
+      // far better than listing every point within eps and keeping the nearest afterwards.
+      auto near = search.nearest(i, max_kantz_neighbours, theiler, limit);
+      near.erase(std::find_if(near.begin(), near.end(),
+                              [&](const auto& m) { return m.distance >= radius; }),
+                 near.end());
       if (near.empty()) continue;
-      if (near.size() > max_kantz_neighbours) {
-        std::nth_element(near.begin(), near.begin() + max_kantz_neighbours, near.end(),
-                         [](const auto& a, const auto& b) { return a.distance < b.distance; });
-        near.resize(max_kantz_neighbours);
-      }
       for (std::size_t k = 0; k < steps; ++k) {
         double mean = 0;
         for (const auto& m : near) mean += e.distance(i + k, m.index + k);
@@ -210,23 +210,20 @@ PluginInfo LyapunovAnalysis::info() {
       "largest Lyapunov exponent by Rosenstein's and Kantz's divergence methods with automatic "
       "linear-region detection, per sample and per second";
   info.models_md_ids = "N3, N4";
-  ParamSpec steps = param_spec("max_steps", ValueKind::integer, "samples",
-                               "length of the divergence curves (absent: max(30, 50 x delay), at "
-                               "most a fifth of the series)");
-  steps.min = 4;
-  steps.optional = true;
-  ParamSpec refs = param_spec("max_reference_points", ValueKind::integer, "1",
-                              "reference vectors whose neighbours are followed (evenly spread)");
-  refs.default_value = 5000;
-  refs.min = 20;
-  ParamSpec radius = param_spec("radius", ValueKind::real, "signal unit",
-                                "Kantz neighbourhood radius eps (absent: median distance to the "
-                                "8th nearest neighbour)");
-  radius.min = 0;
-  radius.min_exclusive = true;
-  radius.optional = true;
-  info.params = {nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-                 steps, refs, radius, nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
+  using nonlinear::numeric_spec;
+  info.params = {
+      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+      numeric_spec("max_steps", ValueKind::integer, "samples",
+                   "length of the divergence curves (absent: max(30, 50 x delay), at most a fifth "
+                   "of the series)",
+                   Json(), 4),
+      numeric_spec("max_reference_points", ValueKind::integer, "1",
+                   "reference vectors whose neighbours are followed (evenly spread)", 5000, 20),
+      numeric_spec("radius", ValueKind::real, "signal unit",
+                   "Kantz neighbourhood radius eps (absent: median distance to the 8th nearest "
+                   "neighbour)",
+                   Json(), 0, std::numeric_limits<double>::infinity(), true),
+      nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_reference_points", 200}};
   return info;
@@ -236,13 +233,11 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
   const std::size_t n = nonlinear::vector_count(x.size(), embedding.dimension, embedding.delay);
-  const Json& p = params_.json();
+  const auto given_steps = nonlinear::given_integer(params_, "max_steps");
   const std::size_t steps =
-      p.contains("max_steps") && p["max_steps"].is_number()
-          ? std::size_t(params_.integer("max_steps"))
-          : std::min(std::max<std::size_t>(30, 50 * std::size_t(embedding.delay)), n / 5);
-  const double radius =
-      p.contains("radius") && p["radius"].is_number() ? params_.real("radius") : 0.0;
+      given_steps ? std::size_t(*given_steps)
+                  : std::min(std::max<std::size_t>(30, 50 * std::size_t(embedding.delay)), n / 5);
+  const double radius = nonlinear::given_real(params_, "radius").value_or(0.0);
   const auto curves = divergence_curves(x, embedding.dimension, embedding.delay,
                                         embedding.theiler, steps,
                                         std::size_t(params_.integer("max_reference_points")),

@@ -91,26 +91,21 @@ PluginInfo LyapunovSpectrum::info() {
       "Lyapunov spectrum from local Jacobian least-squares fits with QR re-orthonormalisation; "
       "spurious exponents rejected by time reversal";
   info.models_md_ids = "N3";
-  ParamSpec steps = param_spec("evolution_steps", ValueKind::integer, "samples",
-                               "samples over which each local Jacobian maps displacements "
-                               "(multi-step evolution; absent: one delay)");
-  steps.min = 1;
-  steps.optional = true;
-  ParamSpec neighbours = param_spec("neighbours", ValueKind::integer, "1",
-                                    "nearest neighbours per local fit (absent: max(20, 4 x "
-                                    "dimension))");
-  neighbours.min = 2;
-  neighbours.optional = true;
-  ParamSpec refs = param_spec("max_reference_points", ValueKind::integer, "1",
-                              "local fits along the trajectory at most");
-  refs.default_value = 20000;
-  refs.min = 20;
+  using nonlinear::numeric_spec;
   ParamSpec reversal = param_spec("time_reversal_check", ValueKind::boolean, "",
                                   "flag exponents that do not change sign for the reversed series");
   reversal.default_value = true;
-  info.params = {nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-                 steps, neighbours, refs, reversal, nonlinear::bootstrap_spec(),
-                 nonlinear::seed_spec()};
+  info.params = {
+      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+      numeric_spec("evolution_steps", ValueKind::integer, "samples",
+                   "samples over which each local Jacobian maps displacements (multi-step "
+                   "evolution; absent: one delay)",
+                   Json(), 1),
+      numeric_spec("neighbours", ValueKind::integer, "1",
+                   "nearest neighbours per local fit (absent: max(20, 4 x dimension))", Json(), 2),
+      numeric_spec("max_reference_points", ValueKind::integer, "1",
+                   "local fits along the trajectory at most", 20000, 20),
+      reversal, nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_reference_points", 300}};
   return info;
@@ -118,13 +113,10 @@ PluginInfo LyapunovSpectrum::info() {
 
 Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
-  const Json& p = params_.json();
-  const std::size_t m = p.contains("evolution_steps") && p["evolution_steps"].is_number()
-                            ? std::size_t(params_.integer("evolution_steps"))
-                            : std::size_t(embedding.delay);
-  const std::size_t k = p.contains("neighbours") && p["neighbours"].is_number()
-                            ? std::size_t(params_.integer("neighbours"))
-                            : std::max<std::size_t>(20, 4 * std::size_t(embedding.dimension));
+  const std::size_t m = std::size_t(
+      nonlinear::given_integer(params_, "evolution_steps").value_or(embedding.delay));
+  const std::size_t k = std::size_t(nonlinear::given_integer(params_, "neighbours")
+                                        .value_or(std::max(20, 4 * embedding.dimension)));
   const auto refs = std::size_t(params_.integer("max_reference_points"));
   const auto forward = lyapunov_spectrum(series.values, embedding.dimension, embedding.delay,
                                          embedding.theiler, m, k, refs);

@@ -338,51 +338,60 @@ double standard_deviation(const std::vector<double>& x) {
 }
 
 ParamSpec delay_spec() {
-  ParamSpec s = param_spec("delay_samples", ValueKind::integer, "samples",
-                           "embedding delay (N1); absent: from an earlier `embedding` result or "
-                           "chosen automatically by average mutual information");
-  s.min = 1;
-  s.max = 100000;
-  s.optional = true;
-  return s;
+  return numeric_spec("delay_samples", ValueKind::integer, "samples",
+                      "embedding delay (N1); absent: from an earlier `embedding` result or chosen "
+                      "automatically by average mutual information",
+                      Json(), 1, 100000);
 }
 
 ParamSpec dimension_spec() {
-  ParamSpec s = param_spec("embedding_dimension", ValueKind::integer, "1",
-                           "embedding dimension (N1); absent: from an earlier `embedding` result "
-                           "or chosen automatically by false nearest neighbours");
-  s.min = 1;
-  s.max = 30;
-  s.optional = true;
-  return s;
+  return numeric_spec("embedding_dimension", ValueKind::integer, "1",
+                      "embedding dimension (N1); absent: from an earlier `embedding` result or "
+                      "chosen automatically by false nearest neighbours",
+                      Json(), 1, 30);
 }
 
 ParamSpec theiler_spec() {
-  ParamSpec s = param_spec("theiler_window_samples", ValueKind::integer, "samples",
-                           "neighbours closer in time than this are excluded; absent: from a "
-                           "space-time separation plot");
-  s.min = 0;
-  s.max = 1000000;
-  s.optional = true;
-  return s;
+  return numeric_spec("theiler_window_samples", ValueKind::integer, "samples",
+                      "neighbours closer in time than this are excluded; absent: from a "
+                      "space-time separation plot",
+                      Json(), 0, 1000000);
 }
 
 ParamSpec seed_spec() {
-  ParamSpec s = param_spec("seed", ValueKind::integer, "1",
-                           "random seed (bootstrap, surrogates): fixed, so runs repeat exactly");
-  s.default_value = 20240611;
-  s.min = 0;
-  return s;
+  return numeric_spec("seed", ValueKind::integer, "1",
+                      "random seed (bootstrap, surrogates): fixed, so runs repeat exactly",
+                      20240611, 0);
 }
 
 ParamSpec bootstrap_spec() {
-  ParamSpec s = param_spec("bootstrap_replicates", ValueKind::integer, "1",
-                           "bootstrap resamplings (of blocks of reference points) for the 95 % "
-                           "confidence interval");
-  s.default_value = 200;
-  s.min = 20;
-  s.max = 100000;
+  return numeric_spec("bootstrap_replicates", ValueKind::integer, "1",
+                      "bootstrap resamplings (of blocks of reference points) for the 95 % "
+                      "confidence interval",
+                      200, 20, 100000);
+}
+
+ParamSpec numeric_spec(std::string key, ValueKind kind, std::string unit, std::string description,
+                       Json default_value, double min, double max, bool min_exclusive) {
+  ParamSpec s = param_spec(std::move(key), kind, std::move(unit), std::move(description));
+  s.optional = default_value.is_null();
+  s.default_value = std::move(default_value);
+  s.min = min;
+  s.max = max;
+  s.min_exclusive = min_exclusive;
   return s;
+}
+
+std::optional<std::int64_t> given_integer(const ParamValues& params, const char* key) {
+  const Json& p = params.json();
+  if (p.contains(key) && p[key].is_number_integer()) return p[key].get<std::int64_t>();
+  return std::nullopt;
+}
+
+std::optional<double> given_real(const ParamValues& params, const char* key) {
+  const Json& p = params.json();
+  if (p.contains(key) && p[key].is_number()) return p[key].get<double>();
+  return std::nullopt;
 }
 
 }  // namespace chatterlab::nonlinear

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -152,5 +153,14 @@ ParamSpec dimension_spec();          // embedding_dimension, optional (auto)
 ParamSpec theiler_spec();            // theiler_window_samples, optional (auto)
 ParamSpec seed_spec();               // seed
 ParamSpec bootstrap_spec();          // bootstrap_replicates
+// A real or integer parameter with limits [min, max]; a null `default_value` makes it optional
+// (the method chooses automatically when it is absent).
+ParamSpec numeric_spec(std::string key, ValueKind kind, std::string unit, std::string description,
+                       Json default_value, double min,
+                       double max = std::numeric_limits<double>::infinity(),
+                       bool min_exclusive = false);
+// An optional parameter's value when the study gave it.
+std::optional<std::int64_t> given_integer(const ParamValues& params, const char* key);
+std::optional<double> given_real(const ParamValues& params, const char* key);
 
 }  // namespace chatterlab::nonlinear

@@ -193,12 +193,9 @@ void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
   std::size_t needed = nonlinear::minimum_samples(2, 1);
   for (const auto& m : methods) {
     const Json& p = validated[m];
-    const int d = p.contains("embedding_dimension") && p["embedding_dimension"].is_number()
-                      ? p["embedding_dimension"].get<int>()
-                      : 2;
-    const int tau = p.contains("delay_samples") && p["delay_samples"].is_number()
-                        ? p["delay_samples"].get<int>()
-                        : 1;
+    const ParamValues values_of_method(p);
+    const int d = int(nonlinear::given_integer(values_of_method, "embedding_dimension").value_or(2));
+    const int tau = int(nonlinear::given_integer(values_of_method, "delay_samples").value_or(1));
     if (nonlinear::minimum_samples(d, tau) > needed) {
       needed = nonlinear::minimum_samples(d, tau);
       needed_dimension = d;

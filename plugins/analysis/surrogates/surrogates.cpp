@@ -88,21 +88,16 @@ PluginInfo Surrogates::info() {
       "IAAFT surrogate test for determinism: nonlinear prediction error rank test (significance "
       "1/(surrogates+1)), time-reversal asymmetry";
   info.models_md_ids = "N4";
-  ParamSpec count = param_spec("surrogates", ValueKind::integer, "1",
-                               "number of IAAFT surrogates (19: one-sided test at 5 %)");
-  count.default_value = 19;
-  count.min = 4;
-  count.max = 999;
-  ParamSpec neighbours = param_spec("neighbours", ValueKind::integer, "1",
-                                    "neighbours of the locally constant predictor");
-  neighbours.default_value = 5;
-  neighbours.min = 1;
-  ParamSpec refs = param_spec("max_reference_points", ValueKind::integer, "1",
-                              "predictions per series at most (evenly spread)");
-  refs.default_value = 4000;
-  refs.min = 20;
-  info.params = {nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-                 count, neighbours, refs, nonlinear::seed_spec()};
+  using nonlinear::numeric_spec;
+  info.params = {
+      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+      numeric_spec("surrogates", ValueKind::integer, "1",
+                   "number of IAAFT surrogates (19: one-sided test at 5 %)", 19, 4, 999),
+      numeric_spec("neighbours", ValueKind::integer, "1",
+                   "neighbours of the locally constant predictor", 5, 1),
+      numeric_spec("max_reference_points", ValueKind::integer, "1",
+                   "predictions per series at most (evenly spread)", 4000, 20),
+      nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"surrogates", 4}, {"max_reference_points", 100}};
   return info;
