@@ -55,8 +55,6 @@ TEST(CorrelationDimension, SumsCountEveryPairOutsideTheTheilerWindow) {
 TEST(CorrelationDimensionAccuracy, Henon) {
   const Json r = make_analysis("correlation_dimension")
                      ->analyse(series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
-  std::cerr << r["correlation_dimension"].dump() << "\n";
-  for (const auto& e : r["by_dimension"]) std::cerr << e["dimension"] << " " << e["d2"] << " " << e["r_low"] << " " << e["r_high"] << "\n";
   EXPECT_GE(value(r), 1.21);
   EXPECT_LE(value(r), 1.23);
   EXPECT_EQ(r["correlation_dimension"]["quality"], "good");
@@ -65,8 +63,6 @@ TEST(CorrelationDimensionAccuracy, Henon) {
 TEST(CorrelationDimensionAccuracy, Lorenz) {
   const Json r = make_analysis("correlation_dimension")
                      ->analyse(series(test_signals::lorenz(100000), 0.01, "lorenz x"), Json::object());
-  std::cerr << r["correlation_dimension"].dump() << "\n";
-  for (const auto& e : r["by_dimension"]) std::cerr << e["dimension"] << " " << e["d2"] << " " << e["r_low"] << " " << e["r_high"] << "\n";
   EXPECT_GE(value(r), 2.03);
   EXPECT_LE(value(r), 2.07);
 }
@@ -74,15 +70,12 @@ TEST(CorrelationDimensionAccuracy, Lorenz) {
 TEST(CorrelationDimension, SineIsOneDimensional) {
   const Json r = make_analysis("correlation_dimension")
                      ->analyse(series(test_signals::sine(5000, 20 * std::sqrt(3.0)), 1.0, "sine"), Json::object());
-  std::cerr << r["correlation_dimension"].dump() << "\n";
   EXPECT_NEAR(value(r), 1.0, 0.05);
 }
 
 TEST(CorrelationDimension, WhiteNoiseDoesNotSaturate) {
   const Json r = make_analysis("correlation_dimension", {{"max_dimension", 6}})
                      ->analyse(series(test_signals::white_noise(5000, 3), 1.0, "noise"), Json::object());
-  std::cerr << r["correlation_dimension"].dump() << "\n";
-  for (const auto& e : r["by_dimension"]) std::cerr << e["dimension"] << " " << e["d2"] << "\n";
   EXPECT_EQ(r["saturation_dimension"], 0);
   EXPECT_EQ(r["correlation_dimension"]["quality"], "failed");
 }

@@ -14,9 +14,6 @@ using test_signals::series;
 TEST(Embedding, HenonNeedsDelayOneDimensionTwo) {
   const Json r = make_analysis("embedding")->analyse(
       series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
-  std::cerr << r["delay_samples"].dump() << "\n" << r["embedding_dimension"].dump() << "\n"
-            << r["theiler_window_samples"].dump() << "\nfnn " << r["fnn_fraction"].dump()
-            << "\ne1 " << r["cao_e1"].dump() << "\ne2 " << r["cao_e2"].dump() << "\n";
   EXPECT_EQ(r["delay_samples"]["value"], 1);
   EXPECT_EQ(r["embedding_dimension"]["value"], 2);
   EXPECT_EQ(r["fnn_dimension"], 2);
@@ -27,9 +24,6 @@ TEST(Embedding, HenonNeedsDelayOneDimensionTwo) {
 TEST(Embedding, LorenzDelayAtFirstMutualInformationMinimum) {
   const Json r = make_analysis("embedding")->analyse(
       series(test_signals::lorenz(20000), 0.01, "lorenz x"), Json::object());
-  std::cerr << r["delay_samples"].dump() << "\n" << r["embedding_dimension"].dump() << "\n"
-            << r["theiler_window_samples"].dump() << "\nfnn " << r["fnn_fraction"].dump()
-            << "\ne1 " << r["cao_e1"].dump() << "\ne2 " << r["cao_e2"].dump() << "\n";
   // The first AMI minimum of Lorenz x at dt = 0.01 lies near 0.16 time units (Fraser & Swinney
   // style estimates give 0.15-0.18).
   EXPECT_GE(r["delay_samples"]["value"].get<int>(), 12);
@@ -41,9 +35,6 @@ TEST(Embedding, LorenzDelayAtFirstMutualInformationMinimum) {
 TEST(Embedding, WhiteNoiseShowsNoDeterminism) {
   const Json r = make_analysis("embedding")->analyse(
       series(test_signals::white_noise(5000, 7), 1.0, "noise"), Json::object());
-  std::cerr << r["delay_samples"].dump() << "\n" << r["embedding_dimension"].dump() << "\n"
-            << "\nfnn " << r["fnn_fraction"].dump()
-            << "\ne1 " << r["cao_e1"].dump() << "\ne2 " << r["cao_e2"].dump() << "\n";
   EXPECT_FALSE(r["deterministic"].get<bool>());
 }
 

@@ -16,7 +16,7 @@ namespace chatterlab {
 namespace {
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t radius_neighbours = 8;    // eps = median distance to the 8th neighbour
-constexpr std::size_t max_kantz_neighbours = 64;  // nearest ones kept inside eps (cost bound)
+constexpr std::size_t max_kantz_neighbours = 64;  // neighbours used inside eps (cost bound)
 }  // namespace
 
 DivergenceCurves divergence_curves(const std::vector<double>& x, int dimension, int delay,
@@ -71,12 +71,8 @@ DivergenceCurves divergence_curves(const std::vector<double>& x, int dimension, 
           }
         }
       }
-      // The nearest max_kantz_neighbours inside eps: a bounded k-nearest search prunes the tree
-      // far better than listing every point within eps and keeping the nearest afterwards.
-      auto near = search.nearest(i, max_kantz_neighbours, theiler, limit);
-      near.erase(std::find_if(near.begin(), near.end(),
-                              [&](const auto& m) { return m.distance >= radius; }),
-                 near.end());
+      // At most max_kantz_neighbours of the neighbours within eps: the search stops there.
+      const auto near = search.within(i, radius, theiler, limit, max_kantz_neighbours);
       if (near.empty()) continue;
       for (std::size_t k = 0; k < steps; ++k) {
         double mean = 0;

@@ -14,12 +14,6 @@ using test_signals::series;
 
 double per_sample(const Json& r) { return r["lyapunov_max_per_sample"]["value"].get<double>(); }
 
-void show(const Json& r) {
-  std::cerr << r["lyapunov_max_per_sample"].dump() << "\n" << r["kantz_per_sample"].dump() << "\n"
-            << r["rosenstein_per_sample"].dump() << "\nradius " << r["kantz_radius"] << " d "
-            << r["embedding_dimension"] << " tau " << r["delay_samples"] << " W "
-            << r["theiler_window_samples"] << "\n";
-}
 
 TEST(Lyapunov, LinearRegionOfAnIdealCurve) {
   // Transient, straight rise of slope 0.3 and saturation: the fit recovers the slope.
@@ -35,7 +29,6 @@ TEST(Lyapunov, LinearRegionOfAnIdealCurve) {
 TEST(LyapunovAccuracy, Henon) {
   const Json r = make_analysis("lyapunov")->analyse(
       series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
-  show(r);
   EXPECT_NEAR(per_sample(r), 0.419, 0.01);
   EXPECT_EQ(r["lyapunov_max_per_sample"]["quality"], "good");
 }
@@ -43,7 +36,6 @@ TEST(LyapunovAccuracy, Henon) {
 TEST(LyapunovAccuracy, Lorenz) {
   const Json r = make_analysis("lyapunov")->analyse(
       series(test_signals::lorenz(100000), 0.01, "lorenz x"), Json::object());
-  show(r);
   const double per_s = r["lyapunov_max_per_s"]["value"].get<double>();
   EXPECT_NEAR(per_s, 0.906, 0.05 * 0.906);
   EXPECT_NEAR(per_s, per_sample(r) / 0.01, 1e-9);
@@ -52,7 +44,6 @@ TEST(LyapunovAccuracy, Lorenz) {
 TEST(Lyapunov, SineDoesNotDiverge) {
   const Json r = make_analysis("lyapunov")->analyse(
       series(test_signals::sine(5000, 20 * std::sqrt(3.0)), 1.0, "sine"), Json::object());
-  show(r);
   EXPECT_NEAR(per_sample(r), 0.0, 0.005);
 }
 

@@ -142,12 +142,13 @@ class TheilerKnn {
 class TheilerRadius {
  public:
   TheilerRadius(double radius_squared, std::size_t i, std::size_t theiler, std::size_t limit,
-                double floor2)
-      : r2_(radius_squared), i_(i), theiler_(theiler), limit_(limit), floor2_(floor2) {}
+                double floor2, std::size_t max_count)
+      : r2_(radius_squared), i_(i), theiler_(theiler), limit_(limit), floor2_(floor2),
+        max_count_(max_count) {}
   bool addPoint(double dist, std::uint32_t index) {
     if (dist < r2_ && dist > floor2_ && admissible(i_, index, theiler_, limit_))
       found_.push_back({index, std::sqrt(dist)});
-    return true;
+    return found_.size() < max_count_;  // false stops the search
   }
   double worstDist() const { return r2_; }
   bool full() const { return true; }
@@ -157,6 +158,7 @@ class TheilerRadius {
   double r2_;
   std::size_t i_, theiler_, limit_;
   double floor2_;
+  std::size_t max_count_;
   std::vector<Neighbour> found_;
 };
 }  // namespace
@@ -189,8 +191,8 @@ std::vector<Neighbour> NeighbourSearch::nearest(std::size_t i, std::size_t k,
 }
 
 std::vector<Neighbour> NeighbourSearch::within(std::size_t i, double radius, std::size_t theiler,
-                                               std::size_t limit) const {
-  TheilerRadius result(radius * radius, i, theiler, limit, floor2_);
+                                               std::size_t limit, std::size_t max_count) const {
+  TheilerRadius result(radius * radius, i, theiler, limit, floor2_, max_count);
   tree_->index.findNeighbors(result, embedding_.point(i), nanoflann::SearchParams(32, 0, false));
   return result.take();
 }

@@ -87,9 +87,11 @@ class NeighbourSearch {
   // The k nearest admissible neighbours of vector i, nearest first (fewer if there are not k).
   std::vector<Neighbour> nearest(std::size_t i, std::size_t k, std::size_t theiler,
                                  std::size_t index_limit) const;
-  // Every admissible neighbour of vector i closer than `radius` (unsorted).
+  // Admissible neighbours of vector i closer than `radius` (unsorted): all of them, or the
+  // first `max_count` the tree search meets (it descends towards i first, so these lie near i).
   std::vector<Neighbour> within(std::size_t i, double radius, std::size_t theiler,
-                                std::size_t index_limit) const;
+                                std::size_t index_limit,
+                                std::size_t max_count = std::numeric_limits<std::size_t>::max()) const;
 
  private:
   struct Tree;
