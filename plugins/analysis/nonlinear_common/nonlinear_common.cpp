@@ -79,22 +79,6 @@ Embedding::Embedding(const std::vector<double>& x, int dimension, int delay, std
       data_[i * std::size_t(dimension) + std::size_t(k)] = x[i + std::size_t(k * delay)];
 }
 
-double Embedding::distance(std::size_t i, std::size_t j) const {
-  const double* a = point(i);
-  const double* b = point(j);
-  double s = 0;
-  for (int k = 0; k < dimension_; ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
-  return std::sqrt(s);
-}
-
-double Embedding::max_distance(std::size_t i, std::size_t j) const {
-  const double* a = point(i);
-  const double* b = point(j);
-  double s = 0;
-  for (int k = 0; k < dimension_; ++k) s = std::max(s, std::abs(a[k] - b[k]));
-  return s;
-}
-
 // ---------------------------------------------------------------- neighbour search
 namespace {
 using Metric = nanoflann::L2_Simple_Adaptor<double, Embedding, double, std::uint32_t>;

@@ -4,6 +4,8 @@
 // the automatic Theiler window from a space-time separation plot, detection of linear/scaling
 // regions, straight-line fits, block bootstrap and the result convention of analysis.hpp.
 // docs/analysis/chaos.md describes the rules in words.
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -48,8 +50,21 @@ class Embedding {
   int dimension() const { return dimension_; }
   int delay() const { return delay_; }
   const double* point(std::size_t i) const { return data_.data() + i * std::size_t(dimension_); }
-  double distance(std::size_t i, std::size_t j) const;  // Euclidean
-  double max_distance(std::size_t i, std::size_t j) const;  // maximum norm
+  // Euclidean and maximum-norm distances (inline: the Lyapunov loops spend most time here).
+  double distance(std::size_t i, std::size_t j) const {
+    const double* a = point(i);
+    const double* b = point(j);
+    double s = 0;
+    for (int k = 0; k < dimension_; ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
+    return std::sqrt(s);
+  }
+  double max_distance(std::size_t i, std::size_t j) const {
+    const double* a = point(i);
+    const double* b = point(j);
+    double s = 0;
+    for (int k = 0; k < dimension_; ++k) s = std::max(s, std::abs(a[k] - b[k]));
+    return s;
+  }
 
   // nanoflann dataset adaptor
   std::size_t kdtree_get_point_count() const { return count_; }
