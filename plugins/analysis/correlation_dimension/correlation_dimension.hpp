@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -37,16 +38,13 @@ struct CorrelationSums {
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references);
 
-class CorrelationDimension final : public Analysis {
+class CorrelationDimension final : public nonlinear::ParameterisedAnalysis {
  public:
   static PluginInfo info();
-  explicit CorrelationDimension(const ParamValues& params) : params_(params) {}
+  using ParameterisedAnalysis::ParameterisedAnalysis;
   Json analyse(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
-
- private:
-  ParamValues params_;
 };
 
 }  // namespace chatterlab

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -47,16 +48,13 @@ struct EmbeddingParameters {
 EmbeddingParameters resolve_embedding(const ParamValues& params, const SampledSeries& series,
                                       const Json& context);
 
-class EmbeddingAnalysis final : public Analysis {
+class EmbeddingAnalysis final : public nonlinear::ParameterisedAnalysis {
  public:
   static PluginInfo info();
-  explicit EmbeddingAnalysis(const ParamValues& params) : params_(params) {}
+  using ParameterisedAnalysis::ParameterisedAnalysis;
   Json analyse(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
-
- private:
-  ParamValues params_;
 };
 
 }  // namespace chatterlab

@@ -6,6 +6,7 @@
 // second of signal time. docs/analysis/chaos.md, section "Largest Lyapunov exponent".
 #include <vector>
 
+#include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -36,16 +37,13 @@ struct LinearRegionFit {
 };
 LinearRegionFit linear_region(const std::vector<double>& y);
 
-class LyapunovAnalysis final : public Analysis {
+class LyapunovAnalysis final : public nonlinear::ParameterisedAnalysis {
  public:
   static PluginInfo info();
-  explicit LyapunovAnalysis(const ParamValues& params) : params_(params) {}
+  using ParameterisedAnalysis::ParameterisedAnalysis;
   Json analyse(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
-
- private:
-  ParamValues params_;
 };
 
 }  // namespace chatterlab

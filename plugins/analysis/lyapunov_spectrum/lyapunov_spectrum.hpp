@@ -8,6 +8,7 @@
 // are flagged spurious (Parlitz 1992). docs/analysis/chaos.md, section "Lyapunov spectrum".
 #include <vector>
 
+#include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -23,16 +24,13 @@ SpectrumEstimate lyapunov_spectrum(const std::vector<double>& x, int dimension, 
                                    std::size_t theiler, std::size_t evolution_steps,
                                    std::size_t neighbours, std::size_t references);
 
-class LyapunovSpectrum final : public Analysis {
+class LyapunovSpectrum final : public nonlinear::ParameterisedAnalysis {
  public:
   static PluginInfo info();
-  explicit LyapunovSpectrum(const ParamValues& params) : params_(params) {}
+  using ParameterisedAnalysis::ParameterisedAnalysis;
   Json analyse(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
-
- private:
-  ParamValues params_;
 };
 
 }  // namespace chatterlab

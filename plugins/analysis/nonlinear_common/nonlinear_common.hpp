@@ -20,6 +20,16 @@
 
 namespace chatterlab::nonlinear {
 
+// ---------------------------------------------------------------- plugin base
+// Base of the analysis plugins here: holds the validated parameter table.
+class ParameterisedAnalysis : public Analysis {
+ public:
+  explicit ParameterisedAnalysis(const ParamValues& params) : params_(params) {}
+
+ protected:
+  ParamValues params_;
+};
+
 // ---------------------------------------------------------------- results
 // A scalar estimate in the analysis.hpp convention: quality "good", "uncertain" or "failed".
 Json estimate(double value, double ci_low, double ci_high, const std::string& quality,

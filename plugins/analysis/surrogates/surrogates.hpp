@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -24,16 +25,13 @@ double prediction_error(const std::vector<double>& x, int dimension, int delay,
 // <(x_{n+tau} - x_n)^3> / <(x_{n+tau} - x_n)^2>^{3/2}: zero for time-reversible processes.
 double time_reversal_asymmetry(const std::vector<double>& x, int delay);
 
-class Surrogates final : public Analysis {
+class Surrogates final : public nonlinear::ParameterisedAnalysis {
  public:
   static PluginInfo info();
-  explicit Surrogates(const ParamValues& params) : params_(params) {}
+  using ParameterisedAnalysis::ParameterisedAnalysis;
   Json analyse(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
-
- private:
-  ParamValues params_;
 };
 
 }  // namespace chatterlab
