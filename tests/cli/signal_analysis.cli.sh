@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Study kind signal_analysis through the command: the shipped Lorenz study (exit 0, headline
-# numbers near the known answers for 10,000 samples, summary.json and every plot), and bad input
+# Study kind signal_analysis through the command: the shipped Lorenz and Henon studies (exit 0,
+# headline numbers near the known answers for 10,000 / 5,000 samples, summary.json and every
+# plot), and bad input
 # (missing column, missing sample rate, constant signal, too short for the requested dimension):
 # exit 2, the reason in the message, nothing written.
 # Usage: signal_analysis.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
@@ -23,6 +24,17 @@ grep -q '"ci_low"' "$out/summary.json" || fail "summary.json lacks confidence in
 expect_plots "$out" embedding_ami embedding_fnn correlation_dimension_sums \
   correlation_dimension_slopes correlation_dimension_saturation lyapunov_divergence \
   lyapunov_spectrum surrogates phase_portrait
+
+# ---- the shipped Henon study (one iteration per sample: per second = per iteration)
+out=$work/henon
+expect_exit 0 "$work/henon" "$bin" run "$src/studies/signal_analysis_henon.toml" --out "$out"
+csv=$out/results.csv
+lambda=$(csv_column "$csv" lyapunov_max_per_s)
+close_to "$lambda" 0.419 0.015 || fail "henon: lyapunov_max_per_s = $lambda (known 0.419)"
+d2=$(csv_column "$csv" correlation_dimension)
+close_to "$d2" 1.21 0.05 || fail "henon: correlation_dimension = $d2 (known 1.21-1.22)"
+[ "$(csv_column "$csv" delay_samples),$(csv_column "$csv" embedding_dimension)" = 1,2 ] ||
+  fail "henon: delay/dimension not 1/2"
 
 # ---- bad input
 printf 't_s,x\n' >"$work/short.csv"

@@ -373,11 +373,13 @@ void EmbeddingAnalysis::plot(const Json& result, const SampledSeries& series,
     ami.title = fmt::format("{}: average mutual information", title);
     ami.x_label = "lag [samples]";
     ami.y_label = "mutual information [nats]";
-    const auto mi = result["mutual_information_nats"].get<std::vector<double>>();
-    plot::Series curve{"AMI", {}, mi, "lines"};
+    const int delay = result["delay_samples"]["value"].get<int>();
+    // Lags up to 5 delays (at least 50): the first minimum, not the long tail, is the point.
+    auto mi = result["mutual_information_nats"].get<std::vector<double>>();
+    mi.resize(std::min(mi.size(), std::size_t(std::max(50, 5 * delay)) + 1));
+    plot::Series curve{"AMI", {}, mi, "linespoints"};
     for (std::size_t k = 0; k < mi.size(); ++k) curve.x.push_back(double(k));
     ami.series.push_back(curve);
-    const int delay = result["delay_samples"]["value"].get<int>();
     if (std::size_t(delay) < mi.size())
       ami.series.push_back({fmt::format("chosen delay {} samples", delay),
                             {double(delay)},
