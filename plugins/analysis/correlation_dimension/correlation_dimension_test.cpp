@@ -1,0 +1,81 @@
+#include "analysis/correlation_dimension/correlation_dimension.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "analysis/nonlinear_common/test_signals.hpp"
+
+namespace chatterlab {
+namespace {
+
+using test_signals::make_analysis;
+using test_signals::series;
+
+double value(const Json& r) { return r["correlation_dimension"]["value"].get<double>(); }
+
+// Pair counting against a direct double loop: the histogram must hold exactly the pairs outside
+// the Theiler window, each dimension's distance being the maximum-norm distance.
+TEST(CorrelationDimension, SumsCountEveryPairOutsideTheTheilerWindow) {
+  const auto x = test_signals::henon(400);
+  const int dims = 3, delay = 2;
+  const std::size_t theiler = 5;
+  const auto sums = correlation_sums(x, dims, delay, theiler, 1000);
+  const std::size_t n = x.size() - std::size_t((dims - 1) * delay);
+  // Bin edges are exact: count distances below the first edge at or above 10 % of the range.
+  std::size_t bin = 0;
+  while (CorrelationSums::edge(bin) < 0.1) ++bin;
+  const double edge = CorrelationSums::edge(bin) * sums.range;
+  for (int d = 1; d <= dims; ++d) {
+    std::uint64_t direct = 0, pairs = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) {
+        if ((i > j ? i - j : j - i) <= theiler) continue;
+        ++pairs;
+        double dist = 0;
+        for (int k = 0; k < d; ++k)
+          dist = std::max(dist, std::abs(x[i + std::size_t(k * delay)] - x[j + std::size_t(k * delay)]));
+        if (dist < edge) ++direct;
+      }
+    std::uint64_t counted = 0;
+    double counted_pairs = 0;
+    for (std::size_t b = 0; b < CorrelationSums::blocks; ++b) {
+      counted_pairs += sums.pairs[b];
+      for (std::size_t k = 0; k <= bin; ++k)
+        counted += sums.counts[(b * std::size_t(dims) + std::size_t(d - 1)) * CorrelationSums::bins + k];
+    }
+    EXPECT_EQ(counted, direct) << "dimension " << d;
+    EXPECT_EQ(counted_pairs, double(pairs));
+  }
+}
+
+TEST(CorrelationDimensionAccuracy, Henon) {
+  const Json r = make_analysis("correlation_dimension")
+                     ->analyse(series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
+  EXPECT_GE(value(r), 1.21);
+  EXPECT_LE(value(r), 1.23);
+  EXPECT_EQ(r["correlation_dimension"]["quality"], "good");
+}
+
+TEST(CorrelationDimensionAccuracy, Lorenz) {
+  const Json r = make_analysis("correlation_dimension")
+                     ->analyse(series(test_signals::lorenz(100000), 0.01, "lorenz x"), Json::object());
+  EXPECT_GE(value(r), 2.03);
+  EXPECT_LE(value(r), 2.07);
+}
+
+TEST(CorrelationDimension, SineIsOneDimensional) {
+  const Json r = make_analysis("correlation_dimension")
+                     ->analyse(series(test_signals::sine(5000, 20 * std::sqrt(3.0)), 1.0, "sine"), Json::object());
+  EXPECT_NEAR(value(r), 1.0, 0.05);
+}
+
+TEST(CorrelationDimension, WhiteNoiseDoesNotSaturate) {
+  const Json r = make_analysis("correlation_dimension", {{"max_dimension", 6}})
+                     ->analyse(series(test_signals::white_noise(5000, 3), 1.0, "noise"), Json::object());
+  EXPECT_EQ(r["saturation_dimension"], 0);
+  EXPECT_EQ(r["correlation_dimension"]["quality"], "failed");
+}
+
+}  // namespace
+}  // namespace chatterlab

@@ -1,0 +1,61 @@
+#include "analysis/embedding/embedding.hpp"
+
+#include <gtest/gtest.h>
+
+#include "analysis/nonlinear_common/test_signals.hpp"
+#include "chatterlab/errors.hpp"
+
+namespace chatterlab {
+namespace {
+
+using test_signals::make_analysis;
+using test_signals::series;
+
+TEST(Embedding, HenonNeedsDelayOneDimensionTwo) {
+  const Json r = make_analysis("embedding")->analyse(
+      series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
+  EXPECT_EQ(r["delay_samples"]["value"], 1);
+  EXPECT_EQ(r["embedding_dimension"]["value"], 2);
+  EXPECT_EQ(r["fnn_dimension"], 2);
+  EXPECT_EQ(r["cao_dimension"], 2);
+  EXPECT_TRUE(r["deterministic"].get<bool>());
+}
+
+TEST(Embedding, LorenzDelayAtFirstMutualInformationMinimum) {
+  const Json r = make_analysis("embedding")->analyse(
+      series(test_signals::lorenz(20000), 0.01, "lorenz x"), Json::object());
+  // The first AMI minimum of Lorenz x at dt = 0.01 lies near 0.16 time units (Fraser & Swinney
+  // style estimates give 0.15-0.18).
+  EXPECT_GE(r["delay_samples"]["value"].get<int>(), 12);
+  EXPECT_LE(r["delay_samples"]["value"].get<int>(), 20);
+  EXPECT_EQ(r["delay_samples"]["quality"], "good");
+  EXPECT_EQ(r["embedding_dimension"]["value"], 3);
+}
+
+TEST(Embedding, WhiteNoiseShowsNoDeterminism) {
+  const Json r = make_analysis("embedding")->analyse(
+      series(test_signals::white_noise(5000, 7), 1.0, "noise"), Json::object());
+  EXPECT_FALSE(r["deterministic"].get<bool>());
+}
+
+TEST(Embedding, BadSeriesNameTheProblem) {
+  auto analysis = make_analysis("embedding");
+  std::vector<double> constant(500, 3.0);
+  try {
+    analysis->analyse(series(constant, 1.0, "signal column 'a'"), Json::object());
+    FAIL() << "constant signal accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("signal column 'a': the signal is constant"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    analysis->analyse(series(std::vector<double>(50, 1.0), 1.0, "short"), Json::object());
+    FAIL() << "short signal accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 101 samples"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace chatterlab

@@ -1,0 +1,118 @@
+#include "analysis/signal_analysis/signal_analysis.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <fstream>
+
+#include "analysis/nonlinear_common/test_signals.hpp"
+#include "chatterlab/runner.hpp"
+#include "unit/study_test_support.hpp"
+
+namespace chatterlab {
+namespace {
+
+using testing::load_error;
+using testing::TempDir;
+
+// A two-column CSV (t_s, x) like a `simulate` study's timeseries.csv.
+void write_signal(const TempDir& dir, const std::string& name, const std::vector<double>& x) {
+  std::string text = "t_s,displacement_m\n";
+  for (std::size_t i = 0; i < x.size(); ++i) text += fmt::format("{},{}\n", 0.001 * double(i), x[i]);
+  dir.write(name, text);
+}
+
+std::string study(const std::string& input, const std::string& analysis = "") {
+  return "[study]\nkind = \"signal_analysis\"\n\n[input]\n" + input + "\n" + analysis;
+}
+
+class SignalAnalysisInput : public ::testing::Test {
+ protected:
+  TempDir dir_;
+};
+
+TEST_F(SignalAnalysisInput, MissingColumnListsTheColumns) {
+  write_signal(dir_, "s.csv", test_signals::henon(500));
+  const std::string m = load_error(dir_, study("file = \"s.csv\"\ncolumn = \"x\"\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("input.column = \"x\""), std::string::npos) << m;
+  EXPECT_NE(m.find("t_s, displacement_m"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, MissingSampleRateIsNamed) {
+  write_signal(dir_, "s.csv", test_signals::henon(500));
+  const std::string m = load_error(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));
+  EXPECT_NE(m.find("missing key 'input.sample_rate_hz'"), std::string::npos) << m;
+  EXPECT_NE(m.find("not a WAV file"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, ConstantSignal) {
+  write_signal(dir_, "s.csv", std::vector<double>(500, 0.25));
+  const std::string m = load_error(
+      dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("the signal is constant"), std::string::npos) << m;
+  EXPECT_NE(m.find("study.toml:"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, NonFiniteSample) {
+  dir_.write("s.csv", "t_s,displacement_m\n0,1\n0.001,nan\n0.002,3\n");
+  const std::string m = load_error(
+      dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("line 3"), std::string::npos) << m;
+  EXPECT_NE(m.find("not finite"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, TooShortForTheRequestedDimensionSaysTheMinimum) {
+  write_signal(dir_, "s.csv", test_signals::henon(300));
+  const std::string m = load_error(
+      dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000",
+                  "[analysis]\nmethods = [\"lyapunov\"]\n[analysis.lyapunov]\n"
+                  "embedding_dimension = 6\ndelay_samples = 50\n"));
+  EXPECT_NE(m.find("300 samples are too short for embedding dimension 6 with delay 50"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("at least 350 samples"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, UnknownMethodAndStrayOverride) {
+  write_signal(dir_, "s.csv", test_signals::henon(500));
+  const std::string input = "file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000";
+  std::string m = load_error(dir_, study(input, "[analysis]\nmethods = [\"lyapunof\"]\n"));
+  EXPECT_NE(m.find("analysis.methods.0 = \"lyapunof\": no such analysis"), std::string::npos) << m;
+  EXPECT_NE(m.find("correlation_dimension, embedding"), std::string::npos) << m;
+  m = load_error(dir_, study(input, "[analysis]\nmethods = [\"embedding\"]\n[analysis.lyapunov]\n"
+                                    "max_steps = 10\n"));
+  EXPECT_NE(m.find("analysis.lyapunov: not a listed method"), std::string::npos) << m;
+  m = load_error(dir_, study(input, "[analysis]\nmethods = [\"lyapunov\"]\n[analysis.lyapunov]\n"
+                                    "max_step = 10\n"));
+  EXPECT_NE(m.find("analysis.lyapunov.max_step"), std::string::npos) << m;
+}
+
+// End to end through the runner: summary.json with the headline estimates, results.csv, plots.
+TEST_F(SignalAnalysisInput, HenonStudyWritesSummaryAndPlots) {
+  write_signal(dir_, "s.csv", test_signals::henon(3000));
+  const auto file = dir_.write(
+      "study.toml", study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000",
+                          "[analysis]\nmethods = [\"embedding\", \"lyapunov\"]\n"
+                          "[analysis.lyapunov]\nmax_reference_points = 1000\n"));
+  const Study s = load_study(file, {});
+  RunOptions options;
+  options.out_dir = dir_.path() / "out";
+  options.threads = 1;
+  options.progress = false;
+  const auto summary = run_study(s, options);
+  ASSERT_EQ(summary.failed, 0u);
+  std::ifstream in(options.out_dir / "summary.json");
+  const Json j = Json::parse(in);
+  EXPECT_EQ(j["delay_samples"]["value"], 1);
+  EXPECT_EQ(j["embedding_dimension"]["value"], 2);
+  // 0.419 per iteration at 1000 iterations per second.
+  EXPECT_NEAR(j["lyapunov_max_per_s"]["value"].get<double>(), 419, 30);
+  EXPECT_EQ(j["correlation_dimension"]["quality"], "failed");  // not run
+  EXPECT_TRUE(j["methods"].contains("lyapunov"));
+  for (const char* stem : {"embedding_ami", "embedding_fnn", "lyapunov_divergence", "phase_portrait"})
+    EXPECT_TRUE(std::filesystem::exists(options.out_dir / (std::string(stem) + ".png"))) << stem;
+}
+
+}  // namespace
+}  // namespace chatterlab
