@@ -62,5 +62,21 @@ void G1OneSidedContact(benchmark::State& state) {
 BENCHMARK(G1OneSidedContact)->Unit(benchmark::kMillisecond);
 
 }  // namespace
+namespace {
+// One chain at a time (G3 wheel-only; workpiece-only), for comparison of the cost per chain.
+void G1OneChain(benchmark::State& state) {
+  auto p = one_mode(250.0);
+  (state.range(0) == 0 ? p.work_regeneration : p.wheel_regeneration) = false;
+  PlungeTimeDomain model(p);
+  SimulationSettings s;
+  s.duration_s = 1.0;
+  s.sample_rate_hz = 10000.0;
+  s.one_sided_contact = false;
+  s.divergence_limit_m = 1e6;
+  state.SetLabel(state.range(0) == 0 ? "wheel only" : "work only");
+  run(state, model, s);
+}
+BENCHMARK(G1OneChain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+}  // namespace
 
 BENCHMARK_MAIN();

@@ -107,6 +107,14 @@ class Engine {
     g[0] = out.penetration_m;
     return 0;
   }
+  static int error_weights(N_Vector y, N_Vector weights, void* self) {
+    auto& e = *static_cast<Engine*>(self);
+    const double* x = N_VGetArrayPointer(y);
+    const double* atol = N_VGetArrayPointer(e.sun_.abstol);
+    double* w = N_VGetArrayPointer(weights);
+    for (std::size_t i = 0; i < e.n_; ++i) w[i] = 1.0 / (e.settings_.relative_tolerance * std::abs(x[i]) + atol[i]);
+    return 0;
+  }
   static void silent_error(int, const char*, const char*, char* message, void* self) {
     static_cast<Engine*>(self)->last_error_ = message;
   }
@@ -355,13 +363,37 @@ SimulationResult Engine::run() {
   std::span<double> scales(N_VGetArrayPointer(sun_.abstol), n_);
   model_.state_scales(reference, scales);
   for (double& s : scales) s = 1e-3 * settings_.relative_tolerance * std::max(s, 1e-300);
+  const std::vector<double> tolerance_floor(scales.begin(), scales.end());
+  // Absolute tolerances follow the amplitude: each component of an oscillation passes through
+  // zero twice a period, where only the absolute tolerance bounds its error weight; a fixed one
+  // set for the start is far too strict once the response has decayed or grown by orders of
+  // magnitude (the step size then collapses to resolve noise). Every window the tolerance is
+  // reset to 0.1 rtol times the component's largest magnitude over the last two windows.
+  const double tolerance_window_s = std::max(4.0 / f_max_, 0.02);
+  std::vector<double> window_max(n_, 0.0), previous_window_max(n_, 0.0);
+  double window_end = tolerance_window_s;
+  auto adapt_tolerances = [&](double t_now) {
+    std::span<const double> x(N_VGetArrayPointer(sun_.y), n_);
+    for (std::size_t i = 0; i < n_; ++i) window_max[i] = std::max(window_max[i], std::abs(x[i]));
+    if (t_now < window_end) return;
+    std::span<double> atol(N_VGetArrayPointer(sun_.abstol), n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      atol[i] = std::max(tolerance_floor[i],
+                         0.1 * settings_.relative_tolerance * std::max(window_max[i], previous_window_max[i]));
+      previous_window_max[i] = window_max[i];
+      window_max[i] = 0.0;
+    }
+    window_end = t_now + tolerance_window_s;
+  };
 
   sun_.cvode = CVodeCreate(CV_ADAMS, sun_.context);
   if (!sun_.cvode) throw std::runtime_error("CVodeCreate failed");
   CVodeSetErrHandlerFn(sun_.cvode, &Engine::silent_error, this);
   if (CVodeInit(sun_.cvode, &Engine::rhs, 0.0, sun_.y) != CV_SUCCESS) throw std::runtime_error("CVodeInit failed");
   CVodeSetUserData(sun_.cvode, this);
-  CVodeSVtolerances(sun_.cvode, settings_.relative_tolerance, sun_.abstol);
+  // Error weights 1/(rtol |y_i| + atol_i) from a weight function reading sun_.abstol, so the
+  // absolute tolerances can follow the amplitude during the run (adapt_tolerances below).
+  CVodeWFtolerances(sun_.cvode, &Engine::error_weights);
   sun_.solver = SUNNonlinSol_FixedPoint(sun_.y, 0, sun_.context);
   CVodeSetNonlinearSolver(sun_.cvode, sun_.solver);
   // Largest step: a fraction of the shortest wave (dense output and contact events stay local)
@@ -449,6 +481,7 @@ SimulationResult Engine::run() {
     }
     t = t_new;
     if (check_divergence(t)) break;
+    adapt_tolerances(t);
     if (flag == CV_ROOT_RETURN) {
       // The force law has a kink at the contact switch: restart the multistep method there.
       CVodeReInit(sun_.cvode, t, sun_.y);
