@@ -10,6 +10,7 @@
 #include "chatterlab/dynamics.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
+#include "models/torsional_coupling/torsional_coupling.hpp"
 
 namespace {
 
@@ -77,6 +78,20 @@ void G1OneChain(benchmark::State& state) {
   run(state, model, s);
 }
 BENCHMARK(G1OneChain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// G5 at its example parameters (speeds as states, one-sided contact, infeed 15 um/s).
+void G5Torsional(benchmark::State& state) {
+  Json params = TorsionalCoupling::info().example_params;
+  TorsionalCoupling plugin{ParamValues(params)};
+  auto model = plugin.time_domain();
+  SimulationSettings s;
+  s.duration_s = 0.5;
+  s.sample_rate_hz = 10000.0;
+  s.infeed_rate_m_per_s = 15e-6;
+  s.initial_waviness_m = 1e-6;
+  run(state, *model, s);
+}
+BENCHMARK(G5Torsional)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 BENCHMARK_MAIN();

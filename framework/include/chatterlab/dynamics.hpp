@@ -57,7 +57,8 @@ const char* to_string(Rotor rotor);
 struct ContactInput {
   double t_s = 0.0;
   std::span<const double> state;
-  double infeed_m = 0.0;  // commanded infeed u(t) (G1 U0)
+  double infeed_m = 0.0;             // commanded infeed u(t) (G1 U0)
+  double infeed_rate_m_per_s = 0.0;  // its rate du/dt
   // Per rotor (index by Rotor): speed [rpm] and the surface one revolution ago at the current
   // contact point [m of radius removed so far] (averaged over the contact arc when set); 0 for a
   // surface the model does not regenerate.

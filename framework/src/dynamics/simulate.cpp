@@ -181,6 +181,7 @@ class Engine {
     in.t_s = t;
     in.state = x;
     in.infeed_m = settings_.infeed_rate_m_per_s * t;
+    in.infeed_rate_m_per_s = settings_.infeed_rate_m_per_s;
     for (std::size_t r = 0; r < rotor_count; ++r) {
       in.speed_rpm[r] = rotor_rpm(r, t, x);
       in.angle_rad[r] = rotor_angle(r, t, x);
