@@ -4,6 +4,8 @@
 #   (finite growth, chatter frequency near the G8 map's 72-75 Hz, bounded displacement);
 # - studies/simulate_g7_sidebands.toml: the three largest spectral peaks are spaced by the wheel
 #   rotation frequency 1450/60 = 24.17 Hz within 0.1 Hz;
+# - studies/simulate_regeneration_dominance.toml: growth and frequency with both chains and with
+#   the wheel chain alone equal the rightmost roots of eq 2-16 (1 % / 0.5 %);
 # - bad input exits 2 with the limit named and nothing written: a run too long for its output
 #   rate, a model without a time-domain form.
 # Usage: simulate.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
@@ -36,6 +38,17 @@ peaks=$(grep -A1 '"frequency_hz"' "$out/summary.json" | grep -o '"frequency_hz":
 set -- $peaks
 close_to "$(awk -v a="$1" -v b="$2" 'BEGIN { print b - a }')" 24.1667 0.1 || fail "g7: sideband spacing $1 $2"
 close_to "$(awk -v a="$2" -v b="$3" 'BEGIN { print b - a }')" 24.1667 0.1 || fail "g7: sideband spacing $2 $3"
+
+# ---- wheel vs work regeneration: growth and frequency of both rows against the roots of eq 2-16
+# (4.790137 /s at 361.7148 Hz with both chains; 9.1746 /s at 409.281 Hz with the wheel alone)
+out=$work/dominance
+expect_exit 0 "$work/dominance" "$bin" run "$src/studies/simulate_regeneration_dominance.toml" --out "$out"
+growth=($(csv_column "$out/results.csv" fitted_growth_rate_per_s))
+freq=($(csv_column "$out/results.csv" dominant_frequency_hz))
+close_to "${growth[0]}" 4.790137 0.048 || fail "dominance: both chains growth ${growth[0]}"
+close_to "${freq[0]}" 361.7148 1.8 || fail "dominance: both chains frequency ${freq[0]}"
+close_to "${growth[1]}" 9.1746 0.092 || fail "dominance: wheel only growth ${growth[1]}"
+close_to "${freq[1]}" 409.281 2.0 || fail "dominance: wheel only frequency ${freq[1]}"
 
 # ---- bad input
 bad=$work/too_long.toml
