@@ -23,6 +23,7 @@
 #include "chatterlab/plugin_api.hpp"
 #include "chatterlab/roots.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "chatterlab/dynamics.hpp"
 #include "chatterlab/suppression.hpp"
 #include "study/source_map.hpp"
 
@@ -112,6 +113,29 @@ void check_characteristic(const Model& model) {
       << "E(" << found.root << ") = " << at_root.value;
 }
 
+// A model with a time-domain form (dynamics engine) runs a short simulation at its example
+// parameters: consistent sizes, finite outputs, a positive frequency scale.
+void check_time_domain(const Model& model) {
+  auto td = model.time_domain();
+  if (!td) return;
+  ASSERT_GT(td->state_size(), 0u);
+  ASSERT_TRUE(std::isfinite(td->highest_frequency_hz()) && td->highest_frequency_hz() > 0);
+  for (Rotor r : {Rotor::wheel, Rotor::work}) {
+    if (!td->angle_state(r)) {
+      EXPECT_GT(td->nominal_speed_rpm(r), 0.0) << to_string(r);
+    }
+  }
+  SimulationSettings settings;
+  settings.duration_s = 0.05;
+  settings.sample_rate_hz = 4000.0;
+  settings.infeed_rate_m_per_s = 1e-5;
+  SimulationResult result;
+  ASSERT_NO_THROW(result = simulate(*td, settings));
+  EXPECT_EQ(result.t_s.size(), 201u);
+  for (double x : result.displacement_m) ASSERT_TRUE(std::isfinite(x));
+  for (double f : result.force_n) ASSERT_TRUE(std::isfinite(f));
+}
+
 template <class Product, class Check>
 void check_registry(const Registry<Product>& registry, Check&& check_product) {
   for (const auto* entry : registry.sorted()) {
@@ -155,6 +179,7 @@ TEST_F(Conformance, EveryModel) {
   ASSERT_FALSE(model_registry().sorted().empty());
   check_registry(model_registry(), [](const Model& model) {
     check_characteristic(model);
+    check_time_domain(model);
     if (auto period = model.wheel_period_s()) {
       EXPECT_GT(*period, 0.0) << "wheel period";
     }

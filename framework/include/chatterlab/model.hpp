@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "chatterlab/characteristic.hpp"
+#include "chatterlab/dynamics.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
@@ -21,7 +22,9 @@ class Model {
   // rho = Tg Re(s) / 2 pi (MODELS.md G3).
   virtual std::optional<double> wheel_period_s() const { return std::nullopt; }
 
-  // The time-domain interface (states, surfaces, forces) arrives with the dynamics engine.
+  // Time-domain form (states, contact law, regenerated surfaces) for the dynamics engine
+  // (chatterlab/dynamics.hpp, study kind `simulate`), or null when the model has none.
+  virtual std::unique_ptr<TimeDomainModel> time_domain() const { return nullptr; }
 };
 
 }  // namespace chatterlab

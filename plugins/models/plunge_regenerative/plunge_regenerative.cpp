@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "models/model_params.hpp"
+#include "models/plunge_regenerative/plunge_time_domain.hpp"
 
 namespace chatterlab {
 
@@ -268,6 +269,10 @@ std::unique_ptr<CharacteristicFunction> PlungeRegenerative::characteristic() con
 
 std::optional<double> PlungeRegenerative::wheel_period_s() const {
   return 60.0 / parameters_.wheel_speed_rpm;
+}
+
+std::unique_ptr<TimeDomainModel> PlungeRegenerative::time_domain() const {
+  return std::make_unique<PlungeTimeDomain>(parameters_);
 }
 
 CHATTERLAB_REGISTER_MODEL(PlungeRegenerative);

@@ -1,0 +1,94 @@
+#include "dynamics/surface_memory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace chatterlab::dynamics_detail {
+
+namespace {
+constexpr std::size_t kMargin = 16;  // samples kept beyond one revolution (stencil + arc slack)
+}
+
+SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile)
+    : n_(samples_per_rev),
+      capacity_(samples_per_rev + kMargin),
+      spacing_(2.0 * std::numbers::pi / static_cast<double>(samples_per_rev)),
+      initial_(std::move(initial_profile)),
+      ring_(capacity_, 0.0),
+      ring_integral_(capacity_, 0.0) {
+  if (n_ < 16) throw std::logic_error("SurfaceMemory: fewer than 16 samples per revolution");
+  if (initial_.empty()) initial_.assign(n_, 0.0);
+  if (initial_.size() != n_) throw std::logic_error("SurfaceMemory: initial profile size");
+  initial_integral_.assign(2 * n_, 0.0);  // k = -2n .. -1
+  const auto n = static_cast<std::int64_t>(n_);
+  for (std::int64_t k = -2 * n + 1; k < 0; ++k) {
+    const auto i = static_cast<std::size_t>(k + 2 * n);
+    initial_integral_[i] = initial_integral_[i - 1] + 0.5 * spacing_ * (value(k - 1) + value(k));
+  }
+}
+
+std::size_t SurfaceMemory::slot(std::int64_t k) const {
+  return static_cast<std::size_t>(k % static_cast<std::int64_t>(capacity_));
+}
+
+double SurfaceMemory::value(std::int64_t k) const {
+  if (k < 0) {
+    const auto n = static_cast<std::int64_t>(n_);
+    return initial_[static_cast<std::size_t>(((k % n) + n) % n)];
+  }
+  return ring_[slot(k)];
+}
+
+double SurfaceMemory::integral(std::int64_t k) const {
+  const auto n = static_cast<std::int64_t>(n_);
+  if (k < 0) return initial_integral_[static_cast<std::size_t>(std::max<std::int64_t>(k + 2 * n, 0))];
+  return ring_integral_[slot(k)];
+}
+
+void SurfaceMemory::push(double v) {
+  const double integral_new = integral(next_ - 1) + 0.5 * spacing_ * (value(next_ - 1) + v);
+  ring_[slot(next_)] = v;
+  ring_integral_[slot(next_)] = integral_new;
+  ++next_;
+}
+
+double SurfaceMemory::interpolate(double theta, bool of_integral) const {
+  const double x = theta / spacing_;
+  const double fl = std::floor(x);
+  const double u = x - fl;
+  auto i = static_cast<std::int64_t>(fl);
+  const std::int64_t last = next_ - 1;  // newest written index (initial profile if none)
+  // Never read past the newest sample: the stencil is shifted back (an extrapolation of at most
+  // a sample or two, which only a step longer than a revolution could ask for).
+  const std::int64_t shift = std::max<std::int64_t>(0, i + 2 - std::max<std::int64_t>(last, -1));
+  auto sample = [&](std::int64_t k) { return of_integral ? integral(k) : value(k); };
+  if (shift > 0) {
+    const std::int64_t j = i - shift;
+    const double v = u + static_cast<double>(shift);
+    // cubic through j-1..j+2 evaluated at offset v from j
+    const double w0 = -v * (v - 1.0) * (v - 2.0) / 6.0, w1 = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0,
+                 w2 = -(v + 1.0) * v * (v - 2.0) / 2.0, w3 = (v + 1.0) * v * (v - 1.0) / 6.0;
+    return w0 * sample(j - 1) + w1 * sample(j) + w2 * sample(j + 1) + w3 * sample(j + 2);
+  }
+  const double w0 = -u * (u - 1.0) * (u - 2.0) / 6.0, w1 = (u + 1.0) * (u - 1.0) * (u - 2.0) / 2.0,
+               w2 = -(u + 1.0) * u * (u - 2.0) / 2.0, w3 = (u + 1.0) * u * (u - 1.0) / 6.0;
+  return w0 * sample(i - 1) + w1 * sample(i) + w2 * sample(i + 1) + w3 * sample(i + 2);
+}
+
+double SurfaceMemory::at(double theta) const { return interpolate(theta, false); }
+
+double SurfaceMemory::mean(double theta, double arc) const {
+  if (arc <= 0.0) return at(theta);
+  return (interpolate(theta + 0.5 * arc, true) - interpolate(theta - 0.5 * arc, true)) / arc;
+}
+
+std::vector<double> SurfaceMemory::last_revolution() const {
+  std::vector<double> out(n_);
+  const auto n = static_cast<std::int64_t>(n_);
+  for (std::int64_t k = next_ - n; k < next_; ++k) out[static_cast<std::size_t>(((k % n) + n) % n)] = value(k);
+  return out;
+}
+
+}  // namespace chatterlab::dynamics_detail

@@ -1,0 +1,51 @@
+#pragma once
+// Angle-indexed memory of one regenerated surface (wheel or work): samples at the cumulative
+// rotation angles k * 2 pi / n (k = 0, 1, ...), written as the contact point passes them, read
+// "one revolution ago" at any angle by cubic Lagrange interpolation. Indices k < 0 are the
+// surface before the run (the initial profile, periodic). A ring of n + margin samples is
+// enough: reads never reach further back than one revolution and a few samples.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace chatterlab::dynamics_detail {
+
+class SurfaceMemory {
+ public:
+  // samples_per_rev >= 16; initial_profile empty (a flat surface) or of size samples_per_rev.
+  SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile);
+
+  std::size_t samples_per_rev() const { return n_; }
+  double spacing_rad() const { return spacing_; }
+  std::int64_t next_index() const { return next_; }
+
+  // The sample at index k (k < next_index(), and not older than one revolution + margin).
+  double value(std::int64_t k) const;
+  // Appends the sample of index next_index().
+  void push(double value);
+
+  // Surface at cumulative angle theta [rad] (theta <= the last written angle; interpolation
+  // needs one sample beyond the interval, clamped to the last written one at the front).
+  double at(double theta_rad) const;
+  // Mean of the surface over [theta - arc/2, theta + arc/2] (geometric filtering), from the
+  // running integral of the samples; arc = 0 gives at(theta).
+  double mean(double theta_rad, double arc_rad) const;
+
+  // The surface over the last revolution: samples k = next - n .. next - 1 by body angle
+  // (k mod n) * spacing, returned in body-angle order 0 .. n - 1.
+  std::vector<double> last_revolution() const;
+
+ private:
+  double integral(std::int64_t k) const;  // trapezoid integral of the samples from k = -2n
+  double interpolate(double theta_rad, bool of_integral) const;
+  std::size_t slot(std::int64_t k) const;
+
+  std::size_t n_, capacity_;
+  double spacing_;
+  std::int64_t next_ = 0;
+  std::vector<double> initial_;           // n samples, body angle order
+  std::vector<double> initial_integral_;  // integral at k = -2n .. 0
+  std::vector<double> ring_, ring_integral_;
+};
+
+}  // namespace chatterlab::dynamics_detail

@@ -1,0 +1,117 @@
+#include "models/amplitude_modulated/amplitude_modulated.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "models/model_params.hpp"
+
+namespace chatterlab {
+
+using model_params::positive;
+
+AmplitudeModulatedTimeDomain::AmplitudeModulatedTimeDomain(const AmplitudeModulatedParameters& p)
+    : p_(p), omega_(2.0 * std::numbers::pi * p.frequency_hz) {}
+
+void AmplitudeModulatedTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+  x[0] = d.displacement_m;
+  x[1] = d.velocity_m_per_s;
+}
+
+void AmplitudeModulatedTimeDomain::state_scales(double displacement_m, std::span<double> scales) const {
+  scales[0] = displacement_m;
+  scales[1] = displacement_m * omega_;
+}
+
+double AmplitudeModulatedTimeDomain::highest_frequency_hz() const {
+  // Stiffened by at most the series grinding/contact stiffness at full modulation; sidebands add
+  // a few wheel rotation frequencies.
+  const double g = p_.grinding_stiffness_n_per_m * (1.0 + p_.modulation_depth);
+  const double series = g / (1.0 + g / p_.contact_stiffness_n_per_m);
+  return 1.5 * p_.frequency_hz * std::sqrt(1.0 + series / p_.stiffness_n_per_m) + 4.0 * p_.wheel_speed_rpm / 60.0;
+}
+
+double AmplitudeModulatedTimeDomain::nominal_speed_rpm(Rotor rotor) const {
+  return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
+}
+
+void AmplitudeModulatedTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
+  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
+  const double g = p_.grinding_stiffness_n_per_m * (1.0 + p_.modulation_depth * std::sin(in.angle_rad[wheel]));
+  const double x1 = in.state[0];
+  const double delayed = in.previous_surface_m[wheel];  // x(t - Tg)
+  const double force = -g * (x1 - p_.overlap_factor * delayed) / (1.0 + g / p_.contact_stiffness_n_per_m);
+  const double x = x1 + force / p_.contact_stiffness_n_per_m;
+  out.penetration_m = 1.0;  // linear perturbation model: always in contact
+  out.normal_force_n = force;
+  out.depth_of_cut_m = x - p_.overlap_factor * delayed;
+  // The stored wheel surface is x(t): the increment over one revolution ago.
+  out.removed_m[wheel] = x - delayed;
+}
+
+void AmplitudeModulatedTimeDomain::derivatives(const ContactInput& in, const ContactOutput& contact,
+                                               std::span<double> dx) const {
+  dx[0] = in.state[1];
+  dx[1] = omega_ * omega_ * (contact.normal_force_n / p_.stiffness_n_per_m - in.state[0]) -
+          2.0 * p_.damping_ratio * omega_ * in.state[1];
+}
+
+namespace {
+AmplitudeModulatedParameters read(const ParamValues& v) {
+  AmplitudeModulatedParameters p;
+  p.frequency_hz = v.real("frequency_hz");
+  p.damping_ratio = v.real("damping_ratio");
+  p.stiffness_n_per_m = v.real("stiffness_n_per_m");
+  p.grinding_stiffness_n_per_m = v.real("grinding_stiffness_n_per_m");
+  p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
+  p.overlap_factor = v.real("overlap_factor");
+  p.modulation_depth = v.real("modulation_depth");
+  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
+  p.work_speed_rpm = v.real("work_speed_rpm");
+  return p;
+}
+}  // namespace
+
+AmplitudeModulated::AmplitudeModulated(const ParamValues& values) : p_(read(values)) {}
+
+PluginInfo AmplitudeModulated::info() {
+  ParamSpec damping = param_spec("damping_ratio", ValueKind::real, "1", "structural damping ratio zeta");
+  damping.min = 0.0;
+  damping.max = 1.0;
+  damping.max_exclusive = true;
+  ParamSpec overlap = param_spec("overlap_factor", ValueKind::real, "1",
+                                 "overlap factor mu: share of the previous wheel surface seen again");
+  overlap.default_value = 1.0;
+  overlap.min = 0.0;
+  overlap.max = 1.0;
+  ParamSpec depth = param_spec("modulation_depth", ValueKind::real, "1",
+                               "modulation depth Q of the grinding stiffness per wheel revolution");
+  depth.min = 0.0;
+  depth.max = 1.0;
+  depth.max_exclusive = true;
+  ParamSpec work = positive("work_speed_rpm", "rpm", "workpiece speed (reported; not regenerated here)");
+  work.default_value = 55.0;
+  PluginInfo info;
+  info.name = "amplitude_modulated";
+  info.description = "wheel-regenerative chatter with the grinding stiffness modulated once per "
+                     "wheel revolution (G7, eqs 3-9..3-20): beats, sidebands at +/- k n_g/60";
+  info.params = {positive("frequency_hz", "Hz", "structural natural frequency"),
+                 damping,
+                 positive("stiffness_n_per_m", "N/m", "structural stiffness k"),
+                 positive("grinding_stiffness_n_per_m", "N/m", "grinding stiffness kg b (times width)"),
+                 positive("contact_stiffness_n_per_m", "N/m", "contact stiffness kc b (times width)"),
+                 overlap,
+                 depth,
+                 positive("wheel_speed_rpm", "rpm", "wheel speed n_g; w0 = 2 pi n_g / 60"),
+                 work};
+  info.thread_safety = ThreadSafety::shareable;
+  info.models_md_ids = "G7";
+  info.example_params = Json::parse(R"({
+      "frequency_hz": 800.0, "damping_ratio": 0.05, "stiffness_n_per_m": 5.0e7,
+      "grinding_stiffness_n_per_m": 5.0e6, "contact_stiffness_n_per_m": 1.0e8,
+      "modulation_depth": 0.3, "wheel_speed_rpm": 1450.0 })");
+  return info;
+}
+
+CHATTERLAB_REGISTER_MODEL(AmplitudeModulated);
+
+}  // namespace chatterlab

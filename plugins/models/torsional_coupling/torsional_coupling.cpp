@@ -1,0 +1,185 @@
+#include "models/torsional_coupling/torsional_coupling.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "models/model_params.hpp"
+
+namespace chatterlab {
+
+using model_params::positive;
+
+namespace {
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double rpm_per_rad_s = 60.0 / kTwoPi;
+constexpr double stall_fraction = 0.01;  // below 1 % of the nominal wheel speed: force law off
+}  // namespace
+
+TorsionalCouplingTimeDomain::TorsionalCouplingTimeDomain(const TorsionalCouplingParameters& p)
+    : p_(p),
+      lambda_ratio_(p.work_radius_m * p.work_speed_rpm /
+                    (p.grinding_ratio * p.wheel_radius_m * p.wheel_speed_rpm)),
+      cos_alpha_(std::cos(p.force_angle_deg * std::numbers::pi / 180.0)),
+      sin_alpha_(std::sin(p.force_angle_deg * std::numbers::pi / 180.0)),
+      lowest_wheel_rpm_(p.wheel_speed_rpm) {}
+
+void TorsionalCouplingTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+  std::fill(x.begin(), x.end(), 0.0);
+  x[0] = d.displacement_m;
+  x[1] = d.velocity_m_per_s;
+}
+
+void TorsionalCouplingTimeDomain::state_scales(double displacement_m, std::span<double> s) const {
+  const double w = kTwoPi * highest_frequency_hz();
+  s[0] = displacement_m;
+  s[1] = displacement_m * w;
+  // Torsion angles ~ displacement over radius; rotation angles ~ 1 rad.
+  s[2] = displacement_m / p_.work_radius_m;
+  s[3] = s[2] * w;
+  s[4] = displacement_m / p_.wheel_radius_m;
+  s[5] = s[4] * w;
+  s[6] = s[7] = 1.0;
+}
+
+double TorsionalCouplingTimeDomain::highest_frequency_hz() const {
+  const double contact = p_.removal_coefficient_n_per_m2 * p_.grinding_width_m / (1.0 + lambda_ratio_);
+  const double transverse = std::sqrt((p_.stiffness_n_per_m + contact) / p_.mass_kg);
+  const double work = std::sqrt((p_.work_torsional_stiffness_n_m + contact * p_.work_radius_m * p_.work_radius_m) /
+                                p_.work_inertia_kg_m2);
+  const double wheel = std::sqrt((p_.wheel_torsional_stiffness_n_m + contact * p_.wheel_radius_m * p_.wheel_radius_m) /
+                                 p_.wheel_inertia_kg_m2);
+  return 1.5 * std::max({transverse, work, wheel}) / kTwoPi;
+}
+
+double TorsionalCouplingTimeDomain::nominal_speed_rpm(Rotor rotor) const {
+  return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
+}
+
+double TorsionalCouplingTimeDomain::speed_rpm_from_state(Rotor rotor, std::span<const double> s) const {
+  return rotor == Rotor::wheel ? p_.wheel_speed_rpm + s[5] * rpm_per_rad_s : p_.work_speed_rpm + s[3] * rpm_per_rad_s;
+}
+
+void TorsionalCouplingTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
+  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
+  const double interference = in.state[0] - in.previous_surface_m[work] - in.previous_surface_m[wheel];
+  const double delta_w = interference / (1.0 + lambda_ratio_);
+  const double delta_g = delta_w * lambda_ratio_;
+  const double work_rpm = in.speed_rpm[work], wheel_rpm = in.speed_rpm[wheel];
+  double force = p_.removal_coefficient_n_per_m2 * p_.grinding_width_m * delta_w;
+  if (wheel_rpm < lowest_wheel_rpm_) lowest_wheel_rpm_ = wheel_rpm;
+  if (wheel_rpm <= stall_fraction * p_.wheel_speed_rpm) {
+    // F ~ v_w / v_g: singular as the wheel stops. No grinding without wheel speed: force off.
+    if (stalled_since_s_ < 0.0) stalled_since_s_ = in.t_s;
+    force = 0.0;
+  } else {
+    force *= std::max(work_rpm, 0.0) / p_.work_speed_rpm * p_.wheel_speed_rpm / wheel_rpm;
+  }
+  out.penetration_m = interference;
+  out.normal_force_n = force;
+  out.tangential_force_n = force * sin_alpha_;
+  out.depth_of_cut_m = delta_w;
+  out.removed_m[work] = delta_w;
+  out.removed_m[wheel] = delta_g;
+}
+
+void TorsionalCouplingTimeDomain::derivatives(const ContactInput& in, const ContactOutput& c,
+                                              std::span<double> dx) const {
+  const auto& s = in.state;
+  const double infeed_rate = in.infeed_rate_m_per_s;
+  const double f = c.normal_force_n;
+  dx[0] = s[1];
+  dx[1] = (-f * cos_alpha_ - p_.damping_n_s_per_m * (s[1] - infeed_rate) - p_.stiffness_n_per_m * (s[0] - in.infeed_m)) / p_.mass_kg;
+  dx[2] = s[3];
+  dx[3] = (-f * p_.work_radius_m * sin_alpha_ - p_.work_torsional_damping_n_m_s * s[3] -
+           p_.work_torsional_stiffness_n_m * s[2]) / p_.work_inertia_kg_m2;
+  dx[4] = s[5];
+  dx[5] = (-f * p_.wheel_radius_m * sin_alpha_ - p_.wheel_torsional_damping_n_m_s * s[5] -
+           p_.wheel_torsional_stiffness_n_m * s[4]) / p_.wheel_inertia_kg_m2;
+  // Rotation angles: nominal speed plus torsional velocity; never backwards (a reversing body
+  // would regrind its surface the wrong way: documented limit).
+  dx[6] = std::max(kTwoPi * p_.work_speed_rpm / 60.0 + s[3], 0.0);
+  dx[7] = std::max(kTwoPi * p_.wheel_speed_rpm / 60.0 + s[5], 0.0);
+}
+
+std::vector<std::string> TorsionalCouplingTimeDomain::diagnostics() const {
+  std::vector<std::string> out;
+  if (stalled_since_s_ >= 0.0)
+    out.push_back(fmt::format("wheel speed fell below {} % of nominal ({:.4g} rpm) at t = {:.6g} s: the force "
+                              "law (F ~ 1/v_g) is singular there, force set to zero while stalled; lowest "
+                              "wheel speed {:.4g} rpm",
+                              100.0 * stall_fraction, stall_fraction * p_.wheel_speed_rpm, stalled_since_s_,
+                              lowest_wheel_rpm_));
+  return out;
+}
+
+namespace {
+TorsionalCouplingParameters read(const ParamValues& v) {
+  TorsionalCouplingParameters p;
+  p.mass_kg = v.real("mass_kg");
+  p.damping_n_s_per_m = v.real("damping_n_s_per_m");
+  p.stiffness_n_per_m = v.real("stiffness_n_per_m");
+  p.work_inertia_kg_m2 = v.real("work_inertia_kg_m2");
+  p.work_torsional_damping_n_m_s = v.real("work_torsional_damping_n_m_s");
+  p.work_torsional_stiffness_n_m = v.real("work_torsional_stiffness_n_m");
+  p.wheel_inertia_kg_m2 = v.real("wheel_inertia_kg_m2");
+  p.wheel_torsional_damping_n_m_s = v.real("wheel_torsional_damping_n_m_s");
+  p.wheel_torsional_stiffness_n_m = v.real("wheel_torsional_stiffness_n_m");
+  p.work_radius_m = v.real("work_radius_m");
+  p.wheel_radius_m = v.real("wheel_radius_m");
+  p.work_speed_rpm = v.real("work_speed_rpm");
+  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
+  p.grinding_width_m = v.real("grinding_width_m");
+  p.removal_coefficient_n_per_m2 = v.real("removal_coefficient_n_per_m2");
+  p.grinding_ratio = v.real("grinding_ratio");
+  p.force_angle_deg = v.real("force_angle_deg");
+  return p;
+}
+}  // namespace
+
+TorsionalCoupling::TorsionalCoupling(const ParamValues& values) : p_(read(values)) {}
+
+PluginInfo TorsionalCoupling::info() {
+  ParamSpec angle = param_spec("force_angle_deg", ValueKind::real, "deg",
+                               "angle alpha of the grinding force from the normal (torque arm: sin alpha)");
+  angle.min = 0.0;
+  angle.max = 90.0;
+  angle.max_exclusive = true;
+  PluginInfo info;
+  info.name = "torsional_coupling";
+  info.description = "transverse, workpiece-torsion and wheel-torsion modes coupled by a "
+                     "speed-dependent grinding force (G5, eqs 2-79..2-87)";
+  info.params = {positive("mass_kg", "kg", "transverse (wheel-head) mass m"),
+                 positive("damping_n_s_per_m", "N s/m", "transverse damping c"),
+                 positive("stiffness_n_per_m", "N/m", "transverse stiffness k"),
+                 positive("work_inertia_kg_m2", "kg m^2", "workpiece + drive inertia Iw"),
+                 positive("work_torsional_damping_n_m_s", "N m s/rad", "workpiece torsional damping cw"),
+                 positive("work_torsional_stiffness_n_m", "N m/rad", "workpiece drive torsional stiffness kw"),
+                 positive("wheel_inertia_kg_m2", "kg m^2", "wheel + spindle inertia Ig"),
+                 positive("wheel_torsional_damping_n_m_s", "N m s/rad", "wheel torsional damping cg"),
+                 positive("wheel_torsional_stiffness_n_m", "N m/rad", "wheel spindle torsional stiffness kg"),
+                 positive("work_radius_m", "m", "workpiece radius Rw0"),
+                 positive("wheel_radius_m", "m", "wheel radius Rg0"),
+                 positive("work_speed_rpm", "rpm", "nominal workpiece speed n_w"),
+                 positive("wheel_speed_rpm", "rpm", "nominal wheel speed n_g"),
+                 positive("grinding_width_m", "m", "grinding width b"),
+                 positive("removal_coefficient_n_per_m2", "N/m^2", "lambda_w: force per width per work depth of cut"),
+                 positive("grinding_ratio", "1", "grinding ratio Gr (work volume / wheel volume removed)"),
+                 angle};
+  info.thread_safety = ThreadSafety::shareable;  // time-domain instances are per simulation
+  info.models_md_ids = "G5";
+  info.example_params = Json::parse(R"({
+      "mass_kg": 50.0, "damping_n_s_per_m": 8000.0, "stiffness_n_per_m": 5.0e7,
+      "work_inertia_kg_m2": 0.05, "work_torsional_damping_n_m_s": 2.0, "work_torsional_stiffness_n_m": 2.0e4,
+      "wheel_inertia_kg_m2": 0.3, "wheel_torsional_damping_n_m_s": 5.0, "wheel_torsional_stiffness_n_m": 5.0e4,
+      "work_radius_m": 0.05, "wheel_radius_m": 0.2, "work_speed_rpm": 55.0, "wheel_speed_rpm": 1450.0,
+      "grinding_width_m": 0.035, "removal_coefficient_n_per_m2": 1.5e9, "grinding_ratio": 30.0,
+      "force_angle_deg": 20.0 })");
+  return info;
+}
+
+CHATTERLAB_REGISTER_MODEL(TorsionalCoupling);
+
+}  // namespace chatterlab

@@ -1,0 +1,119 @@
+#include "models/unbalance_two_dof/unbalance_two_dof.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "models/model_params.hpp"
+
+namespace chatterlab {
+
+using model_params::positive;
+
+void UnbalanceTwoDofTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+  x[0] = d.displacement_m;
+  x[1] = d.velocity_m_per_s;
+  x[2] = 0.0;
+  x[3] = 0.0;
+}
+
+void UnbalanceTwoDofTimeDomain::state_scales(double displacement_m, std::span<double> scales) const {
+  const double w = 2.0 * std::numbers::pi * highest_frequency_hz();
+  // The forced amplitude U w^2 / k sets the scale when it exceeds the disturbance.
+  const double w_g = 2.0 * std::numbers::pi * p_.wheel_speed_rpm / 60.0;
+  const double d = std::max(displacement_m, p_.unbalance_kg_m * w_g * w_g /
+                                                (p_.coupling_stiffness() + p_.stiffness_1_n_per_m));
+  scales[0] = scales[2] = d;
+  scales[1] = scales[3] = d * w;
+}
+
+double UnbalanceTwoDofTimeDomain::highest_frequency_hz() const {
+  const double k = p_.coupling_stiffness();
+  const double w1 = std::sqrt((k + p_.stiffness_1_n_per_m) / p_.mass_1_kg);
+  const double w2 = std::sqrt((k + p_.stiffness_2_n_per_m) / p_.mass_2_kg);
+  // The coupled frequencies lie below sqrt(w1^2 + w2^2); the forcing is at the wheel speed.
+  return 1.5 * std::max(std::hypot(w1, w2) / (2.0 * std::numbers::pi), p_.wheel_speed_rpm / 60.0);
+}
+
+double UnbalanceTwoDofTimeDomain::nominal_speed_rpm(Rotor rotor) const {
+  return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
+}
+
+void UnbalanceTwoDofTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
+  constexpr auto work = static_cast<std::size_t>(Rotor::work);
+  const double relative = in.state[0] + in.state[2];
+  out.penetration_m = 1.0;  // linear model: always in contact
+  out.normal_force_n = p_.coupling_stiffness() * relative;  // force through the contact spring
+  out.depth_of_cut_m = relative;
+  // The work surface keeps a copy of the relative motion: increment over one revolution ago.
+  out.removed_m[work] = relative - in.previous_surface_m[work];
+}
+
+void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const ContactOutput&,
+                                            std::span<double> dx) const {
+  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
+  const double w = 2.0 * std::numbers::pi * in.speed_rpm[wheel] / 60.0;
+  const double force = p_.unbalance_kg_m * w * w * std::cos(in.angle_rad[wheel]);
+  const double k = p_.coupling_stiffness();
+  const double x1 = in.state[0], v1 = in.state[1], x2 = in.state[2], v2 = in.state[3];
+  dx[0] = v1;
+  dx[1] = (force - p_.damping_1_n_s_per_m * v1 - (k + p_.stiffness_1_n_per_m) * x1 - k * x2) / p_.mass_1_kg;
+  dx[2] = v2;
+  dx[3] = (-p_.damping_2_n_s_per_m * v2 - (k + p_.stiffness_2_n_per_m) * x2 - k * x1) / p_.mass_2_kg;
+}
+
+namespace {
+UnbalanceTwoDofParameters read(const ParamValues& v) {
+  UnbalanceTwoDofParameters p;
+  p.mass_1_kg = v.real("mass_1_kg");
+  p.damping_1_n_s_per_m = v.real("damping_1_n_s_per_m");
+  p.stiffness_1_n_per_m = v.real("stiffness_1_n_per_m");
+  p.mass_2_kg = v.real("mass_2_kg");
+  p.damping_2_n_s_per_m = v.real("damping_2_n_s_per_m");
+  p.stiffness_2_n_per_m = v.real("stiffness_2_n_per_m");
+  p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
+  p.wheel_wear_stiffness_n_per_m = v.real("wheel_wear_stiffness_n_per_m");
+  p.unbalance_kg_m = v.real("unbalance_kg_m");
+  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
+  p.work_speed_rpm = v.real("work_speed_rpm");
+  return p;
+}
+
+ParamSpec non_negative(std::string key, std::string unit, std::string description) {
+  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
+  spec.min = 0.0;
+  return spec;
+}
+}  // namespace
+
+UnbalanceTwoDof::UnbalanceTwoDof(const ParamValues& values) : p_(read(values)) {}
+
+PluginInfo UnbalanceTwoDof::info() {
+  PluginInfo info;
+  info.name = "unbalance_two_dof";
+  info.description = "two-DOF wheel/work system forced by wheel unbalance U w^2 cos wt (G6, eqs "
+                     "3-1..3-6): forced response, Z = n_g/n_w lobes on the work";
+  info.params = {positive("mass_1_kg", "kg", "wheel-side mass m1"),
+                 non_negative("damping_1_n_s_per_m", "N s/m", "wheel-side damping c1"),
+                 positive("stiffness_1_n_per_m", "N/m", "wheel-side support stiffness k1"),
+                 positive("mass_2_kg", "kg", "work-side mass m2"),
+                 non_negative("damping_2_n_s_per_m", "N s/m", "work-side damping c2"),
+                 positive("stiffness_2_n_per_m", "N/m", "work-side support stiffness k2"),
+                 positive("contact_stiffness_n_per_m", "N/m", "contact stiffness kc"),
+                 positive("wheel_wear_stiffness_n_per_m", "N/m", "wheel stiffness kg; k = kc kg/(kc + kg)"),
+                 non_negative("unbalance_kg_m", "kg m", "wheel unbalance U (mass times eccentricity)"),
+                 positive("wheel_speed_rpm", "rpm", "wheel speed n_g (forcing frequency w = 2 pi n_g/60)"),
+                 positive("work_speed_rpm", "rpm", "work speed n_w (lobes Z = n_g/n_w)")};
+  info.thread_safety = ThreadSafety::shareable;
+  info.models_md_ids = "G6";
+  info.example_params = Json::parse(R"({
+      "mass_1_kg": 60.0, "damping_1_n_s_per_m": 6000.0, "stiffness_1_n_per_m": 5.0e7,
+      "mass_2_kg": 20.0, "damping_2_n_s_per_m": 3000.0, "stiffness_2_n_per_m": 3.0e7,
+      "contact_stiffness_n_per_m": 1.0e8, "wheel_wear_stiffness_n_per_m": 1.0e9,
+      "unbalance_kg_m": 1.0e-4, "wheel_speed_rpm": 1450.0, "work_speed_rpm": 55.0 })");
+  return info;
+}
+
+CHATTERLAB_REGISTER_MODEL(UnbalanceTwoDof);
+
+}  // namespace chatterlab

@@ -1,0 +1,100 @@
+// Known answers for unbalance_two_dof (MODELS.md G6): the simulated steady forced response
+// against the exact steady state of the linear two-DOF system (a 2x2 complex solve here), and
+// Z = n_g / n_w lobes per revolution on the work surface.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "chatterlab/dynamics.hpp"
+#include "chatterlab/spectrum.hpp"
+#include "models/unbalance_two_dof/unbalance_two_dof.hpp"
+
+namespace chatterlab {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+UnbalanceTwoDofParameters example() {
+  UnbalanceTwoDofParameters p;
+  p.mass_1_kg = 60.0;
+  p.damping_1_n_s_per_m = 6000.0;
+  p.stiffness_1_n_per_m = 5e7;
+  p.mass_2_kg = 20.0;
+  p.damping_2_n_s_per_m = 3000.0;
+  p.stiffness_2_n_per_m = 3e7;
+  p.contact_stiffness_n_per_m = 1e8;
+  p.wheel_wear_stiffness_n_per_m = 1e9;
+  p.unbalance_kg_m = 1e-4;
+  p.wheel_speed_rpm = 1450.0;
+  p.work_speed_rpm = 55.0;
+  return p;
+}
+
+// Exact steady state: [K - w^2 M + i w C] X = [U w^2, 0] (Cramer's rule), relative X1 + X2.
+std::complex<double> exact_relative_amplitude(const UnbalanceTwoDofParameters& p) {
+  using C = std::complex<double>;
+  const double w = kTwoPi * p.wheel_speed_rpm / 60.0, k = p.coupling_stiffness();
+  const C a11(k + p.stiffness_1_n_per_m - p.mass_1_kg * w * w, w * p.damping_1_n_s_per_m);
+  const C a22(k + p.stiffness_2_n_per_m - p.mass_2_kg * w * w, w * p.damping_2_n_s_per_m);
+  const C a12 = k, a21 = k;
+  const C f = p.unbalance_kg_m * w * w;
+  const C det = a11 * a22 - a12 * a21;
+  const C x1 = f * a22 / det, x2 = -a21 * f / det;
+  return x1 + x2;
+}
+
+SimulationResult run(const UnbalanceTwoDofParameters& p, double duration_s) {
+  UnbalanceTwoDofTimeDomain model(p);
+  SimulationSettings s;
+  s.duration_s = duration_s;
+  s.sample_rate_hz = 20000.0;
+  s.disturbance = {0.0, 0.0};
+  s.one_sided_contact = false;
+  s.snapshot_times_s = {duration_s};
+  return simulate(model, s);
+}
+
+TEST(UnbalanceTwoDof, SteadyForcedResponseMatchesTheExactTwoByTwoSolution) {
+  const auto p = example();
+  const SimulationResult r = run(p, 2.2);
+  ASSERT_EQ(r.status, "completed");
+  // Least-squares fit of a cos wt + b sin wt over the last second (transients decayed: the
+  // slowest mode decays at ~ c/(2m) = 50 /s).
+  const double w = kTwoPi * p.wheel_speed_rpm / 60.0;
+  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+    if (r.t_s[i] < 1.2) continue;
+    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
+    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
+  }
+  const double det = cc * ss - cs * cs;
+  const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
+  const std::complex<double> exact = exact_relative_amplitude(p);
+  // x = Re(X e^{iwt}) = Re X cos wt - Im X sin wt
+  EXPECT_NEAR(std::hypot(a, b), std::abs(exact), 1e-4 * std::abs(exact));
+  EXPECT_NEAR(a, exact.real(), 1e-3 * std::abs(exact));
+  EXPECT_NEAR(b, -exact.imag(), 1e-3 * std::abs(exact));
+}
+
+TEST(UnbalanceTwoDof, WorkSurfaceCarriesWheelOverWorkSpeedLobes) {
+  const auto p = example();
+  const SimulationResult r = run(p, 2.5);
+  ASSERT_EQ(r.snapshots.size(), 1u);
+  const auto& profile = r.snapshots[0].surface_m[static_cast<std::size_t>(Rotor::work)];
+  // Spectrum over angle: sample rate = samples per revolution, so frequencies read as
+  // undulations per revolution.
+  Spectrum s = amplitude_spectrum(profile, static_cast<double>(profile.size()));
+  auto peak = find_peaks(s, 1);
+  ASSERT_EQ(peak.size(), 1u);
+  const double z = p.wheel_speed_rpm / p.work_speed_rpm;  // 26.36 lobes
+  EXPECT_NEAR(peak[0].frequency_hz, z, 0.5);
+  // The lobes' height is the forced amplitude.
+  const auto [lo, hi] = std::minmax_element(profile.begin(), profile.end());
+  EXPECT_NEAR(0.5 * (*hi - *lo), std::abs(exact_relative_amplitude(p)), 0.02 * std::abs(exact_relative_amplitude(p)));
+}
+
+}  // namespace
+}  // namespace chatterlab

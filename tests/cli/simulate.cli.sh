@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The `simulate` study kind end to end (dynamics engine, MODELS.md G1, G7):
+# - studies/simulate_g8_chatter.toml: exit 0, every output file and plot, numbers in range
+#   (finite growth, chatter frequency near the G8 map's 72-75 Hz, bounded displacement);
+# - studies/simulate_g7_sidebands.toml: the three largest spectral peaks are spaced by the wheel
+#   rotation frequency 1450/60 = 24.17 Hz within 0.1 Hz;
+# - studies/simulate_regeneration_dominance.toml: growth and frequency with both chains and with
+#   the wheel chain alone equal the rightmost roots of eq 2-16 (1 % / 0.5 %);
+# - bad input exits 2 with the limit named and nothing written: a run too long for its output
+#   rate, a model without a time-domain form.
+# Usage: simulate.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
+source "$(dirname "$0")/lib.sh"
+bin=$1 work=$2 src=$3
+rm -rf "$work" && mkdir -p "$work"
+
+# ---- G8 chatter
+out=$work/g8
+expect_exit 0 "$work/g8" "$bin" run "$src/studies/simulate_g8_chatter.toml" --out "$out"
+for f in timeseries.csv spectrum.csv surfaces_00.csv surfaces_01.csv summary.json results.csv; do
+  [ -s "$out/$f" ] || fail "g8: $f missing"
+done
+expect_plots "$out" timeseries force envelope_fit spectrum work_surface wheel_surface
+[ "$(csv_column "$out/results.csv" status)" = "ok" ] || fail "g8: status not ok"
+f=$(csv_column "$out/results.csv" dominant_frequency_hz)
+close_to "$f" 73 5 || fail "g8: dominant frequency $f Hz, expected ~73 Hz (the map's chatter mode)"
+x=$(csv_column "$out/results.csv" max_displacement_m)
+close_to "$x" 1.5e-5 1e-5 || fail "g8: max displacement $x m out of range"
+head -n 1 "$out/timeseries.csv" | grep -q "^t_s,displacement_m,force_n,depth_of_cut_m" || fail "g8: timeseries header"
+grep -q '"fitted_growth_rate_per_s": -\?[0-9]' "$out/summary.json" || fail "g8: no fitted growth rate"
+grep -q '"dominant_frequency_hz": [0-9]' "$out/summary.json" || fail "g8: no dominant frequency"
+if tail -n +2 "$out/timeseries.csv" | grep -qiE '(^|,)-?(nan|inf)'; then fail "g8: non-finite values in timeseries.csv"; fi
+
+# ---- G7 sidebands
+out=$work/g7
+expect_exit 0 "$work/g7" "$bin" run "$src/studies/simulate_g7_sidebands.toml" --out "$out"
+peaks=$(grep -A1 '"frequency_hz"' "$out/summary.json" | grep -o '"frequency_hz": [0-9.e+-]*' | head -n 3 |
+        sed 's/.*: //' | sort -g | tr '\n' ' ')
+set -- $peaks
+close_to "$(awk -v a="$1" -v b="$2" 'BEGIN { print b - a }')" 24.1667 0.1 || fail "g7: sideband spacing $1 $2"
+close_to "$(awk -v a="$2" -v b="$3" 'BEGIN { print b - a }')" 24.1667 0.1 || fail "g7: sideband spacing $2 $3"
+
+# ---- wheel vs work regeneration: growth and frequency of both rows against the roots of eq 2-16
+# (4.790137 /s at 361.7148 Hz with both chains; 9.1746 /s at 409.281 Hz with the wheel alone)
+out=$work/dominance
+expect_exit 0 "$work/dominance" "$bin" run "$src/studies/simulate_regeneration_dominance.toml" --out "$out"
+growth=($(csv_column "$out/results.csv" fitted_growth_rate_per_s))
+freq=($(csv_column "$out/results.csv" dominant_frequency_hz))
+close_to "${growth[0]}" 4.790137 0.048 || fail "dominance: both chains growth ${growth[0]}"
+close_to "${freq[0]}" 361.7148 1.8 || fail "dominance: both chains frequency ${freq[0]}"
+close_to "${growth[1]}" 9.1746 0.092 || fail "dominance: wheel only growth ${growth[1]}"
+close_to "${freq[1]}" 409.281 2.0 || fail "dominance: wheel only frequency ${freq[1]}"
+
+# ---- bad input
+bad=$work/too_long.toml
+sed 's/^duration_s = 6.0/duration_s = 6000.0/' "$src/studies/simulate_g8_chatter.toml" > "$bad"
+expect_exit 2 "$work/too_long" "$bin" run "$bad" --out "$work/too_long_out"
+grep -q "simulation.duration_s = 6000: duration_s \* sample_rate_hz = 6e+07 output samples exceeds the limit of 5e+07" \
+  "$work/too_long.err" || fail "too long: message $(cat "$work/too_long.err")"
+[ ! -e "$work/too_long_out/results.csv" ] || fail "too long: results written"
+bad=$work/no_time_domain.toml
+cat > "$bad" <<'TOML'
+[study]
+kind = "simulate"
+[model]
+type = "linear_dde"
+a0 = [[0.0, 1.0], [-1.3, -0.1]]
+[simulation]
+duration_s = 1.0
+TOML
+expect_exit 2 "$work/no_td" "$bin" run "$bad" --out "$work/no_td_out"
+grep -q 'model.type = "linear_dde": this model has no time-domain form' "$work/no_td.err" ||
+  fail "no time domain: message $(cat "$work/no_td.err")"
+finish
