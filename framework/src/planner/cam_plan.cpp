@@ -81,6 +81,7 @@ std::unique_ptr<Kinematics> build(const Json& machine) {
 struct CamDeviation {
   double normal_mm;  // signed normal distance minus the wheel radius (+: material left)
   double lift_mm;    // the same as a radial (lift) deviation at the foot point
+  double angle_deg;  // polar angle of the foot point, [0, 360)
 };
 
 CamDeviation cam_deviation(const ParametricSpline& spline, const ToolInPart& wheel, double& l) {
@@ -105,7 +106,7 @@ CamDeviation cam_deviation(const ParametricSpline& spline, const ToolInPart& whe
   // radius r_hat that is normal / (n . r_hat).
   const double speed = std::hypot(d1[0], d1[1]), rho = std::hypot(p[0], p[1]);
   const double cos_angle = (d1[1] * p[0] - d1[0] * p[1]) / (speed * rho);
-  return {normal, normal / cos_angle};
+  return {normal, normal / cos_angle, std::fmod(std::atan2(p[1], p[0]) * 180.0 / pi + 360.0, 360.0)};
 }
 
 constexpr const char* columns[] = {"seed_points_max_fit_error_mm", "max_fit_error_mm", "inserted_points",
@@ -239,29 +240,34 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     cols[4].push_back(static_cast<double>(plan.segments[k].pulses[1]));
   }
   // Replay every state (pulses spread evenly per segment) through the forward kinematics: the
-  // normal deviation, and the lift error = the radial deviation of the produced profile (normal
-  // deviation / cos of the angle between the profile normal and the radius).
-  double max_error = 0.0, sum_sq = 0.0, max_lift_error = 0.0;
+  // normal deviation of each state, and the lift error of the surface the wheel leaves: the
+  // radial deviation (normal deviation / cos of the angle between the profile normal and the
+  // radius), and per 0.1 deg bin of the cam angle the deepest state (the envelope: a state that
+  // leaves material there is ground away by a deeper one).
+  constexpr std::size_t bins_per_degree = 10;
+  std::vector<double> envelope(360 * bins_per_degree, std::numeric_limits<double>::infinity());
+  double max_error = 0.0, sum_sq = 0.0;
   std::size_t states = 0;
-  std::vector<double> end_angle, end_error;
   double l = contact_l[0];
   for_each_pulse_state(plan, [&](std::size_t k, double u, const std::vector<double>& position) {
-    const ToolInPart wheel = kinematics->forward(position, {});
     if (u == 0.0) l = contact_l[k];
-    const CamDeviation d = cam_deviation(spline, wheel, l);
-    if (u == 0.0 && k > 0) {  // the state at a segment's start ends the previous one
-      end_angle.push_back(360.0 * static_cast<double>(k) / static_cast<double>(segments));
-      end_error.push_back(d.lift_mm);
-    }
+    const CamDeviation d = cam_deviation(spline, kinematics->forward(position, {}), l);
+    auto& bin = envelope[std::min(envelope.size() - 1, static_cast<std::size_t>(d.angle_deg * bins_per_degree))];
+    bin = std::min(bin, d.lift_mm);
     max_error = std::max(max_error, std::abs(d.normal_mm));
-    max_lift_error = std::max(max_lift_error, std::abs(d.lift_mm));
     sum_sq += d.normal_mm * d.normal_mm;
     ++states;
   });
-  const std::vector<double> end = plan.positions_after(segments);
-  double l_end = contact_l[segments];
-  end_angle.push_back(360.0);
-  end_error.push_back(cam_deviation(spline, kinematics->forward(end, {}), l_end).lift_mm);
+  std::vector<double> bin_angle, lift_error;
+  double max_lift_error = 0.0, per_degree = 0.0;
+  for (std::size_t i = 0; i < envelope.size(); ++i)
+    if (std::isfinite(envelope[i])) {
+      bin_angle.push_back((static_cast<double>(i) + 0.5) / bins_per_degree);
+      lift_error.push_back(envelope[i]);
+      max_lift_error = std::max(max_lift_error, std::abs(envelope[i]));
+      const double next = envelope[(i + bins_per_degree) % envelope.size()];  // periodic
+      if (std::isfinite(next)) per_degree = std::max(per_degree, std::abs(next - envelope[i]));
+    }
   // Concave parts of the fitted profile: a wheel of larger radius gouges there (K2 tracking keeps
   // the tangency at the contact but the wheel then cuts the profile next to it).
   double min_concave_radius = std::numeric_limits<double>::infinity(), concave_at_deg = 0.0;
@@ -275,12 +281,6 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       concave_at_deg = std::fmod(std::atan2(p[1], p[0]) * 180 / pi + 360.0, 360.0);
     }
   }
-  // Per-degree lift error: change of the deviation over one degree of cam angle.
-  double per_degree = 0.0;
-  const auto per = static_cast<std::size_t>(std::max(1.0, std::round(1.0 / step_deg)));
-  for (std::size_t k = 0; k < end_error.size(); ++k)  // periodic: across 360 -> 0 deg too
-    per_degree = std::max(per_degree, std::abs(end_error[(k + per) % end_error.size()] - end_error[k]));
-
   if (!context.artifact_dir.empty()) {
     const fs::path dir = context.artifact_dir;
     write_file_atomically(dir / "pulses.csv",
@@ -328,6 +328,10 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
         {"max_profile_error_mm", max_error},
         {"rms_profile_error_mm", states ? std::sqrt(sum_sq / static_cast<double>(states)) : 0.0},
         {"max_lift_error_mm", max_lift_error},
+        {"lift_error_method", "radial deviation of the surface the wheel leaves: every replayed "
+                              "state, per 0.1 deg of cam angle the deepest; per degree: the largest "
+                              "change between bins 1 deg apart"},
+        {"replayed_states", states},
         {"max_per_degree_error_mm", per_degree},
         {"max_per_degree_lift_error_mm", per_degree},
         {"meets_requirements", max_lift_error <= 0.015 && per_degree <= 0.004},
@@ -360,11 +364,11 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       f.series = {a, b};
       draw(f, "fit_error");
       plot::Curves e;
-      e.title = "replayed lift error at the segment ends (limit +-15 um)";
+      e.title = "lift error of the ground surface, per 0.1 deg (limit +-15 um)";
       e.x_label = "contact polar angle [deg]";
       e.y_label = "radial deviation [um] (+ material left)";
-      plot::Series s{"lift error", end_angle, {}, "lines"};
-      for (double v : end_error) s.y.push_back(1000 * v);
+      plot::Series s{"lift error (deepest replayed state)", bin_angle, {}, "lines"};
+      for (double v : lift_error) s.y.push_back(1000 * v);
       e.series = {s};
       draw(e, "profile_error");
       plot::Curves x;
