@@ -1,6 +1,7 @@
 #include "planner/wheel_limits.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -65,6 +66,7 @@ class TabulatedProfile {
       const GeneratrixValue v = g.evaluate(std::min(b_, a_ + h_ * static_cast<double>(i)));
       f_[i] = v.f;
       d1_[i] = v.d1;
+      if (i > 0) max_curvature_ = std::max(max_curvature_, std::abs(d1_[i] - d1_[i - 1]) / h_);
     }
   }
   // Depth of Q below the profile along its normal (first order); -inf beyond the part's ends.
@@ -78,10 +80,12 @@ class TabulatedProfile {
     const double d1 = (1 - t) * d1_[i] + t * d1_[i + 1];
     return (f - qy) / std::sqrt(1.0 + d1 * d1);
   }
+  double max_curvature_per_mm() const { return max_curvature_; }  // max |f''| (bounds curvature)
 
  private:
   double a_, b_, h_;
   std::vector<double> f_, d1_;
+  double max_curvature_ = 0.0;
 };
 
 // The wheel section in the part frame: tool point (along, across) -> O + along U + across W.
@@ -93,42 +97,61 @@ struct Deepest {
   double depth_mm, x_mm;
 };
 
-// Deepest point of the section below the profile: samples, then golden section around the best.
-Deepest deepest_point(const TabulatedProfile& profile, const WheelSection& wheel, const ToolFrame& f) {
-  const double half = 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0;
-  auto point = [&](double t) {  // t in [-1, 1] along the section
-    double along = 0.0, across = 0.0;
-    if (!wheel.profiled) {
-      along = 0.5 * wheel.thickness_mm * t;
-    } else {
-      const double phi = half * t, r = wheel.edge_radius_mm;
-      along = r * std::sin(phi);
-      across = r * (1 - std::cos(phi));
-    }
-    const double qx = f.ox + along * f.ux + across * f.wx, qy = f.oy + along * f.uy + across * f.wy;
-    return Deepest{profile.depth(qx, qy), qx};
-  };
-  constexpr int samples = 64;
-  Deepest best{-std::numeric_limits<double>::infinity(), 0.0};
-  int best_i = 0;
-  for (int i = 0; i <= samples; ++i) {
-    const Deepest d = point(-1.0 + 2.0 * i / samples);
-    if (d.depth_mm > best.depth_mm) {
-      best = d;
-      best_i = i;
-    }
+// The wheel section sampled once in its own frame, probed at each state: the deepest sample,
+// refined by golden section between its neighbours only where it could matter. The depth along
+// the section has a second derivative of at most k = (section curvature) + max |f''| per mm of
+// arc, so no point between samples Delta apart lies more than k Delta^2 / 8 deeper than the
+// deeper of them (`sampling_bound_mm`).
+class SectionProbe {
+ public:
+  explicit SectionProbe(const WheelSection& wheel, double part_curvature) : wheel_(wheel) {
+    half_angle_ = 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0;
+    for (int i = 0; i <= samples; ++i) points_.push_back(tool_point(-1.0 + 2.0 * i / samples));
+    const double spacing = wheel.profiled ? wheel.edge_radius_mm * 2 * half_angle_ / samples
+                                          : wheel.thickness_mm / samples;
+    const double k = (wheel.profiled ? 1.0 / wheel.edge_radius_mm : 0.0) + part_curvature;
+    sampling_bound_mm_ = k * spacing * spacing / 8.0;
   }
-  if (!std::isfinite(best.depth_mm)) return best;
-  // The depth is smooth along the section: refine between the best sample's neighbours.
-  double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples, hi = -1.0 + 2.0 * std::min(samples, best_i + 1) / samples;
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  for (int it = 0; it < 30; ++it) {
-    const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
-    if (point(m1).depth_mm > point(m2).depth_mm) hi = m2; else lo = m1;
+  double sampling_bound_mm() const { return sampling_bound_mm_; }
+
+  // Deepest point; refined where the coarse depth exceeds refine_above_mm.
+  Deepest deepest(const TabulatedProfile& profile, const ToolFrame& f, double refine_above_mm) const {
+    auto at = [&](const std::array<double, 2>& p) {
+      const double qx = f.ox + p[0] * f.ux + p[1] * f.wx, qy = f.oy + p[0] * f.uy + p[1] * f.wy;
+      return Deepest{profile.depth(qx, qy), qx};
+    };
+    Deepest best{-std::numeric_limits<double>::infinity(), 0.0};
+    int best_i = 0;
+    for (int i = 0; i <= samples; ++i) {
+      const Deepest d = at(points_[static_cast<std::size_t>(i)]);
+      if (d.depth_mm > best.depth_mm) {
+        best = d;
+        best_i = i;
+      }
+    }
+    if (!std::isfinite(best.depth_mm) || best.depth_mm <= refine_above_mm) return best;
+    double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples;
+    double hi = -1.0 + 2.0 * std::min(samples, best_i + 1) / samples;
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    for (int it = 0; it < 24; ++it) {
+      const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
+      if (at(tool_point(m1)).depth_mm > at(tool_point(m2)).depth_mm) hi = m2; else lo = m1;
+    }
+    const Deepest refined = at(tool_point(0.5 * (lo + hi)));
+    return refined.depth_mm > best.depth_mm ? refined : best;
   }
-  const Deepest refined = point(0.5 * (lo + hi));
-  return refined.depth_mm > best.depth_mm ? refined : best;
-}
+
+ private:
+  static constexpr int samples = 64;
+  std::array<double, 2> tool_point(double t) const {  // t in [-1, 1] along the section
+    if (!wheel_.profiled) return {0.5 * wheel_.thickness_mm * t, 0.0};
+    const double phi = half_angle_ * t, r = wheel_.edge_radius_mm;
+    return {r * std::sin(phi), r * (1 - std::cos(phi))};
+  }
+  WheelSection wheel_;
+  double half_angle_ = 0.0, sampling_bound_mm_ = 0.0;
+  std::vector<std::array<double, 2>> points_;
+};
 
 constexpr std::size_t table_intervals = 20000;
 
@@ -137,11 +160,13 @@ constexpr std::size_t table_intervals = 20000;
 Interference check_interference(const Generatrix& generatrix, const WheelSection& wheel,
                                 const std::vector<double>& contacts_mm, double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
   Interference out;
   out.tolerance_mm = tolerance_mm;
   for (double x : contacts_mm) {
     const Frame p = frame_at(generatrix, x);
-    const Deepest d = deepest_point(profile, wheel, {p.x, p.y, p.tx, p.ty, p.nx, p.ny});
+    const Deepest d = probe.deepest(profile, {p.x, p.y, p.tx, p.ty, p.nx, p.ny},
+                                    tolerance_mm - probe.sampling_bound_mm());
     ++out.states_checked;
     if (d.depth_mm > tolerance_mm) {
       ++out.contacts_with_interference;
@@ -159,6 +184,7 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
                                            const Kinematics& kinematics, const WheelSection& wheel,
                                            double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
   const FeedPlan& plan = schedule.plan;
   Interference out;
   out.tolerance_mm = tolerance_mm;
@@ -172,8 +198,8 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
     const ToolInPart contact = kinematics.forward(position, schedule.contact_at(zeta));
-    const double own_cut = std::max(0.0, -tool_deviation_mm(contact, generatrix));
-    const Deepest d = deepest_point(profile, wheel, frame);
+    const double own_cut = std::max(0.0, profile.depth(contact.x_mm, contact.y_mm));
+    const Deepest d = probe.deepest(profile, frame, own_cut + tolerance_mm - probe.sampling_bound_mm());
     ++out.states_checked;
     const double excess = d.depth_mm - own_cut;
     if (!(excess > tolerance_mm)) return;
