@@ -37,4 +37,11 @@ sed -i "s|\.\./tests/data|$src/tests/data|" "$work/bad.toml"
 expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"
 grep -q "chosen angle 22 deg is not a row of the lift table" "$work/bad.err" || fail "message: $(cat "$work/bad.err")"
 [ ! -e "$work/bad_out" ] || fail "bad input wrote files"
+# The smoothness rule's delta is checked like feed_plan's.
+sed "s/^max_relative_rate_change = 0.1 /max_relative_rate_change = 1.5 /; s|\.\./tests/data|$src/tests/data|" \
+  "$src/studies/cam_seed002.toml" > "$work/bad_delta.toml"
+expect_exit 2 "$work/bad_delta" "$bin" run "$work/bad_delta.toml" --out "$work/bad_delta_out"
+grep -q "machine.max_relative_rate_change = 1.5: out of range, must be > 0 and < 1" "$work/bad_delta.err" ||
+  fail "message: $(cat "$work/bad_delta.err")"
+[ ! -e "$work/bad_delta_out" ] || fail "bad delta wrote files"
 finish
