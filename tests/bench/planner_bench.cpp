@@ -1,11 +1,13 @@
 // Feed planner timings (docs/performance.md, section "Feed planner"): a 3000-segment plan of
 // MODELS.md P3 problem 2 (knots, inverse kinematics, integerisation, smoothing passes,
-// certificate), and the replay of all its machine states for the error analysis.
+// certificate), the replay of all its machine states for the error analysis, and the wheel
+// interference check at every one of those states.
 #include <benchmark/benchmark.h>
 
 #include "chatterlab/kinematics.hpp"
 #include "planner/replay.hpp"
 #include "planner/setup.hpp"
+#include "planner/wheel_limits.hpp"
 #include "planner/scheduler.hpp"
 
 namespace {
@@ -42,6 +44,19 @@ void BM_ReplayErrors3000Segments(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ReplayErrors3000Segments)->Unit(benchmark::kMillisecond);
+
+void BM_InterferenceAlongPlan3000Segments(benchmark::State& state) {
+  auto kinematics = machine();
+  auto g = expression_generatrix(problem2, 0.0, 600.0);
+  const Schedule s = plan_feed(*g, *kinematics, constraints(), 0.2);
+  const WheelSection wheel{true, 40.0, 20.0, 180.0};  // the problem 2 study's profiled wheel
+  for (auto _ : state) {
+    const Interference hit = check_interference_along_plan(s, *g, *kinematics, wheel);
+    benchmark::DoNotOptimize(hit.depth_mm);
+    if (hit.states_checked < 250000 || hit.contacts_with_interference != 0) state.SkipWithError("bad check");
+  }
+}
+BENCHMARK(BM_InterferenceAlongPlan3000Segments)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -21,6 +21,13 @@ for key in lower_mm middle_mm upper_nut_mm rms_profile_error_mm max_edge_radius_
   grep -q "\"$key\"" "$out/summary.json" || fail "summary.json lacks $key"
 done
 grep -q '"ok": true' "$out/summary.json" || fail "plan not certified"
+# Problem 1 is convex: no part limits the edge radius; the number is the wheel's own limit
+# (20 mm face, 180 deg arc: r <= 10 mm) and says so. The wheel clears the part at every state.
+close_to "$(json_number "$out/summary.json" max_edge_radius_mm)" 10 1e-9 || fail "problem 1 edge radius"
+grep -q '"max_edge_radius_limited_by": "wheel_geometry"' "$out/summary.json" || fail "edge radius limit reason"
+close_to "$(json_number "$out/summary.json" max_depth_mm)" 0 0 || fail "problem 1 interference"
+states=$(json_number "$out/summary.json" states_checked)
+awk -v n="$states" 'BEGIN { exit !(n > 100000) }' || fail "interference checked only $states states"
 # Sum of pulses = displacement: the lower table ends within a step of P4's position at x = 600.
 sum=$(csv_column "$out/pulses.csv" upper_pulses | awk '{ s += $1 } END { print s }')
 # z_g(600) - z_g(0) = -R (f'(600) - f'(0)) = 300 * (0.45 + 1/60) mm = 140 mm = 42000 pulses.
@@ -33,6 +40,7 @@ expect_exit 0 "$work/p2" "$bin" run "$src/studies/feed_plan_problem2.toml" --out
 [ "$(sed -n 2p "$out2/pulses.csv" | cut -d, -f4-)" = "-27,40,55" ] || fail "problem 2 first row $(sed -n 2p "$out2/pulses.csv")"
 close_to "$(json_number "$out2/summary.json" total_time_s)" 3000 1e-6 || fail "problem 2 total time"
 close_to "$(json_number "$out2/summary.json" max_edge_radius_mm)" 722.7 0.5 || fail "problem 2 edge radius"
+grep -q '"max_edge_radius_limited_by": "concave_part"' "$out2/summary.json" || fail "problem 2 edge radius reason"
 error=$(json_number "$out2/summary.json" max_profile_error_mm)
 awk -v e="$error" 'BEGIN { exit !(e > 0 && e <= 0.005) }' || fail "problem 2 max profile error $error"
 

@@ -16,9 +16,32 @@ awk -v e="$seed" 'BEGIN { exit !(e > 5e-4) }' || fail "27-point fit error $seed 
 sum=$(csv_column "$out/pulses.csv" c_axis_pulses | awk '{ s += $1 } END { print s }')
 [ "$sum" = "360000" ] || fail "C axis turns $sum pulses (expected one turn, 360000)"
 expect_plots "$out" fit_error profile_error x_slide
+# Every machine rule, certified after integerisation; the lower bound below the plan's time.
+grep -q '"ok": true' "$out/summary.json" || fail "cam plan not certified"
+total=$(json_number "$out/summary.json" total_time_s)
+bound=$(json_number "$out/summary.json" lower_bound_s)
+awk -v t="$total" -v b="$bound" 'BEGIN { exit !(b > 0 && b <= t && t < 2) }' || fail "time $total, bound $bound"
+# K3 process limits with the shipped 40 mm wheel: lift error within 15 um, per degree within 4 um.
+lift=$(json_number "$out/summary.json" max_lift_error_mm)
+per=$(json_number "$out/summary.json" max_per_degree_lift_error_mm)
+awk -v e="$lift" -v p="$per" 'BEGIN { exit !(e > 0 && e <= 0.015 && p > 0 && p <= 0.004) }' ||
+  fail "lift error $lift, per degree $per"
+# A 200 mm wheel gouges the concave flanks: beyond the limit.
+sed "s/^wheel_radius_mm = 40.0/wheel_radius_mm = 200.0/; s|\.\./tests/data|$src/tests/data|" \
+  "$src/studies/cam_seed002.toml" > "$work/large.toml"
+expect_exit 0 "$work/large" "$bin" run "$work/large.toml" --out "$work/large_out"
+lift=$(json_number "$work/large_out/summary.json" max_lift_error_mm)
+awk -v e="$lift" 'BEGIN { exit !(e > 0.05) }' || fail "200 mm wheel lift error $lift"
 sed 's/^chosen_angles_deg = \[360, 10, 21,/chosen_angles_deg = [360, 10, 22,/' "$src/studies/cam_seed002.toml" > "$work/bad.toml"
 sed -i "s|\.\./tests/data|$src/tests/data|" "$work/bad.toml"
 expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"
 grep -q "chosen angle 22 deg is not a row of the lift table" "$work/bad.err" || fail "message: $(cat "$work/bad.err")"
 [ ! -e "$work/bad_out" ] || fail "bad input wrote files"
+# The smoothness rule's delta is checked like feed_plan's.
+sed "s/^max_relative_rate_change = 0.1 /max_relative_rate_change = 1.5 /; s|\.\./tests/data|$src/tests/data|" \
+  "$src/studies/cam_seed002.toml" > "$work/bad_delta.toml"
+expect_exit 2 "$work/bad_delta" "$bin" run "$work/bad_delta.toml" --out "$work/bad_delta_out"
+grep -q "machine.max_relative_rate_change = 1.5: out of range, must be > 0 and < 1" "$work/bad_delta.err" ||
+  fail "message: $(cat "$work/bad_delta.err")"
+[ ! -e "$work/bad_delta_out" ] || fail "bad delta wrote files"
 finish

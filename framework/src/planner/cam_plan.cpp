@@ -13,6 +13,8 @@
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
 #include "planner/parametric_spline.hpp"
+#include "planner/plan_io.hpp"
+#include "planner/replay.hpp"
 #include "planner/setup.hpp"
 
 namespace chatterlab::planner {
@@ -41,6 +43,14 @@ std::vector<ParamSpec> part_specs() {
   return {file, chosen, target};
 }
 
+std::vector<ParamSpec> machine_rule_specs() {
+  ParamSpec speed = positive("cam_speed_rpm", "rpm", "largest cam (C axis) speed");
+  speed.default_value = 60.0;
+  ParamSpec delta = relative_rate_change_spec();
+  delta.default_value = 0.1;  // P2's machine
+  return {speed, delta};
+}
+
 LiftTable read_lift_table(const Json& part, const fs::path& study_dir) {
   const fs::path file = study_dir / part.at("lift_table_file").get<std::string>();
   const DataTable data = read_data_table(file);
@@ -62,13 +72,19 @@ std::vector<double> chosen_angles(const Json& part, const LiftTable& table) {
 std::unique_ptr<Kinematics> build(const Json& machine) {
   Json params = machine;
   params.erase("type");
-  params.erase("cam_speed_rpm");
+  for (const ParamSpec& rule : machine_rule_specs()) params.erase(rule.key);
   return kinematics_registry().at(machine.at("type").get<std::string>()).create(ParamValues(params));
 }
 
 // Signed distance from the closed profile to the wheel centre minus the wheel radius (positive:
 // material left), nearest point by Newton on the spline parameter from `l`.
-double cam_deviation(const ParametricSpline& spline, const ToolInPart& wheel, double& l) {
+struct CamDeviation {
+  double normal_mm;  // signed normal distance minus the wheel radius (+: material left)
+  double lift_mm;    // the same as a radial (lift) deviation at the foot point
+  double angle_deg;  // polar angle of the foot point, [0, 360)
+};
+
+CamDeviation cam_deviation(const ParametricSpline& spline, const ToolInPart& wheel, double& l) {
   // Safeguarded Newton: steps of at most 0.5 mm, a fixed downhill step where the distance is not
   // locally convex in l (concave flanks seen from a large wheel).
   std::array<double, 2> p{}, d1{}, d2{};
@@ -85,11 +101,17 @@ double cam_deviation(const ParametricSpline& spline, const ToolInPart& wheel, do
   const double distance = std::hypot(p[0] - wheel.x_mm, p[1] - wheel.y_mm);
   // Outside (wheel side) when the centre lies along the outward normal (d1.y, -d1.x).
   const double side = (wheel.x_mm - p[0]) * d1[1] - (wheel.y_mm - p[1]) * d1[0];
-  return (side >= 0 ? distance : -distance) - wheel.radius_mm;
+  const double normal = (side >= 0 ? distance : -distance) - wheel.radius_mm;
+  // Radial deviation: the produced profile lies `normal` along the unit normal n; along the
+  // radius r_hat that is normal / (n . r_hat).
+  const double speed = std::hypot(d1[0], d1[1]), rho = std::hypot(p[0], p[1]);
+  const double cos_angle = (d1[1] * p[0] - d1[0] * p[1]) / (speed * rho);
+  return {normal, normal / cos_angle, std::fmod(std::atan2(p[1], p[0]) * 180.0 / pi + 360.0, 360.0)};
 }
 
 constexpr const char* columns[] = {"seed_points_max_fit_error_mm", "max_fit_error_mm", "inserted_points",
-                                   "total_time_s", "max_profile_error_mm", "max_per_degree_error_mm"};
+                                   "total_time_s", "lower_bound_s", "max_profile_error_mm",
+                                   "max_lift_error_mm", "max_per_degree_error_mm", "certified"};
 
 }  // namespace
 
@@ -102,7 +124,7 @@ PluginInfo CamPlanKind::info() {
   ParamSpec step = positive("segment_angle_deg", "deg", "polar angle of the contact per segment");
   step.default_value = 0.5;
   step.max = 10.0;
-  info.params = {step};
+  info.params = {step, start_stop_rate_spec()};
   info.thread_safety = ThreadSafety::copy_per_thread;
   info.example_params = {{"segment_angle_deg", 1.0}};
   return info;
@@ -116,15 +138,19 @@ void CamPlanKind::validate(Json& document, const SourceMap& sources) const {
     return document[key];
   };
   Json machine = table_of("machine");
-  Json speed = machine.contains("cam_speed_rpm") ? machine["cam_speed_rpm"] : Json(60.0);
-  machine.erase("cam_speed_rpm");
-  ParamSpec speed_spec = positive("cam_speed_rpm", "rpm", "mean cam (C axis) speed");
-  speed = validate_params(Json{{"cam_speed_rpm", speed}}, {speed_spec}, "machine", sources)["cam_speed_rpm"];
+  // The planner's rules in [machine] (the kinematics plugin does not know them).
+  Json rules = Json::object();
+  for (const char* key : {"cam_speed_rpm", "max_relative_rate_change"})
+    if (machine.contains(key)) {
+      rules[key] = machine[key];
+      machine.erase(key);
+    }
+  rules = validate_params(rules, machine_rule_specs(), "machine", sources);
   Json validated = validate_component(Json{{"machine", machine}}, "machine", kinematics_registry(), sources);
   if (validated["type"] != "xc_cam")
     throw InputError(fmt::format("{}: machine.type = {}: a cam_plan needs the xc_cam machine",
                                  sources.locate("machine.type").str(), validated["type"].dump()));
-  validated["cam_speed_rpm"] = speed;
+  validated.update(rules);
   Json part = validate_params(table_of("part"), part_specs(), "part", sources);
   Json plan = validate_params(document.contains("plan") ? document["plan"] : Json::object(),
                               info().params, "plan", sources);
@@ -169,56 +195,79 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     kinematics->inverse({p[0], p[1], d1[0], d1[1]}, {}, q[k]);
     if (k > 0) q[k][0] += 360.0 * std::round((q[k - 1][0] - q[k][0]) / 360.0);  // unwrap C
   }
-  // Integer positions (remainders carried), durations: C at the mean cam speed, stretched where a
-  // motor would exceed its pulse rate.
-  const double c_speed_deg_s = doc.at("machine").at("cam_speed_rpm").get<double>() * 6.0;
-  std::vector<std::vector<double>> cols(5);
-  std::vector<std::int64_t> previous{0, 0};
-  double t = 0.0;
-  std::vector<std::vector<std::int64_t>> pulses;
-  std::vector<double> durations;
+  // Integer positions (remainders carried) and time-optimal durations under every machine rule
+  // (the feed planner's scheduler, docs/planner.md): C speed <= cam_speed_rpm, every motor's
+  // pulse rate, and the smoothness rule with starts, stops and reversals (the X slide reverses
+  // at the nose and the base circle), periodic because the cam is ground revolution after
+  // revolution. Then the same certificate after integerisation.
+  const Json& machine = doc.at("machine");
+  FeedPlan plan;
+  plan.motors = motors;
+  quantise_targets(plan, q);
+  const double c_speed_deg_s = machine.at("cam_speed_rpm").get<double>() * 6.0;
+  std::vector<double> cap(segments), exact_cap(segments);
   for (std::size_t k = 0; k < segments; ++k) {
-    std::vector<std::int64_t> n(2);
-    double duration = std::abs(q[k + 1][0] - q[k][0]) / c_speed_deg_s;
-    for (std::size_t m = 0; m < 2; ++m) {
-      const auto now = std::llround((q[k + 1][m] - q[0][m]) / motors[m].mm_per_pulse);
-      n[m] = now - previous[m];
-      previous[m] = now;
-      duration = std::max(duration, static_cast<double>(std::llabs(n[m])) / motors[m].max_pulse_rate_hz);
-    }
-    cols[0].push_back(static_cast<double>(k));
-    cols[1].push_back(t);
-    cols[2].push_back(duration);
-    cols[3].push_back(static_cast<double>(n[0]));
-    cols[4].push_back(static_cast<double>(n[1]));
-    pulses.push_back(n);
-    durations.push_back(duration);
-    t += duration;
+    const double pulses_c = static_cast<double>(std::llabs(plan.segments[k].pulses[0]));
+    cap[k] = pulses_c > 0 ? c_speed_deg_s / (pulses_c * motors[0].mm_per_pulse)
+                          : std::numeric_limits<double>::infinity();
+    exact_cap[k] = c_speed_deg_s / std::abs(q[k + 1][0] - q[k][0]);
   }
-  // Replay every state (pulses spread evenly per segment) through the forward kinematics.
-  std::vector<double> position = q[0];
+  const RateRules rules = build_rate_rules(machine, doc.at("plan"), *kinematics);
+  std::size_t passes = 0;
+  try {
+    passes = time_optimal_durations(plan, cap, rules, true);
+  } catch (const NoAdmissibleSpeed& e) {
+    throw PointFailure(fmt::format("no plan: no admissible speed at contact angle {} deg",
+                                   360.0 * static_cast<double>(e.segment) / static_cast<double>(segments)));
+  }
+  const double lower_bound = relaxed_time_bound(plan, exact_cap, q);
+  Certificate certificate = certify_motor_rules(plan, q, rules, true);
+  double max_c_speed = 0.0;
+  for (std::size_t k = 0; k < segments; ++k) {
+    const PlanSegment& seg = plan.segments[k];
+    const double c_speed = static_cast<double>(std::llabs(seg.pulses[0])) * motors[0].mm_per_pulse / seg.duration_s;
+    max_c_speed = std::max(max_c_speed, c_speed);
+    if (c_speed > c_speed_deg_s * (1 + 1e-9))
+      certificate.add_violation(fmt::format("segment {}: C speed {} deg/s > {} deg/s", k, c_speed, c_speed_deg_s));
+  }
+  const double t = plan.total_time_s();
+  std::vector<std::vector<double>> cols(5);
+  for (std::size_t k = 0; k < segments; ++k) {
+    cols[0].push_back(static_cast<double>(k));
+    cols[1].push_back(plan.segments[k].start_s);
+    cols[2].push_back(plan.segments[k].duration_s);
+    cols[3].push_back(static_cast<double>(plan.segments[k].pulses[0]));
+    cols[4].push_back(static_cast<double>(plan.segments[k].pulses[1]));
+  }
+  // Replay every state (pulses spread evenly per segment) through the forward kinematics: the
+  // normal deviation of each state, and the lift error of the surface the wheel leaves: the
+  // radial deviation (normal deviation / cos of the angle between the profile normal and the
+  // radius), and per 0.1 deg bin of the cam angle the deepest state (the envelope: a state that
+  // leaves material there is ground away by a deeper one).
+  constexpr std::size_t bins_per_degree = 10;
+  std::vector<double> envelope(360 * bins_per_degree, std::numeric_limits<double>::infinity());
   double max_error = 0.0, sum_sq = 0.0;
   std::size_t states = 0;
-  std::vector<double> end_angle, end_error;
-  std::vector<std::pair<double, std::size_t>> events;
-  for (std::size_t k = 0; k < segments; ++k) {
-    double l = contact_l[k];
-    events.clear();
-    for (std::size_t m = 0; m < 2; ++m)
-      for (std::int64_t j = 1; j <= std::llabs(pulses[k][m]); ++j)
-        events.emplace_back((static_cast<double>(j) - 0.5) / static_cast<double>(std::llabs(pulses[k][m])), m);
-    std::sort(events.begin(), events.end());
-    for (const auto& [u, m] : events) {
-      position[m] += (pulses[k][m] > 0 ? 1.0 : -1.0) * motors[m].mm_per_pulse;
-      const double e = cam_deviation(spline, kinematics->forward(position, {}), l);
-      max_error = std::max(max_error, std::abs(e));
-      sum_sq += e * e;
-      ++states;
+  double l = contact_l[0];
+  for_each_pulse_state(plan, [&](std::size_t k, double u, const std::vector<double>& position) {
+    if (u == 0.0) l = contact_l[k];
+    const CamDeviation d = cam_deviation(spline, kinematics->forward(position, {}), l);
+    auto& bin = envelope[std::min(envelope.size() - 1, static_cast<std::size_t>(d.angle_deg * bins_per_degree))];
+    bin = std::min(bin, d.lift_mm);
+    max_error = std::max(max_error, std::abs(d.normal_mm));
+    sum_sq += d.normal_mm * d.normal_mm;
+    ++states;
+  });
+  std::vector<double> bin_angle, lift_error;
+  double max_lift_error = 0.0, per_degree = 0.0;
+  for (std::size_t i = 0; i < envelope.size(); ++i)
+    if (std::isfinite(envelope[i])) {
+      bin_angle.push_back((static_cast<double>(i) + 0.5) / bins_per_degree);
+      lift_error.push_back(envelope[i]);
+      max_lift_error = std::max(max_lift_error, std::abs(envelope[i]));
+      const double next = envelope[(i + bins_per_degree) % envelope.size()];  // periodic
+      if (std::isfinite(next)) per_degree = std::max(per_degree, std::abs(next - envelope[i]));
     }
-    double l_end = contact_l[k + 1];
-    end_angle.push_back(360.0 * static_cast<double>(k + 1) / static_cast<double>(segments));
-    end_error.push_back(cam_deviation(spline, kinematics->forward(position, {}), l_end));
-  }
   // Concave parts of the fitted profile: a wheel of larger radius gouges there (K2 tracking keeps
   // the tangency at the contact but the wheel then cuts the profile next to it).
   double min_concave_radius = std::numeric_limits<double>::infinity(), concave_at_deg = 0.0;
@@ -232,12 +281,6 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       concave_at_deg = std::fmod(std::atan2(p[1], p[0]) * 180 / pi + 360.0, 360.0);
     }
   }
-  // Per-degree lift error: change of the deviation over one degree of cam angle.
-  double per_degree = 0.0;
-  const auto per = static_cast<std::size_t>(std::max(1.0, std::round(1.0 / step_deg)));
-  for (std::size_t k = per; k < end_error.size(); ++k)
-    per_degree = std::max(per_degree, std::abs(end_error[k] - end_error[k - per]));
-
   if (!context.artifact_dir.empty()) {
     const fs::path dir = context.artifact_dir;
     write_file_atomically(dir / "pulses.csv",
@@ -265,11 +308,33 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
                           {"max_x_error_mm", fit.max_x_error_mm}, {"max_y_error_mm", fit.max_y_error_mm},
                           {"worst_angle_deg", fit.worst_angle_deg}}},
         {"total_time_s", t},
+        {"lower_bound_s", lower_bound},
+        {"lower_bound_kind", "continuous relaxation: the exact path at the largest speed each "
+                             "per-segment bound allows (C speed, pulse rates), without smoothness"},
+        {"gap_percent", 100.0 * (t - lower_bound) / lower_bound},
+        {"mean_cam_speed_rpm", 60.0 / t},
         {"segments", segments},
+        {"smoothing_passes", passes},
+        {"certificate", certificate_json(certificate, plan, rules,
+                                         {{"path_rule", "C speed <= cam_speed_rpm"},
+                                          {"max_c_speed_deg_per_s", max_c_speed},
+                                          {"c_speed_limit_deg_per_s", c_speed_deg_s}})},
+        {"pre_motion", {{"ramp_segments_each_end", ramp_segments(plan, rules)},
+                        {"ramp_time_s", static_cast<double>(ramp_segments(plan, rules)) *
+                                            (plan.segments.front().duration_s + plan.segments.back().duration_s)},
+                        {"note", "the C axis and X slide ramp up from rest before the wheel engages "
+                                 "(and down after it leaves), not in total_time_s"}}},
         {"initial_position", {{"c_axis_deg", q[0][0]}, {"x_slide_mm", q[0][1]}}},
         {"max_profile_error_mm", max_error},
         {"rms_profile_error_mm", states ? std::sqrt(sum_sq / static_cast<double>(states)) : 0.0},
+        {"max_lift_error_mm", max_lift_error},
+        {"lift_error_method", "radial deviation of the surface the wheel leaves: every replayed "
+                              "state, per 0.1 deg of cam angle the deepest; per degree: the largest "
+                              "change between bins 1 deg apart"},
+        {"replayed_states", states},
         {"max_per_degree_error_mm", per_degree},
+        {"max_per_degree_lift_error_mm", per_degree},
+        {"meets_requirements", max_lift_error <= 0.015 && per_degree <= 0.004},
         {"min_concave_radius_mm", std::isfinite(min_concave_radius) ? Json(min_concave_radius) : Json()},
         {"min_concave_radius_at_deg", concave_at_deg},
         {"wheel_gouges_concave_parts",
@@ -299,11 +364,11 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       f.series = {a, b};
       draw(f, "fit_error");
       plot::Curves e;
-      e.title = "replayed profile error (segment ends)";
+      e.title = "lift error of the ground surface, per 0.1 deg (limit +-15 um)";
       e.x_label = "contact polar angle [deg]";
-      e.y_label = "normal deviation [um] (+ material left)";
-      plot::Series s{"deviation", end_angle, {}, "lines"};
-      for (double v : end_error) s.y.push_back(1000 * v);
+      e.y_label = "radial deviation [um] (+ material left)";
+      plot::Series s{"lift error (deepest replayed state)", bin_angle, {}, "lines"};
+      for (double v : lift_error) s.y.push_back(1000 * v);
       e.series = {s};
       draw(e, "profile_error");
       plot::Curves x;
@@ -322,7 +387,7 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     write_json_file(dir / "summary.json", summary);
   }
   return {seed.max_radius_error_mm, fit.max_radius_error_mm, static_cast<double>(fit.inserted), t,
-          max_error, per_degree};
+          lower_bound, max_error, max_lift_error, per_degree, certificate.ok};
 }
 
 }  // namespace chatterlab::planner

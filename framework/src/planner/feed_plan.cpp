@@ -24,12 +24,7 @@ ParamSpec positive(std::string key, std::string unit, std::string description) {
 }
 
 std::vector<ParamSpec> machine_constraint_specs() {
-  ParamSpec delta = positive("max_relative_rate_change", "1",
-                             "delta: largest relative change of a motor's pulse rate between "
-                             "consecutive segments, |f_q - f_h| / f_q");
-  delta.max = 1.0;
-  delta.max_exclusive = true;
-  return {delta,
+  return {relative_rate_change_spec(),
           positive("max_axial_advance_mm_per_100_rev", "mm",
                    "largest advance of the contact point along the work axis per 100 work "
                    "revolutions")};
@@ -183,7 +178,7 @@ void check_wheel_fits(const Json& wheel, const Json& part, const SourceMap& sour
           limit.x_mm));
     const double arc_width = 2 * section.edge_radius_mm *
                              std::sin(0.5 * section.edge_angle_deg * 3.14159265358979323846 / 180.0);
-    if (arc_width > section.thickness_mm * (1 + 1e-12))
+    if (section.edge_radius_mm > wheel_geometry_edge_radius_mm(section) * (1 + 1e-12))
       throw InputError(fmt::format(
           "{}: wheel.edge_radius_mm = {}: an arc of radius {} mm and opening {} deg is {:.4g} mm "
           "wide, more than wheel.thickness_mm = {}", sources.locate("wheel.edge_radius_mm").str(),
@@ -193,13 +188,15 @@ void check_wheel_fits(const Json& wheel, const Json& part, const SourceMap& sour
   std::vector<double> contacts;
   const double a = generatrix->x_min_mm(), b = generatrix->x_max_mm();
   for (int i = 0; i <= 600; ++i) contacts.push_back(a + (b - a) * i / 600.0);
-  const Interference hit = check_interference(*generatrix, section, contacts, {});
+  const Interference hit = check_interference(*generatrix, section, contacts);
   if (hit.depth_mm > 0)
     throw InputError(fmt::format(
         "{}: wheel = {} wheel, thickness_mm = {}: the wheel is too large for the part: its {} cuts "
-        "{:.4g} mm into the part with the contact at x = {:.2f} mm ({} of 601 contacts interfere)",
+        "{:.4g} mm into the part at x = {:.2f} mm with the contact at x = {:.2f} mm ({} of 601 "
+        "contacts interfere)",
         sources.locate("wheel").str(), section.profiled ? "profiled" : "cylindrical",
         section.thickness_mm, section.profiled ? "edge arc" : "flat face", hit.depth_mm, hit.x_mm,
+        hit.contact_x_mm,
         hit.contacts_with_interference));
 }
 
@@ -219,11 +216,7 @@ PluginInfo FeedPlanKind::info() {
   ParamSpec length = positive("segment_length_mm", "mm",
                               "axial length of a plan segment (default: 1 s at the axial-speed bound)");
   length.optional = true;
-  ParamSpec start_stop = positive(
-      "start_stop_rate_hz", "1/s",
-      "start-stop rate: a motor may change its rate by this much in one step where the relative "
-      "rule does not apply (start, stop, reversal, low rates); default delta x max pulse rate");
-  start_stop.optional = true;
+  ParamSpec start_stop = start_stop_rate_spec();
   ParamSpec sweep = param_spec("wear_sweep", ValueKind::string, "",
                                "contact sweep across the wheel face (MODELS.md P6)");
   sweep.choices = {"none", "triangle", "sine", "stepped"};
@@ -296,7 +289,7 @@ std::vector<Json> FeedPlanKind::run_point(const Json& doc, const PointContext& c
           static_cast<double>(s.plan.segments.size()),
           run.errors.total.max_abs_mm,
           run.errors.total.rms_mm,
-          std::isfinite(run.edge_limit.radius_mm) ? Json(run.edge_limit.radius_mm) : Json(),
+          run.max_edge_radius_mm,
           s.certificate.ok};
 }
 

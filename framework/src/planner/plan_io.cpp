@@ -30,46 +30,29 @@ Json error_stats(const ErrorStats& s) {
           {"rms_mm", s.rms_mm}};
 }
 
-Json certificate_json(const Certificate& c, const FeedPlan& plan, const FeedConstraints& k) {
+}  // namespace
+
+Json certificate_json(const Certificate& c, const FeedPlan& plan, const RateRules& rules,
+                      const Json& path_rule) {
   Json rates = Json::object();
   for (std::size_t m = 0; m < plan.motors.size(); ++m) rates[plan.motors[m].name] = c.max_pulse_rate_hz[m];
-  return {{"ok", c.ok},
-          {"checked", "every segment and motor after integerisation: pulse rate <= max_pulse_rate_hz, "
-                      "axial speed <= max_axial_advance_mm_per_100_rev/100 * spindle rev/s, "
-                      "|r' - r| <= max(delta |r|, start_stop_rate_hz), position drift <= 1/2 step"},
-          {"max_pulse_rate_hz", rates},
-          {"max_axial_speed_mm_per_s", c.max_axial_speed_mm_per_s},
-          {"axial_speed_limit_mm_per_s", k.max_axial_speed_mm_per_s()},
-          {"max_relative_rate_change", c.max_relative_rate_change},
-          {"relative_rate_change_limit", k.max_relative_rate_change},
-          {"start_stop_rate_hz", k.start_stop_rate_hz},
-          {"rate_changes_under_start_stop_allowance", c.rate_changes_under_start_stop_allowance},
-          {"max_rate_change_under_allowance_hz", c.max_rate_change_at_low_rate_hz},
-          {"reversals", c.reversals},
-          {"max_position_drift_steps", c.max_position_drift_steps},
-          {"violations", c.violations}};
+  Json out = {{"ok", c.ok},
+              {"checked", "every segment and motor after integerisation: pulse rate <= "
+                          "max_pulse_rate_hz, |r' - r| <= max(delta |r|, start_stop_rate_hz) between "
+                          "consecutive segments, position drift <= 1/2 step at segment ends, and the "
+                          "path rule"},
+              {"max_pulse_rate_hz", rates},
+              {"max_relative_rate_change", c.max_relative_rate_change},
+              {"relative_rate_change_limit", rules.max_relative_rate_change},
+              {"start_stop_rate_hz", rules.start_stop_rate_hz},
+              {"rate_changes_under_start_stop_allowance", c.rate_changes_under_start_stop_allowance},
+              {"max_rate_change_under_allowance_hz", c.max_rate_change_at_low_rate_hz},
+              {"reversals", c.reversals},
+              {"max_position_drift_steps", c.max_position_drift_steps},
+              {"violations", c.violations}};
+  out.update(path_rule);
+  return out;
 }
-
-// Pre-motion (P2: "the plan starts after a short pre-motion"): on the approach, before the
-// wheel reaches the part, every motor ramps from rest along the first segment's direction with
-// all rates scaled by c_0 = f_ss / max|r| and then c_{j+1} = (1 + delta) c_j: each step meets
-// the relative rule, the first the start-stop rate. The run-out mirrors it after the last segment.
-std::size_t ramp_segments(const FeedPlan& plan, const FeedConstraints& k) {
-  if (plan.segments.empty()) return 0;
-  double fastest = 0.0;
-  const PlanSegment& first = plan.segments.front();
-  for (std::size_t m = 0; m < plan.motors.size(); ++m)
-    fastest = std::max(fastest, std::abs(static_cast<double>(first.pulses[m])) / first.duration_s);
-  double scale = fastest > 0 ? k.start_stop_rate_hz / fastest : 1.0;
-  std::size_t n = 0;
-  while (scale < 1.0) {
-    ++n;
-    scale *= 1.0 + k.max_relative_rate_change;
-  }
-  return n;
-}
-
-}  // namespace
 
 PlanRun compute_plan(const Json& document) {
   PlanRun run;
@@ -90,13 +73,21 @@ PlanRun compute_plan(const Json& document) {
   }
   run.errors = replay_errors(run.schedule, *run.generatrix, *run.kinematics);
   run.edge_limit = largest_edge_radius(*run.generatrix);
-  run.interference = check_interference(*run.generatrix, build_wheel(wheel), run.schedule.knots_mm,
-                                        run.schedule.contact_on_tool_mm);
+  run.wheel_edge_radius_limit_mm = wheel_geometry_edge_radius_mm(build_wheel(wheel));
+  if (std::isfinite(run.edge_limit.radius_mm)) {
+    run.max_edge_radius_mm = run.edge_limit.radius_mm;
+    run.max_edge_radius_limited_by = run.edge_limit.local ? "concave_part" : "distant_part";
+  } else {
+    run.max_edge_radius_mm = run.wheel_edge_radius_limit_mm;
+    run.max_edge_radius_limited_by = "wheel_geometry";
+  }
+  run.interference = check_interference_along_plan(run.schedule, *run.generatrix, *run.kinematics,
+                                                   build_wheel(wheel));
   std::vector<double> durations;
   for (const auto& seg : run.schedule.plan.segments) durations.push_back(seg.duration_s);
   run.wear = wear_distribution(run.schedule.contact_on_tool_mm, durations,
                                sweep_half_width_mm(build_wheel(wheel)));
-  run.ramp_segments = ramp_segments(run.schedule.plan, run.constraints);
+  run.ramp_segments = ramp_segments(run.schedule.plan, run.constraints.rate_rules());
   if (!durations.empty())
     run.ramp_time_s = static_cast<double>(run.ramp_segments) * (durations.front() + durations.back());
   return run;
@@ -113,6 +104,7 @@ Json plan_summary(const PlanRun& run, const Json& document) {
     steps[plan.motors[m].name] = plan.motors[m].mm_per_pulse;
   }
   const bool edge_limited = std::isfinite(run.edge_limit.radius_mm);
+  const WheelSection wheel = build_wheel(document.at("wheel"));
   Json summary = {
       {"total_time_s", total},
       {"lower_bound_s", s.lower_bound_s},
@@ -126,12 +118,21 @@ Json plan_summary(const PlanRun& run, const Json& document) {
       {"initial_position", initial},
       {"mm_per_pulse", steps},
       {"max_pulse_rate_hz", rates},
-      {"max_edge_radius_mm", edge_limited ? Json(run.edge_limit.radius_mm) : Json()},
+      {"max_edge_radius_mm", run.max_edge_radius_mm},
+      {"max_edge_radius_limited_by", run.max_edge_radius_limited_by},
       {"max_edge_radius_note",
-       edge_limited ? fmt::format("set at x = {:.3f} mm by {}", run.edge_limit.x_mm,
-                                  run.edge_limit.local ? "the radius of curvature of a concave part"
-                                                       : "a distant part of the profile (normal-line condition)")
-                    : std::string("no concave part: any edge radius fits")},
+       edge_limited
+           ? fmt::format("set at x = {:.3f} mm by {}; the wheel itself carries at most {:.4g} mm "
+                         "(arc width 2 r sin(alpha/2) <= thickness)", run.edge_limit.x_mm,
+                         run.edge_limit.local ? "the radius of curvature of a concave part"
+                                              : "a distant part of the profile (normal-line condition)",
+                         run.wheel_edge_radius_limit_mm)
+           : fmt::format("no part of the profile limits the edge radius (no concave part, any arc "
+                         "tangent at a contact clears the part); the limit is the wheel's own: an "
+                         "arc of opening {} deg fits the {} mm face up to r = {:.4g} mm",
+                         wheel.edge_angle_deg, wheel.thickness_mm,
+                         run.wheel_edge_radius_limit_mm)},
+      {"edge_radius_limit_from_wheel_geometry_mm", run.wheel_edge_radius_limit_mm},
       {"max_profile_error_mm", run.errors.total.max_abs_mm},
       {"mean_profile_error_mm", run.errors.total.mean_mm},
       {"mean_abs_profile_error_mm", run.errors.total.mean_abs_mm},
@@ -141,10 +142,23 @@ Json plan_summary(const PlanRun& run, const Json& document) {
       {"error_split", {{"linearisation", error_stats(run.errors.linearisation)},
                        {"quantisation", error_stats(run.errors.quantisation)},
                        {"replayed_states", run.errors.states}}},
-      {"certificate", certificate_json(s.certificate, plan, run.constraints)},
+      {"certificate", certificate_json(s.certificate, plan, run.constraints.rate_rules(),
+                                       {{"path_rule", "axial speed <= max_axial_advance_mm_per_100_rev"
+                                                      " / 100 x spindle rev/s"},
+                                        {"max_axial_speed_mm_per_s", s.certificate.max_axial_speed_mm_per_s},
+                                        {"axial_speed_limit_mm_per_s",
+                                         run.constraints.max_axial_speed_mm_per_s()}})},
       {"interference", {{"max_depth_mm", run.interference.depth_mm},
                         {"at_x_mm", run.interference.x_mm},
-                        {"contacts_with_interference", run.interference.contacts_with_interference}}},
+                        {"contact_x_mm", run.interference.contact_x_mm},
+                        {"at_time_s", run.interference.time_s},
+                        {"states_with_interference", run.interference.contacts_with_interference},
+                        {"segments_with_interference", run.interference.segments_with_interference},
+                        {"states_checked", run.interference.states_checked},
+                        {"tolerance_mm", run.interference.tolerance_mm},
+                        {"method", "every pulse state of the quantised plan through the forward "
+                                   "kinematics; the wheel section probed against the generatrix; "
+                                   "depth beyond the contact's own cut-in (the profile error)"}}},
       {"wear", {{"sweep", run.sweep.law},
                 {"amplitude_mm", run.sweep.law == "none" ? 0.0 : run.sweep.amplitude_mm},
                 {"period_mm", run.sweep.period_mm},

@@ -3,6 +3,7 @@
 // segments.csv, summary.json, plots) and the reader of saved plans (chatterlab/planner/plan.hpp).
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "planner/replay.hpp"
 #include "planner/setup.hpp"
@@ -16,7 +17,12 @@ struct PlanRun {
   WearSweep sweep;
   Schedule schedule;
   ProfileErrors errors;
-  EdgeRadiusLimit edge_limit;
+  EdgeRadiusLimit edge_limit;             // from the part (+inf: nothing limits it)
+  double wheel_edge_radius_limit_mm = 0.0;  // from the wheel's own geometry
+  // Reported max_edge_radius_mm: the part's limit where the part sets one (concave part or a
+  // distant part of the profile), otherwise the wheel's own limit; what limits it.
+  double max_edge_radius_mm = 0.0;
+  std::string max_edge_radius_limited_by;
   Interference interference;
   WearDistribution wear;
   std::size_t ramp_segments = 0;  // pre-motion ramp from rest (and, mirrored, the run-out)
@@ -33,6 +39,11 @@ void write_plan_files(const PlanRun& run, const Json& document, const std::files
 // appended to `failures` (a JSON array of messages).
 void draw_plan_plots(const PlanRun& run, const Json& document, const std::filesystem::path& dir,
                      Json& failures);
+
+// A certificate as JSON: the motor rules (shared by feed_plan and cam_plan) and the kind's own
+// path rule entries (`path_rule`: what it is, the largest value used, the limit).
+Json certificate_json(const Certificate& c, const FeedPlan& plan, const RateRules& rules,
+                      const Json& path_rule);
 
 // The summary.json content (also what read_saved_plan reads back).
 Json plan_summary(const PlanRun& run, const Json& document);

@@ -171,6 +171,32 @@ TEST(FeedPlanner, SmoothnessBindsAndIsCertified) {
   EXPECT_EQ(broken, tried);
 }
 
+TEST(FeedPlanner, PeriodicScheduleAlsoLinksTheLastSegmentToTheFirst) {
+  // One motor, 100 pulses per segment, the third segment capped at 0.1 segments/s (10 pulses/s).
+  // delta = 0.1, f_ss = 10: segment 1 may run at 10 + 10 = 20 pulses/s, segment 0 (before it) at
+  // max(20 / 0.9, 20 + 10) = 30; periodic (segment 0 also follows segment 2) only at 20.
+  FeedPlan plan;
+  plan.motors = {{"c", 1.0, 100.0, ""}};
+  const std::vector<std::vector<double>> targets{{0.0}, {100.0}, {200.0}, {300.0}};
+  quantise_targets(plan, targets);
+  const std::vector<double> cap{1e9, 1e9, 0.1};
+  const RateRules rules{0.1, 10.0};
+  FeedPlan open = plan;
+  time_optimal_durations(open, cap, rules, false);
+  EXPECT_NEAR(100.0 / open.segments[0].duration_s, 30.0, 1e-9);
+  EXPECT_NEAR(100.0 / open.segments[1].duration_s, 20.0, 1e-9);
+  EXPECT_NEAR(100.0 / open.segments[2].duration_s, 10.0, 1e-9);
+  time_optimal_durations(plan, cap, rules, true);
+  EXPECT_NEAR(100.0 / plan.segments[0].duration_s, 20.0, 1e-9);
+  EXPECT_TRUE(certify_motor_rules(plan, targets, rules, true).ok);
+  EXPECT_TRUE(certify_motor_rules(open, targets, rules, false).ok);
+  const Certificate broken = certify_motor_rules(open, targets, rules, true);
+  ASSERT_FALSE(broken.ok);
+  EXPECT_NE(broken.violations.front().find("segments 2-0"), std::string::npos) << broken.violations.front();
+  // The relaxation ignores smoothness: 1 + 1 + 10 s.
+  EXPECT_NEAR(relaxed_time_bound(plan, cap, targets), 12.0, 1e-9);
+}
+
 TEST(WheelLimits, EdgeRadiusIsTheConcaveRadiusOfCurvature) {
   // y = 100 + x^2 / 1000: radius of curvature 500 mm at x = 0, larger elsewhere.
   auto g = expression_generatrix("100 + x^2/1000", -50.0, 50.0);
@@ -182,8 +208,77 @@ TEST(WheelLimits, EdgeRadiusIsTheConcaveRadiusOfCurvature) {
   // A flat face of width a on that valley cuts a^2/(8 rho) deep: 20 mm -> 0.1 mm.
   WheelSection face;
   face.thickness_mm = 20.0;
-  const Interference hit = check_interference(*g, face, {0.0}, {});
+  const Interference hit = check_interference(*g, face, {0.0});
   EXPECT_NEAR(hit.depth_mm, 0.1, 2e-3);
+  EXPECT_NEAR(std::abs(hit.x_mm), 10.0, 0.05);  // the face's ends dig in
+  // The wheel's own limit: an arc of opening alpha fits the face width a: r <= a / (2 sin(alpha/2)).
+  WheelSection arc{true, 40.0, 20.0, 180.0};
+  EXPECT_NEAR(wheel_geometry_edge_radius_mm(arc), 20.0, 1e-12);
+  arc.edge_angle_deg = 60.0;
+  EXPECT_NEAR(wheel_geometry_edge_radius_mm(arc), 40.0, 1e-12);
+}
+
+// The quantised plan replayed pulse by pulse with the wheel section (MODELS.md P5).
+Interference along_plan(const Generatrix& g, const WheelSection& wheel, Schedule* out = nullptr) {
+  auto machine = seed_machine();
+  Schedule s = plan_feed(g, *machine, seed_constraints(), 0.2);
+  const Interference hit = check_interference_along_plan(s, g, *machine, wheel);
+  if (out) *out = std::move(s);
+  return hit;
+}
+
+TEST(WheelLimits, InterferenceAlongThePlanFindsTooLargeWheels) {
+  // Valley of radius of curvature 500 mm at x = 0: a 20 mm face cuts 20^2 / (8 x 500) = 0.1 mm.
+  auto valley = expression_generatrix("100 + x^2/1000", -25.0, 25.0);
+  WheelSection face;
+  face.thickness_mm = 20.0;
+  Schedule s;
+  const Interference hit = along_plan(*valley, face, &s);
+  EXPECT_NEAR(hit.depth_mm, 0.1, 3e-3);
+  EXPECT_NEAR(hit.contact_x_mm, 0.0, 10.0);  // nearly the same everywhere; deepest near x = 0
+  EXPECT_GT(hit.states_checked, 2 * s.plan.segments.size());  // every pulse state, not the knots
+  EXPECT_GT(hit.contacts_with_interference, hit.states_checked * 9 / 10);
+  EXPECT_EQ(hit.segments_with_interference, s.plan.segments.size());
+  // Edge arcs (opening 10 deg): a radius above the 500 mm limit cuts in, one below clears.
+  WheelSection arc{true, 200.0, 600.0, 10.0};
+  const Interference too_large = along_plan(*valley, arc);
+  EXPECT_GT(too_large.depth_mm, 0.05);
+  EXPECT_GT(too_large.contacts_with_interference, 0u);
+  arc.edge_radius_mm = 400.0;
+  const Interference clear = along_plan(*valley, arc);
+  EXPECT_EQ(clear.depth_mm, 0.0);
+  EXPECT_EQ(clear.contacts_with_interference, 0u);
+  EXPECT_GT(clear.states_checked, 0u);
+  // Problem 1 (convex everywhere) with the shipped 20 mm face: clear along the whole plan.
+  face.thickness_mm = 20.0;
+  EXPECT_EQ(along_plan(*expression_generatrix(problem1, 550.0, 600.0), face).contacts_with_interference, 0u);
+}
+
+TEST(WheelLimits, InterferenceAlongThePlanSaysWhere) {
+  // A bump at x = 30 mm on a cylinder: a 20 mm face touching the cylinder within 10 mm of the
+  // bump rides on it, and touching the bump's flank it tilts and digs its end into the cylinder.
+  // The replay and the ideal placements agree on depth and place (the bump is symmetric: the
+  // deepest state may lie on either side).
+  auto bump = expression_generatrix("100 + 0.5*exp(-((x - 30)/5)^2)", 0.0, 60.0);
+  WheelSection face;
+  face.thickness_mm = 20.0;
+  Schedule s;
+  const Interference hit = along_plan(*bump, face, &s);
+  std::vector<double> contacts;
+  for (int i = 0; i <= 600; ++i) contacts.push_back(0.1 * i);
+  const Interference ideal = check_interference(*bump, face, contacts);
+  ASSERT_GT(hit.depth_mm, 0.1);
+  EXPECT_NEAR(hit.depth_mm, ideal.depth_mm, 0.01);
+  EXPECT_NEAR(std::abs(hit.contact_x_mm - 30.0), std::abs(ideal.contact_x_mm - 30.0), 0.5);
+  EXPECT_NEAR(std::abs(hit.x_mm - 30.0), std::abs(ideal.x_mm - 30.0), 0.5);
+  EXPECT_LT(std::abs(hit.contact_x_mm - 30.0), 12.0);          // on or beside the bump
+  EXPECT_LE(std::abs(hit.x_mm - hit.contact_x_mm), 10.0 + 1e-6);  // a point of the face
+  // The time is that of a state in the segment whose ends bracket the contact.
+  std::size_t k = 0;
+  while (k + 1 < s.plan.segments.size() && s.plan.segments[k + 1].start_s <= hit.time_s) ++k;
+  EXPECT_LE(s.knots_mm[k] - 0.01, hit.contact_x_mm);
+  EXPECT_GE(s.knots_mm[k + 1] + 0.01, hit.contact_x_mm);
+  EXPECT_LT(hit.segments_with_interference, s.plan.segments.size());  // not everywhere
 }
 
 TEST(Wear, TriangleSweepDwellsUniformlySineAtTheEdges) {

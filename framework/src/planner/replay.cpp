@@ -40,11 +40,19 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   const std::size_t motors = plan.motors.size();
   ProfileErrors out;
   Accumulator total, linear, quantisation;
-  std::vector<double> position(plan.initial_position_mm), exact(motors);
-  std::vector<std::pair<double, std::size_t>> events;
+  std::vector<double> exact(motors);
   double area = 0.0, last_x = 0.0, last_e = 0.0;
   bool first = true;
-  auto visit = [&](std::size_t k, double u, double& lo, double& hi) {
+  double lo = 1e300, hi = -1e300;
+  auto close_segment = [&](std::size_t k) {
+    out.segment_x_mm.push_back(0.5 * (schedule.knots_mm[k] + schedule.knots_mm[k + 1]));
+    out.segment_min_mm.push_back(lo);
+    out.segment_max_mm.push_back(hi);
+    lo = 1e300;
+    hi = -1e300;
+  };
+  for_each_pulse_state(plan, [&](std::size_t k, double u, const std::vector<double>& position) {
+    if (u == 0.0 && k > 0) close_segment(k - 1);
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
     const ToolContact contact = schedule.contact_at(zeta);
@@ -63,28 +71,8 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
     first = false;
     last_x = tool.x_mm;
     last_e = e;
-  };
-  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
-    const PlanSegment& seg = plan.segments[k];
-    events.clear();
-    for (std::size_t m = 0; m < motors; ++m) {
-      const std::int64_t n = std::llabs(seg.pulses[m]);
-      for (std::int64_t j = 1; j <= n; ++j)
-        events.emplace_back((static_cast<double>(j) - 0.5) / static_cast<double>(n), m);
-    }
-    std::sort(events.begin(), events.end());
-    double lo = 1e300, hi = -1e300;
-    visit(k, 0.0, lo, hi);
-    for (std::size_t i = 0; i < events.size(); ++i) {
-      const std::size_t m = events[i].second;
-      position[m] += (seg.pulses[m] > 0 ? 1.0 : -1.0) * plan.motors[m].mm_per_pulse;
-      if (i + 1 < events.size() && events[i + 1].first == events[i].first) continue;
-      visit(k, events[i].first, lo, hi);
-    }
-    out.segment_x_mm.push_back(0.5 * (schedule.knots_mm[k] + schedule.knots_mm[k + 1]));
-    out.segment_min_mm.push_back(lo);
-    out.segment_max_mm.push_back(hi);
-  }
+  });
+  if (!plan.segments.empty()) close_segment(plan.segments.size() - 1);
   // Area under the generatrix (Simpson on the knots' grid refined x4).
   const double a = schedule.knots_mm.front(), b = schedule.knots_mm.back();
   const std::size_t n = 4 * (schedule.knots_mm.size() - 1);

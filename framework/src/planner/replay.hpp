@@ -5,11 +5,41 @@
 // profile normal, is the produced-profile error. The same instants replayed with the exact
 // (unrounded) targets interpolated linearly in each segment give the linearisation part; the
 // difference per state is the quantisation part.
+#include <algorithm>
+#include <cstdlib>
+#include <utility>
 #include <vector>
 
 #include "planner/scheduler.hpp"
 
 namespace chatterlab::planner {
+
+// Every machine state of a quantised plan: visit(k, u, positions) at the start of segment k
+// (u = 0) and after each distinct pulse instant u in (0, 1) of segment k (a motor's n pulses
+// spread evenly: pulse j at u = (j - 1/2) / n; simultaneous pulses form one state). The time of
+// a state is start_s + u duration_s.
+template <class Visit>
+void for_each_pulse_state(const FeedPlan& plan, Visit&& visit) {
+  std::vector<double> position(plan.initial_position_mm);
+  std::vector<std::pair<double, std::size_t>> events;
+  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
+    const PlanSegment& seg = plan.segments[k];
+    events.clear();
+    for (std::size_t m = 0; m < plan.motors.size(); ++m) {
+      const std::int64_t n = std::llabs(seg.pulses[m]);
+      for (std::int64_t j = 1; j <= n; ++j)
+        events.emplace_back((static_cast<double>(j) - 0.5) / static_cast<double>(n), m);
+    }
+    std::sort(events.begin(), events.end());
+    visit(k, 0.0, static_cast<const std::vector<double>&>(position));
+    for (std::size_t i = 0; i < events.size(); ++i) {
+      const std::size_t m = events[i].second;
+      position[m] += (seg.pulses[m] > 0 ? 1.0 : -1.0) * plan.motors[m].mm_per_pulse;
+      if (i + 1 < events.size() && events[i + 1].first == events[i].first) continue;
+      visit(k, events[i].first, static_cast<const std::vector<double>&>(position));
+    }
+  }
+}
 
 struct ErrorStats {
   double max_abs_mm = 0.0, mean_mm = 0.0, mean_abs_mm = 0.0, rms_mm = 0.0;

@@ -114,156 +114,212 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
     }
     place(k, nominal + best_t * w);
   }
-  plan.initial_position_mm = out.target_mm[0];
+  quantise_targets(plan, out.target_mm);
 
-  // 2. Integer positions relative to the start, remainders carried by rounding the cumulative
-  //    target (never the increments).
-  std::vector<std::vector<std::int64_t>> steps(segment_count + 1, std::vector<std::int64_t>(motors));
-  for (std::size_t k = 0; k <= segment_count; ++k)
-    for (std::size_t m = 0; m < motors; ++m)
-      steps[k][m] = std::llround((out.target_mm[k][m] - out.target_mm[0][m]) / plan.motors[m].mm_per_pulse);
-  plan.segments.resize(segment_count);
+  // 3. Per-segment speed caps from the axial-advance rule (s = 1/duration), the continuous
+  //    relaxation, and the time-optimal speeds under every motor rule.
+  const double v_axial = constraints.max_axial_speed_mm_per_s();
+  std::vector<double> cap(segment_count);
+  for (std::size_t k = 0; k < segment_count; ++k)
+    cap[k] = v_axial / (out.knots_mm[k + 1] - out.knots_mm[k]);
+  out.lower_bound_s = relaxed_time_bound(plan, cap, out.target_mm);
+  try {
+    out.smoothing_passes = time_optimal_durations(plan, cap, constraints.rate_rules());
+  } catch (const NoAdmissibleSpeed& e) {
+    throw std::domain_error(
+        fmt::format("no admissible speed for the segment at x = {} mm", out.knots_mm[e.segment]));
+  }
+  out.certificate = certify(out, constraints);
+  return out;
+}
+
+void quantise_targets(FeedPlan& plan, const std::vector<std::vector<double>>& target_mm) {
+  const std::size_t motors = plan.motors.size(), segment_count = target_mm.size() - 1;
+  plan.initial_position_mm = target_mm[0];
+  // Rounding the cumulative target (never the increments) carries the remainder: every axis
+  // stays within half a step of its target at every segment end.
+  std::vector<std::int64_t> previous(motors, 0), now(motors);
+  plan.segments.assign(segment_count, PlanSegment{});
   for (std::size_t k = 0; k < segment_count; ++k) {
     plan.segments[k].pulses.resize(motors);
-    for (std::size_t m = 0; m < motors; ++m)
-      plan.segments[k].pulses[m] = steps[k + 1][m] - steps[k][m];
-  }
-
-  // 3. Per-segment speed bounds (s = 1/duration) and the continuous relaxation.
-  const double delta = constraints.max_relative_rate_change, fss = constraints.start_stop_rate_hz;
-  const double v_axial = constraints.max_axial_speed_mm_per_s();
-  std::vector<double> s(segment_count);
-  for (std::size_t k = 0; k < segment_count; ++k) {
-    const double dx = out.knots_mm[k + 1] - out.knots_mm[k];
-    double bound = v_axial / dx, relaxed = v_axial / dx;
     for (std::size_t m = 0; m < motors; ++m) {
-      const auto n = static_cast<double>(std::llabs(plan.segments[k].pulses[m]));
-      if (n > 0) bound = std::min(bound, plan.motors[m].max_pulse_rate_hz / n);
-      const double exact = std::abs(out.target_mm[k + 1][m] - out.target_mm[k][m]) / plan.motors[m].mm_per_pulse;
+      now[m] = std::llround((target_mm[k + 1][m] - target_mm[0][m]) / plan.motors[m].mm_per_pulse);
+      plan.segments[k].pulses[m] = now[m] - previous[m];
+      previous[m] = now[m];
+    }
+  }
+}
+
+double relaxed_time_bound(const FeedPlan& plan, const std::vector<double>& speed_cap,
+                          const std::vector<std::vector<double>>& target_mm) {
+  double bound_s = 0.0;
+  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
+    double relaxed = speed_cap[k];
+    for (std::size_t m = 0; m < plan.motors.size(); ++m) {
+      const double exact = std::abs(target_mm[k + 1][m] - target_mm[k][m]) / plan.motors[m].mm_per_pulse;
       if (exact > 0) relaxed = std::min(relaxed, plan.motors[m].max_pulse_rate_hz / exact);
     }
-    s[k] = bound;
-    out.lower_bound_s += 1.0 / relaxed;
+    bound_s += 1.0 / relaxed;
   }
+  return bound_s;
+}
+
+namespace {
+
+// Consecutive segment pairs (k, next): k + 1, and N-1 -> 0 when periodic.
+std::vector<std::pair<std::size_t, std::size_t>> segment_pairs(std::size_t count, bool periodic) {
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t k = 0; k + 1 < count; ++k) pairs.emplace_back(k, k + 1);
+  if (periodic && count > 1) pairs.emplace_back(count - 1, 0);
+  return pairs;
+}
+
+}  // namespace
+
+std::size_t time_optimal_durations(FeedPlan& plan, const std::vector<double>& speed_cap,
+                                   const RateRules& rules, bool periodic) {
+  const std::size_t motors = plan.motors.size(), segment_count = plan.segments.size();
+  const double delta = rules.max_relative_rate_change, fss = rules.start_stop_rate_hz;
+  auto pulses = [&](std::size_t k, std::size_t m) { return static_cast<double>(plan.segments[k].pulses[m]); };
+  // Per-segment bounds: the path's cap and every motor's pulse rate.
+  std::vector<double> s(segment_count);
+  for (std::size_t k = 0; k < segment_count; ++k) {
+    s[k] = speed_cap[k];
+    for (std::size_t m = 0; m < motors; ++m)
+      if (pulses(k, m) != 0) s[k] = std::min(s[k], plan.motors[m].max_pulse_rate_hz / std::abs(pulses(k, m)));
+  }
+  const auto pairs = segment_pairs(segment_count, periodic);
   // Smoothness rules that bound one segment alone: starts, stops and reversals.
-  for (std::size_t k = 0; k + 1 < segment_count; ++k)
+  for (const auto& [k, next] : pairs)
     for (std::size_t m = 0; m < motors; ++m) {
-      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
-      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
-      if (n0 == 0 && n1 != 0) s[k + 1] = std::min(s[k + 1], fss / std::abs(n1));
+      const double n0 = pulses(k, m), n1 = pulses(next, m);
+      if (n0 == 0 && n1 != 0) s[next] = std::min(s[next], fss / std::abs(n1));
       if (n1 == 0 && n0 != 0) s[k] = std::min(s[k], fss / std::abs(n0));
       if (n0 * n1 < 0) {
         s[k] = std::min(s[k], 0.5 * fss / std::abs(n0));
-        s[k + 1] = std::min(s[k + 1], 0.5 * fss / std::abs(n1));
+        s[next] = std::min(s[next], 0.5 * fss / std::abs(n1));
       }
     }
-
-  // 4. Same-sign rate changes: forward (acceleration) and backward (deceleration) passes.
-  auto forward_bound = [&](std::size_t k) {  // largest s[k+1] given s[k]
+  // Same-sign rate changes: forward (acceleration) and backward (deceleration) passes.
+  auto forward_bound = [&](std::size_t k, std::size_t next) {  // largest s[next] given s[k]
     double bound = std::numeric_limits<double>::infinity();
     for (std::size_t m = 0; m < motors; ++m) {
-      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
-      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
+      const double n0 = pulses(k, m), n1 = pulses(next, m);
       if (n0 * n1 <= 0) continue;
       const double r = std::abs(n0) * s[k];
       bound = std::min(bound, (r + rate_change_allowed(r, delta, fss)) / std::abs(n1));
     }
     return bound;
   };
-  auto backward_bound = [&](std::size_t k) {  // largest s[k] given s[k+1]
+  auto backward_bound = [&](std::size_t k, std::size_t next) {  // largest s[k] given s[next]
     double bound = std::numeric_limits<double>::infinity();
     for (std::size_t m = 0; m < motors; ++m) {
-      const double n0 = static_cast<double>(plan.segments[k].pulses[m]);
-      const double n1 = static_cast<double>(plan.segments[k + 1].pulses[m]);
+      const double n0 = pulses(k, m), n1 = pulses(next, m);
       if (n0 * n1 <= 0) continue;
-      const double r1 = std::abs(n1) * s[k + 1];
+      const double r1 = std::abs(n1) * s[next];
       bound = std::min(bound, std::max(r1 / (1.0 - delta), r1 + fss) / std::abs(n0));
     }
     return bound;
   };
+  std::size_t passes = 0;
   for (std::size_t pass = 0; pass < 1000; ++pass) {
     bool changed = false;
     auto lower = [&](std::size_t k, double bound) {
       if (bound < s[k] * (1.0 - 1e-13)) changed = true;
       s[k] = std::min(s[k], bound);
     };
-    for (std::size_t k = 0; k + 1 < segment_count; ++k) lower(k + 1, forward_bound(k));
-    for (std::size_t k = segment_count - 1; k-- > 0;) lower(k, backward_bound(k));
-    out.smoothing_passes = pass + 1;
+    for (const auto& [k, next] : pairs) lower(next, forward_bound(k, next));
+    for (auto it = pairs.rbegin(); it != pairs.rend(); ++it) lower(it->first, backward_bound(it->first, it->second));
+    passes = pass + 1;
     if (!changed) break;
   }
 
   double t = 0.0, carry = 0.0;  // compensated sum: 3000 segments end at the bound's time
   for (std::size_t k = 0; k < segment_count; ++k) {
-    if (!(s[k] > 0.0) || !std::isfinite(1.0 / s[k]))
-      throw std::domain_error(fmt::format("no admissible speed for the segment at x = {} mm",
-                                          out.knots_mm[k]));
+    if (!(s[k] > 0.0) || !std::isfinite(1.0 / s[k])) throw NoAdmissibleSpeed(k);
     plan.segments[k].start_s = t;
     plan.segments[k].duration_s = 1.0 / s[k];
     const double y = plan.segments[k].duration_s - carry, sum = t + y;
     carry = (sum - t) - y;
     t = sum;
   }
-  out.certificate = certify(out, constraints);
-  return out;
+  return passes;
 }
 
-Certificate certify(const Schedule& schedule, const FeedConstraints& constraints) {
-  const FeedPlan& plan = schedule.plan;
+Certificate certify_motor_rules(const FeedPlan& plan, const std::vector<std::vector<double>>& target_mm,
+                                const RateRules& rules, bool periodic) {
   const std::size_t motors = plan.motors.size();
   Certificate c;
   c.max_pulse_rate_hz.assign(motors, 0.0);
-  const double delta = constraints.max_relative_rate_change, fss = constraints.start_stop_rate_hz;
-  const double v_axial = constraints.max_axial_speed_mm_per_s();
-  auto violation = [&](std::string what) {
-    c.ok = false;
-    if (c.violations.size() < 10) c.violations.push_back(std::move(what));
+  const double delta = rules.max_relative_rate_change, fss = rules.start_stop_rate_hz;
+  auto rate = [&](std::size_t k, std::size_t m) {
+    return static_cast<double>(plan.segments[k].pulses[m]) / plan.segments[k].duration_s;
   };
   std::vector<std::int64_t> position(motors, 0);
   std::vector<int> last_sign(motors, 0);
-  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
-    const PlanSegment& seg = plan.segments[k];
-    const double dx = schedule.knots_mm[k + 1] - schedule.knots_mm[k];
-    const double axial = std::abs(dx) / seg.duration_s;
-    c.max_axial_speed_mm_per_s = std::max(c.max_axial_speed_mm_per_s, axial);
-    if (axial > v_axial * (1 + check_tolerance))
-      violation(fmt::format("segment {}: axial speed {} mm/s > {} mm/s", k, axial, v_axial));
+  for (std::size_t k = 0; k < plan.segments.size(); ++k)
     for (std::size_t m = 0; m < motors; ++m) {
-      const double rate = static_cast<double>(seg.pulses[m]) / seg.duration_s;
-      c.max_pulse_rate_hz[m] = std::max(c.max_pulse_rate_hz[m], std::abs(rate));
-      if (std::abs(rate) > plan.motors[m].max_pulse_rate_hz * (1 + check_tolerance))
-        violation(fmt::format("segment {}: {} motor at {} pulses/s > {}", k, plan.motors[m].name,
-                              std::abs(rate), plan.motors[m].max_pulse_rate_hz));
-      position[m] += seg.pulses[m];
-      const double exact = (schedule.target_mm[k + 1][m] - schedule.target_mm[0][m]) /
-                           plan.motors[m].mm_per_pulse;
-      c.max_position_drift_steps = std::max(c.max_position_drift_steps,
-                                            std::abs(static_cast<double>(position[m]) - exact));
-      if (k + 1 == plan.segments.size()) continue;
-      const PlanSegment& next = plan.segments[k + 1];
-      const double next_rate = static_cast<double>(next.pulses[m]) / next.duration_s;
-      const double change = std::abs(next_rate - rate);
-      if (seg.pulses[m] != 0) {
-        const int sign = seg.pulses[m] > 0 ? 1 : -1;
+      if (plan.segments[k].pulses[m] != 0) {  // reversals: sign changes of the moving segments
+        const int sign = plan.segments[k].pulses[m] > 0 ? 1 : -1;
         if (last_sign[m] != 0 && sign != last_sign[m]) ++c.reversals;
         last_sign[m] = sign;
       }
-      if (change <= delta * std::abs(rate)) {
-        if (rate != 0.0) c.max_relative_rate_change = std::max(c.max_relative_rate_change, change / std::abs(rate));
+      const double r = std::abs(rate(k, m));
+      c.max_pulse_rate_hz[m] = std::max(c.max_pulse_rate_hz[m], r);
+      if (r > plan.motors[m].max_pulse_rate_hz * (1 + check_tolerance))
+        c.add_violation(fmt::format("segment {}: {} motor at {} pulses/s > {}", k, plan.motors[m].name,
+                                    r, plan.motors[m].max_pulse_rate_hz));
+      position[m] += plan.segments[k].pulses[m];
+      const double exact = (target_mm[k + 1][m] - target_mm[0][m]) / plan.motors[m].mm_per_pulse;
+      c.max_position_drift_steps = std::max(c.max_position_drift_steps,
+                                            std::abs(static_cast<double>(position[m]) - exact));
+    }
+  for (const auto& [k, next] : segment_pairs(plan.segments.size(), periodic))
+    for (std::size_t m = 0; m < motors; ++m) {
+      const double before = rate(k, m), after = rate(next, m), change = std::abs(after - before);
+      if (change <= delta * std::abs(before)) {
+        if (before != 0.0) c.max_relative_rate_change = std::max(c.max_relative_rate_change, change / std::abs(before));
       } else {
         ++c.rate_changes_under_start_stop_allowance;
         c.max_rate_change_at_low_rate_hz = std::max(c.max_rate_change_at_low_rate_hz, change);
-        if (change > rate_change_allowed(rate, delta, fss) * (1 + check_tolerance))
-          violation(fmt::format("segments {}-{}: {} motor rate {} -> {} pulses/s changes by more "
-                                "than max({} x {}, start-stop rate {})",
-                                k, k + 1, plan.motors[m].name, rate, next_rate, delta,
-                                std::abs(rate), fss));
+        if (change > rate_change_allowed(before, delta, fss) * (1 + check_tolerance))
+          c.add_violation(fmt::format("segments {}-{}: {} motor rate {} -> {} pulses/s changes by more "
+                                      "than max({} x {}, start-stop rate {})",
+                                      k, next, plan.motors[m].name, before, after, delta,
+                                      std::abs(before), fss));
       }
     }
-  }
   if (c.max_position_drift_steps > 0.5 + 1e-6)
-    violation(fmt::format("positions drift by {} steps", c.max_position_drift_steps));
+    c.add_violation(fmt::format("positions drift by {} steps", c.max_position_drift_steps));
   return c;
+}
+
+Certificate certify(const Schedule& schedule, const FeedConstraints& constraints) {
+  Certificate c = certify_motor_rules(schedule.plan, schedule.target_mm, constraints.rate_rules());
+  const double v_axial = constraints.max_axial_speed_mm_per_s();
+  for (std::size_t k = 0; k < schedule.plan.segments.size(); ++k) {
+    const double axial = std::abs(schedule.knots_mm[k + 1] - schedule.knots_mm[k]) /
+                         schedule.plan.segments[k].duration_s;
+    c.max_axial_speed_mm_per_s = std::max(c.max_axial_speed_mm_per_s, axial);
+    if (axial > v_axial * (1 + check_tolerance))
+      c.add_violation(fmt::format("segment {}: axial speed {} mm/s > {} mm/s", k, axial, v_axial));
+  }
+  return c;
+}
+
+std::size_t ramp_segments(const FeedPlan& plan, const RateRules& rules) {
+  if (plan.segments.empty()) return 0;
+  double fastest = 0.0;
+  const PlanSegment& first = plan.segments.front();
+  for (std::size_t m = 0; m < plan.motors.size(); ++m)
+    fastest = std::max(fastest, std::abs(static_cast<double>(first.pulses[m])) / first.duration_s);
+  double scale = fastest > 0 ? rules.start_stop_rate_hz / fastest : 1.0;
+  std::size_t n = 0;
+  while (scale < 1.0) {
+    ++n;
+    scale *= 1.0 + rules.max_relative_rate_change;
+  }
+  return n;
 }
 
 }  // namespace chatterlab::planner

@@ -18,6 +18,7 @@
 // most the start-stop rate f_ss (a stepper starts, stops or reverses within f_ss without losing
 // steps) where it is not. A reversal (r, r' of opposite sign) is allowed with |r|, |r'| <= f_ss/2.
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,12 @@
 
 namespace chatterlab::planner {
 
+// The machine's rate rules (every motor): the smoothness rule above with delta and f_ss.
+struct RateRules {
+  double max_relative_rate_change = 0.1;  // delta
+  double start_stop_rate_hz = 10.0;       // f_ss
+};
+
 struct FeedConstraints {
   double spindle_speed_rpm = 300.0;
   double max_axial_advance_mm_per_100_rev = 4.0;
@@ -35,6 +42,7 @@ struct FeedConstraints {
   double max_axial_speed_mm_per_s() const {
     return max_axial_advance_mm_per_100_rev / 100.0 * spindle_speed_rpm / 60.0;
   }
+  RateRules rate_rules() const { return {max_relative_rate_change, start_stop_rate_hz}; }
 };
 
 // Every segment and motor checked after integerisation, with the largest values used.
@@ -48,6 +56,10 @@ struct Certificate {
   std::size_t reversals = 0;
   double max_position_drift_steps = 0.0;     // |integer - exact| position at segment ends
   std::vector<std::string> violations;       // empty when ok (first few listed)
+  void add_violation(std::string what) {
+    ok = false;
+    if (violations.size() < 10) violations.push_back(std::move(what));
+  }
 };
 
 struct Schedule {
@@ -73,6 +85,42 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
                    const std::function<double(double)>& contact_on_tool = nullptr,
                    bool choose_knots = true,
                    const std::function<ToolContact(double)>& tool_contact = nullptr);
+
+// The parts of the scheduler that do not depend on the geometry (shared by feed_plan and
+// cam_plan, MODELS.md P2/K2):
+//
+// Integer pulses from exact axis targets target_mm[k][m] (k = 0..N): positions rounded from the
+// cumulative targets, remainders carried; sets plan.initial_position_mm = target_mm[0].
+void quantise_targets(FeedPlan& plan, const std::vector<std::vector<double>>& target_mm);
+
+// Time-optimal durations for the plan's integer pulses: the greatest speeds s_k = 1/duration_k
+// with s_k <= speed_cap[k] (the path's own rule: axial advance, cam speed), every motor's pulse
+// rate, starts, stops and reversals, and the smoothness rule between consecutive segments;
+// periodic: the last segment is also followed by the first (a cam ground revolution after
+// revolution). Sets start_s and duration_s; returns the number of smoothing passes. Throws
+// std::domain_error("segment k: ...") when a segment admits no speed.
+struct NoAdmissibleSpeed : std::domain_error {
+  explicit NoAdmissibleSpeed(std::size_t k)
+      : std::domain_error("segment " + std::to_string(k) + ": no admissible speed"), segment(k) {}
+  std::size_t segment;
+};
+std::size_t time_optimal_durations(FeedPlan& plan, const std::vector<double>& speed_cap,
+                                   const RateRules& rules, bool periodic = false);
+
+// Continuous relaxation: every segment at the largest speed its own bounds allow (speed_cap and
+// the pulse rate of the exact, unrounded axis travel), no smoothness: a lower bound on the time.
+double relaxed_time_bound(const FeedPlan& plan, const std::vector<double>& speed_cap,
+                          const std::vector<std::vector<double>>& target_mm);
+
+// Certificate of the motor rules after integerisation: pulse rate, smoothness (with the pair
+// last -> first when periodic), position drift against target_mm at segment ends.
+Certificate certify_motor_rules(const FeedPlan& plan, const std::vector<std::vector<double>>& target_mm,
+                                const RateRules& rules, bool periodic = false);
+
+// Pre-motion (P2: "the plan starts after a short pre-motion"): segments of a ramp from rest to
+// the first segment's rates (all rates scaled by f_ss / max|r|, then by 1 + delta per segment);
+// the run-out mirrors it.
+std::size_t ramp_segments(const FeedPlan& plan, const RateRules& rules);
 
 // Signed normal distance of the tool from the generatrix (positive: material left).
 double tool_deviation_mm(const ToolInPart& tool, const Generatrix& generatrix);

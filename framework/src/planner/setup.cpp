@@ -30,6 +30,37 @@ std::unique_ptr<Generatrix> build_generatrix(const Json& part) {
   return expression_generatrix(part.at("generatrix").get<std::string>(), range.at(0), range.at(1));
 }
 
+ParamSpec relative_rate_change_spec() {
+  ParamSpec delta = positive_spec("max_relative_rate_change", "1",
+                                  "delta: largest relative change of a motor's pulse rate between "
+                                  "consecutive segments, |f_q - f_h| / f_q");
+  delta.max = 1.0;
+  delta.max_exclusive = true;
+  return delta;
+}
+
+ParamSpec start_stop_rate_spec() {
+  ParamSpec start_stop = positive_spec(
+      "start_stop_rate_hz", "1/s",
+      "start-stop rate: a motor may change its rate by this much in one step where the relative "
+      "rule does not apply (start, stop, reversal, low rates); default delta x max pulse rate");
+  start_stop.optional = true;
+  return start_stop;
+}
+
+RateRules build_rate_rules(const Json& machine, const Json& plan, const Kinematics& kinematics) {
+  RateRules rules;
+  rules.max_relative_rate_change = machine.at("max_relative_rate_change").get<double>();
+  if (plan.contains("start_stop_rate_hz") && plan["start_stop_rate_hz"].is_number()) {
+    rules.start_stop_rate_hz = plan["start_stop_rate_hz"].get<double>();
+  } else {
+    double slowest = 1e300;
+    for (const MotorAxis& m : kinematics.motors()) slowest = std::min(slowest, m.max_pulse_rate_hz);
+    rules.start_stop_rate_hz = rules.max_relative_rate_change * slowest;
+  }
+  return rules;
+}
+
 FeedConstraints build_constraints(const Json& machine, const Json& plan, const Kinematics& kinematics) {
   FeedConstraints c;
   const Json& speed = machine.at("spindle_speed_rpm");
@@ -37,16 +68,9 @@ FeedConstraints build_constraints(const Json& machine, const Json& plan, const K
   // planning constraint that depends on it and it grows with the speed (docs/planner.md).
   c.spindle_speed_rpm = speed.is_object() ? speed.at("to").get<double>() : speed.get<double>();
   c.max_axial_advance_mm_per_100_rev = machine.at("max_axial_advance_mm_per_100_rev").get<double>();
-  c.max_relative_rate_change = machine.at("max_relative_rate_change").get<double>();
-  if (plan.contains("start_stop_rate_hz") && plan["start_stop_rate_hz"].is_number()) {
-    c.start_stop_rate_hz = plan["start_stop_rate_hz"].get<double>();
-  } else {
-    // Default: the change the relative rule allows at the slowest motor's top rate, so the
-    // allowance never permits more than the seed rule permits at full speed.
-    double slowest = 1e300;
-    for (const MotorAxis& m : kinematics.motors()) slowest = std::min(slowest, m.max_pulse_rate_hz);
-    c.start_stop_rate_hz = c.max_relative_rate_change * slowest;
-  }
+  const RateRules rules = build_rate_rules(machine, plan, kinematics);
+  c.max_relative_rate_change = rules.max_relative_rate_change;
+  c.start_stop_rate_hz = rules.start_stop_rate_hz;
   return c;
 }
 

@@ -26,6 +26,13 @@ inline ParamSpec positive_spec(std::string key, std::string unit, std::string de
 inline constexpr const char* machine_constraint_keys[] = {
     "max_relative_rate_change", "spindle_speed_rpm", "max_axial_advance_mm_per_100_rev"};
 
+// The motor rules shared by feed_plan and cam_plan: [machine] max_relative_rate_change (delta)
+// and [plan] start_stop_rate_hz (f_ss, default delta x the slowest motor's top rate, so the
+// allowance never permits more than the seed rule permits at full speed).
+ParamSpec relative_rate_change_spec();
+ParamSpec start_stop_rate_spec();
+RateRules build_rate_rules(const Json& machine, const Json& plan, const Kinematics& kinematics);
+
 std::unique_ptr<Kinematics> build_kinematics(const Json& machine);
 std::unique_ptr<Generatrix> build_generatrix(const Json& part);
 FeedConstraints build_constraints(const Json& machine, const Json& plan,

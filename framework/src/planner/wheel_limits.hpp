@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "chatterlab/planner/generatrix.hpp"
+#include "planner/scheduler.hpp"
 
 namespace chatterlab::planner {
 
@@ -26,18 +27,37 @@ struct EdgeRadiusLimit {
 // curvature (1+f'^2)^1.5 / f'' of a concave part (f'' > 0). Minimised over P on `samples` points.
 EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples = 2001);
 
+// Largest edge radius the wheel itself can carry: an arc of opening alpha is 2 r sin(alpha/2)
+// wide and must fit the face width a (a cylindrical wheel: alpha as given, default 180 deg).
+double wheel_geometry_edge_radius_mm(const WheelSection& wheel);
+
 struct Interference {
-  double depth_mm = 0.0;  // deepest penetration of the wheel section into the part (0: none)
-  double x_mm = 0.0;      // contact position where it happens
-  std::size_t contacts_with_interference = 0;
+  double depth_mm = 0.0;  // deepest penetration of the wheel section beyond the contact's own cut
+  double x_mm = 0.0;      // where on the part (x of the deepest section point)
+  double contact_x_mm = 0.0;  // where the contact was then
+  double time_s = 0.0;    // plan time of that state (along a plan)
+  std::size_t contacts_with_interference = 0;  // states (or ideal contacts) beyond the tolerance
+  std::size_t segments_with_interference = 0;  // along a plan
+  std::size_t states_checked = 0;
+  double tolerance_mm = 0.0;
 };
 
-// Checks the wheel section placed as P4 places it (tangent at the contact, contact at offset
-// zeta along the face) at each contact x in `contacts_mm` (zeta from `contact_on_tool_mm`, same
-// length or empty). Penetrations below tolerance_mm are ignored.
+// Ideal placements (validation): the wheel section tangent at each contact x in `contacts_mm`,
+// the contact at the section's nominal point (middle of the face, bottom of the edge arc).
+// Penetrations up to tolerance_mm are ignored.
 Interference check_interference(const Generatrix& generatrix, const WheelSection& wheel,
-                                const std::vector<double>& contacts_mm,
-                                const std::vector<double>& contact_on_tool_mm,
-                                double tolerance_mm = 1e-4);
+                                const std::vector<double>& contacts_mm, double tolerance_mm = 1e-4);
+
+// Along the quantised plan: every machine state (each pulse, spread evenly in its segment) goes
+// through the forward kinematics; the tool frame in the part (nominal point O, along-rails U,
+// across W) follows from forward() at tool points (0,0), (1,0), (0,1); the section (face
+// [-a/2, a/2] x {0}, or edge arc (r sin phi, r (1 - cos phi)), |phi| <= alpha/2) is probed for
+// its deepest point below the generatrix (64 samples, then golden-section refinement; the
+// generatrix tabulated as a cubic Hermite on 20000 intervals). Interference at a state: the
+// deepest penetration minus the contact's own cut-in (the profile error, reported separately),
+// beyond tolerance_mm (default 1 um: a nut step tilts a 20 mm half face by 0.2 um).
+Interference check_interference_along_plan(const Schedule& schedule, const Generatrix& generatrix,
+                                           const Kinematics& kinematics, const WheelSection& wheel,
+                                           double tolerance_mm = 1e-3);
 
 }  // namespace chatterlab::planner
