@@ -6,7 +6,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
 
+#include "chatterlab/analysis.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
@@ -24,6 +26,12 @@ constexpr const char* col_frequency = "dominant_frequency_hz";
 constexpr const char* col_max_displacement = "max_displacement_m";
 constexpr const char* col_contact_loss = "contact_loss_fraction";
 constexpr const char* col_outcome = "simulation_outcome";
+constexpr const char* col_work_wt = "work_waviness_wt_um";
+constexpr const char* col_work_wz = "work_waviness_wz_um";
+constexpr const char* col_work_ront = "work_roundness_ront_um";
+// Part quality (issue 7 part 6): the final work surface is evaluated by the surface metrology's
+// analysis plugin, reached through the registry (the framework does not link plugin code).
+constexpr const char* surface_plugin = "surface_profile";
 constexpr std::size_t max_peaks = 10;
 
 std::unique_ptr<Model> build_model(const Json& model_table) {
@@ -123,6 +131,91 @@ std::string study_name(const Json& document) {
   return "simulation";
 }
 
+// The optional [surface] table: the surface_profile plugin's keys except `unit` (a simulated
+// surface is in metres). Empty when the plugin is not registered.
+std::vector<ParamSpec> surface_specs() {
+  std::vector<ParamSpec> specs;
+  if (const auto* entry = analysis_registry().find(surface_plugin))
+    for (const ParamSpec& spec : entry->info.params)
+      if (spec.key != "unit") specs.push_back(spec);
+  return specs;
+}
+
+struct WorkSurfaceQuality {
+  Json summary;  // the surface summary of the final snapshot (+ t_s), or {problem}
+  Json wt_um, wz_um, ront_um;
+  std::optional<SampledSeries> series;  // the evaluated profile (for the plot)
+  std::unique_ptr<Analysis> analysis;
+};
+
+// Mean of a recorded speed over [from, to] (samples inside; the value at `to` if none).
+double mean_speed(const SimulationResult& r, std::size_t rotor, double from, double to) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i)
+    if (r.t_s[i] >= from && r.t_s[i] <= to) {
+      sum += r.speed_rpm[rotor][i];
+      ++n;
+    }
+  if (n > 0) return sum / static_cast<double>(n);
+  return r.speed_rpm[rotor].empty() ? 0.0 : r.speed_rpm[rotor].back();
+}
+
+// Waviness and roundness of the last work-surface snapshot: radius deviation = -(removal so far)
+// over one revolution, a closed profile. Wz|f bands from the speeds of the revolution that cut
+// it (mean over the last work revolution before the snapshot) unless [surface] gives them.
+WorkSurfaceQuality evaluate_work_surface(const SimulationResult& r, const Json& document) {
+  WorkSurfaceQuality q;
+  constexpr auto work = static_cast<std::size_t>(Rotor::work), wheel = static_cast<std::size_t>(Rotor::wheel);
+  if (r.snapshots.empty() || r.surface_samples_per_rev[work] == 0 ||
+      !analysis_registry().find(surface_plugin)) {
+    q.summary = {{"problem", "no work surface to evaluate (the model does not store one, or no "
+                             "snapshot was taken)"}};
+    return q;
+  }
+  const SurfaceSnapshot& snap = r.snapshots.back();
+  Json params = document.contains("surface") ? document.at("surface") : Json::object();
+  params["unit"] = "m";
+  Json speeds;
+  if (!params["work_speed_rpm"].is_number()) {
+    const double nw_end = mean_speed(r, work, snap.t_s, snap.t_s);
+    const double from = nw_end > 0 ? snap.t_s - 60.0 / nw_end : 0.0;
+    const double nw = mean_speed(r, work, from, snap.t_s), ng = mean_speed(r, wheel, from, snap.t_s);
+    if (nw > 0 && ng > 0) {
+      params["work_speed_rpm"] = nw;
+      params["wheel_speed_rpm"] = ng;
+      speeds = {{"wheel_speed_rpm", ng}, {"work_speed_rpm", nw},
+                {"from", "mean over the last work revolution before the snapshot"}};
+    }
+  }
+  SampledSeries series;
+  series.values.reserve(snap.surface_m[work].size());
+  for (double removed : snap.surface_m[work]) series.values.push_back(-removed);
+  series.sample_interval = 360.0 / static_cast<double>(series.values.size());
+  series.sample_unit = "deg";
+  series.closed = true;
+  series.name = fmt::format("work surface at t = {:.4g} s", snap.t_s);
+  try {
+    q.analysis = analysis_registry().at(surface_plugin).create(ParamValues(params));
+    q.summary = q.analysis->analyse(series, Json::object());
+  } catch (const InputError& e) {
+    q.summary = {{"problem", e.what()}};
+    q.analysis.reset();
+    return q;
+  }
+  q.summary["t_s"] = snap.t_s;
+  q.summary["profile"] = "radius deviation = -(removal so far), one work revolution";
+  if (!speeds.is_null()) q.summary["speeds"] = speeds;
+  const double infeed = document.at("simulation").at("infeed_rate_m_per_s").get<double>();
+  if (infeed > 0 && params["work_speed_rpm"].is_number())
+    q.summary["infeed_per_work_revolution_um"] = 1e6 * infeed * 60.0 / params["work_speed_rpm"].get<double>();
+  q.wt_um = q.summary["Wt_um"];
+  q.wz_um = q.summary["Wz_um"];
+  q.ront_um = q.summary["RONt_um"];
+  q.series = std::move(series);
+  return q;
+}
+
 struct PointAnalysis {
   std::optional<EnvelopeFit> fit;
   std::string fit_problem;
@@ -162,19 +255,30 @@ PointAnalysis analyse(const SimulationResult& r, const Json& sim) {
   return a;
 }
 
-void write_point_files(const SimulationResult& r, const PointAnalysis& a, const Json& document,
-                       const PointContext& context) {
+void write_point_files(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
+                       const Json& document, const PointContext& context) {
   const fs::path& dir = context.artifact_dir;
   const Json& sim = document.at("simulation");
   std::vector<std::string> header{"t_s", "displacement_m", "force_n", "depth_of_cut_m", "infeed_m",
                                   "wheel_speed_rpm", "work_speed_rpm", "wheel_surface_at_contact_m",
                                   "work_surface_at_contact_m", "in_contact"};
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
-  write_file_atomically(dir / "timeseries.csv",
-                        csv_text(header, {r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
-                                          r.speed_rpm[wheel], r.speed_rpm[work],
-                                          r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
-                                          r.in_contact}));
+  std::vector<std::vector<double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
+                                           r.speed_rpm[wheel], r.speed_rpm[work],
+                                           r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
+                                           r.in_contact};
+  if (const double noise = sim.at("measurement_noise_m").get<double>(); noise > 0) {
+    // A displacement sensor's reading: x plus white Gaussian noise (never fed back to the
+    // dynamics). Monitors built for measured signals (C1-C3) need it: a noise-free simulated
+    // signal has no stable "texture", and amplitude-normalised criteria flag any pure sine.
+    std::mt19937_64 random(sim.at("seed").get<std::uint64_t>() + 0x5eed);
+    std::normal_distribution<double> gauss(0.0, noise);
+    std::vector<double> measured = r.displacement_m;
+    for (double& x : measured) x += gauss(random);
+    header.emplace_back("measured_displacement_m");
+    columns.push_back(std::move(measured));
+  }
+  write_file_atomically(dir / "timeseries.csv", csv_text(header, columns));
   Json snapshots = Json::array();
   for (std::size_t i = 0; i < r.snapshots.size(); ++i) {
     const SurfaceSnapshot& s = r.snapshots[i];
@@ -211,6 +315,7 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
   summary["contact_loss_intervals_s"] = intervals;
   summary["contact_loss_interval_count"] = r.contact_loss_intervals.size();
   summary["surface_snapshots"] = snapshots;
+  summary["work_surface_quality"] = quality.summary;
   summary["diagnostics"] = {{"messages", r.diagnostics},
                             {"integrator_steps", r.steps},
                             {"rhs_evaluations", r.rhs_evaluations},
@@ -289,6 +394,13 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
       render(surf, fmt::format("{}_surface", to_string(static_cast<Rotor>(rotor))));
     }
   }
+  if (quality.analysis && quality.series) {
+    try {
+      quality.analysis->plot(quality.summary, *quality.series, dir);
+    } catch (const std::exception& e) {
+      errors += fmt::format("{}surface_profile_polar: {}", errors.empty() ? "" : "; ", e.what());
+    }
+  }
   if (!errors.empty()) throw plot::PlotError(errors);
 }
 
@@ -341,6 +453,9 @@ PluginInfo Simulate::info() {
                 "spectral peaks below this are not the dominant (chatter) frequency: the infeed "
                 "transient and work-revolution waviness live there", 10.0, 0.0, false),
       real_spec("divergence_limit_m", "m", "|displacement| beyond this stops the run as diverged", 0.01, 0.0, true),
+      real_spec("measurement_noise_m", "m",
+                "rms of white Gaussian sensor noise added to x in timeseries.csv column "
+                "measured_displacement_m (seeded by seed; 0: no column)", 0.0, 0.0, false),
       files,
   };
   for (const std::string rotor : {"wheel", "work"})
@@ -419,6 +534,38 @@ void Simulate::validate(Json& document, const SourceMap& sources) const {
   }
   document["model"] = std::move(model);
   document["simulation"] = std::move(sim);
+  validate_surface(document, sources);
+}
+
+void Simulate::validate_surface(Json& document, const SourceMap& sources) {
+  // [surface] (optional): the surface study's [filter]/[process]/[parameters] keys, flat, with
+  // their limits and joint checks (the surface_profile plugin's own); a closed profile takes its
+  // cut-off in UPR only.
+  const std::vector<ParamSpec> specs = surface_specs();
+  if (specs.empty()) {
+    if (document.contains("surface"))
+      throw InputError(fmt::format("{}: [surface] needs the surface metrology plugin '{}', which "
+                                   "is not registered in this build",
+                                   sources.locate("surface").str(), surface_plugin));
+    return;
+  }
+  Json table = document.contains("surface") ? document["surface"] : Json::object();
+  if (!table.is_object())
+    throw InputError(fmt::format("{}: surface = {}: expected a table [surface]",
+                                 sources.locate("surface").str(), table.dump()));
+  table = validate_params(table, specs, "surface", sources);
+  if (table["cutoff_mm"].is_number())
+    throw InputError(fmt::format("{}: surface.cutoff_mm = {}: a simulated work surface is a closed "
+                                 "profile (one revolution); give its cut-off as surface.cutoff_upr",
+                                 sources.locate("surface.cutoff_mm").str(), table["cutoff_mm"].dump()));
+  Json params = table;
+  params["unit"] = "m";
+  try {
+    analysis_registry().at(surface_plugin).create(ParamValues(params));
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: [surface]: {}", sources.locate("surface").str(), e.what()));
+  }
+  document["surface"] = std::move(table);
 }
 
 SimulationSettings Simulate::settings(const Json& document, const TimeDomainModel& model) {
@@ -444,7 +591,8 @@ SimulationSettings Simulate::settings(const Json& document, const TimeDomainMode
 }
 
 std::vector<std::string> Simulate::output_columns(const Json&) const {
-  return {col_growth, col_frequency, col_max_displacement, col_contact_loss, col_outcome};
+  return {col_growth, col_frequency, col_max_displacement, col_contact_loss, col_outcome,
+          col_work_wt, col_work_wz, col_work_ront};
 }
 
 std::vector<Json> Simulate::run_point(const Json& document, const PointContext& context) const {
@@ -458,12 +606,14 @@ std::vector<Json> Simulate::run_point(const Json& document, const PointContext& 
   }
   const Json& sim = document.at("simulation");
   PointAnalysis a = analyse(result, sim);
+  const WorkSurfaceQuality quality = evaluate_work_surface(result, document);
   if (!context.artifact_dir.empty() && (context.single_point() || sim.at("write_point_files").get<bool>()))
-    write_point_files(result, a, document, context);
+    write_point_files(result, a, quality, document, context);
   return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(),
           a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz), a.max_displacement,
           result.end_time_s > 0 ? result.contact_loss_time_s / result.end_time_s : 0.0,
-          result.diverged ? std::string("diverged") : std::string("completed")};
+          result.diverged ? std::string("diverged") : std::string("completed"),
+          quality.wt_um, quality.wz_um, quality.ront_um};
 }
 
 void Simulate::write_artifacts(const Study& study, const ResultTable& results, const fs::path& out_dir) const {

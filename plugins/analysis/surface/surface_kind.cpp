@@ -120,6 +120,24 @@ Json validated_table(const Json& document, const std::string& name,
   return validate_params(table, specs, name, sources);
 }
 
+// The [process] keys' joint limits, shared by the study kind and the analysis plugin: both
+// speeds or none, bands [from, to] with from <= to. `prefix` is how the caller names the keys
+// ("process." in a surface study, "" for the flat analysis parameters); fail(key, message).
+template <class Fail>
+void check_process(const Json& process, const std::string& prefix, Fail&& fail) {
+  const bool wheel = process["wheel_speed_rpm"].is_number(), work = process["work_speed_rpm"].is_number();
+  if (wheel != work)
+    fail(prefix + "wheel_speed_rpm",
+         fmt::format("Wz|f needs both {0}wheel_speed_rpm and {0}work_speed_rpm", prefix));
+  for (const char* key : {"low_band_upr", "high_band_upr"}) {
+    const Json& band = process[key];
+    if (!band.is_array()) continue;
+    if (band.size() != 2 || band[0].get<double>() > band[1].get<double>())
+      fail(prefix + key,
+           fmt::format("{}{} = {}: expected [from, to] with from <= to", prefix, key, band.dump()));
+  }
+}
+
 double unit_to_um(const std::string& unit) {
   if (unit == "mm") return 1e3;
   if (unit == "m") return 1e6;
@@ -261,7 +279,8 @@ void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& t
 // Polar plot of the waviness about the least-squares centre (eccentricity removed, as roundness
 // instruments draw it), magnified onto a base circle of twice the LS peak-to-valley, with the
 // four reference circles (limacons relative to the LS circle) in the same scale.
-void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir) {
+void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir,
+                const std::string& stem = "polar") {
   const Json& rd = e.summary.at("roundness");
   const Json& ls = rd.at("least_squares");
   const double base = std::max(2.0 * ls.at("RONt_um").get<double>(), 1e-9);
@@ -296,11 +315,12 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
     }
     polar.series.push_back(std::move(circle));
   }
-  plot::render(polar, dir, "polar");
+  plot::render(polar, dir, stem);
 }
 
 // Amplitude per UPR of the profile with the Wz|f bands marked.
-void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir) {
+void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir,
+                const std::string& stem = "wz_f_bands") {
   const Json& wzf = e.summary.at("Wz_f");
   const std::size_t n = e.profile_um.size();
   RealFft fft(n);
@@ -328,7 +348,7 @@ void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::
   }
   for (auto* s : {&low, &high, &other})
     if (!s->x.empty()) bands.series.push_back(std::move(*s));
-  plot::render(bands, dir, "wz_f_bands");
+  plot::render(bands, dir, stem);
 }
 
 }  // namespace
@@ -429,19 +449,10 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
       }
     }
   }
-  const bool wheel = process["wheel_speed_rpm"].is_number(), work = process["work_speed_rpm"].is_number();
-  if (wheel != work)
-    fail("process", "Wz|f needs both process.wheel_speed_rpm and process.work_speed_rpm");
-  if (wheel && !closed)
+  if (process["wheel_speed_rpm"].is_number() && !closed)
     fail("process.wheel_speed_rpm", "process.wheel_speed_rpm: Wz|f bands need a closed "
                                     "(circumferential) profile, closed = true");
-  for (const char* key : {"low_band_upr", "high_band_upr"}) {
-    const Json& band = process[key];
-    if (!band.is_array()) continue;
-    if (band.size() != 2 || band[0].get<double>() > band[1].get<double>())
-      fail(fmt::format("process.{}", key),
-           fmt::format("process.{} = {}: expected [from, to] with from <= to", key, band.dump()));
-  }
+  check_process(process, "process.", fail);
 
   document["input"] = input;
   document["filter"] = filter;
@@ -528,7 +539,13 @@ PluginInfo SurfaceAnalysis::info() {
   return info;
 }
 
-Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+SurfaceAnalysis::SurfaceAnalysis(const ParamValues& params) : params_(params.json()) {
+  check_process(params_, "", [](const std::string&, const std::string& what) {
+    throw InputError(what);
+  });
+}
+
+SurfaceSettings SurfaceAnalysis::settings() const {
   // The flat parameters regrouped into the study kind's tables, read by the same code.
   Json document{{"input", Json::object()}, {"filter", Json::object()},
                 {"process", Json::object()}, {"parameters", Json::object()}};
@@ -541,7 +558,22 @@ Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context
   document["filter"]["type"] = params_.at("filter");
   take(process_specs(), "process");
   take(parameter_specs(), "parameters");
-  return evaluate_surface(series, settings_from(document));
+  return settings_from(document);
+}
+
+Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+  return evaluate_surface(series, settings());
+}
+
+void SurfaceAnalysis::plot(const Json& /*result*/, const SampledSeries& series,
+                           const fs::path& out_dir) const {
+  // The study kind's figures of a closed profile, drawn from a re-evaluation (the summary alone
+  // does not hold the filtered profile): polar roundness and, with speeds, the Wz|f bands.
+  if (!series.closed) return;
+  const SurfaceEvaluation e = evaluate_surface_profile(series, settings());
+  const std::string title = series.name.empty() ? std::string("profile") : series.name;
+  plot_polar(e, title, out_dir, "surface_profile_polar");
+  if (e.summary.contains("Wz_f")) plot_bands(e, title, out_dir, "surface_profile_wz_f_bands");
 }
 
 void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& results,

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/surface/surface.hpp"
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/study_kind.hpp"
 
@@ -30,14 +31,20 @@ class SurfaceStudy final : public StudyKind {
 // Analysis plugin `surface_profile` (analysis_registry): the same evaluation for a series another study
 // kind already holds, e.g. a simulated work surface (`unit = "m"`, closed, sample unit deg).
 // Parameters: the study kind's [filter], [process] and [parameters] keys plus `unit`, flat.
-// analyse() returns the summary.json object of the study kind.
+// analyse() returns the summary.json object of the study kind; plot() draws its polar roundness
+// plot (and the Wz|f bands with speeds) of a closed profile: surface_profile_polar(.png/.svg),
+// surface_profile_wz_f_bands. The constructor throws InputError on inconsistent [process] keys
+// (one speed without the other, a band with from > to), naming the flat key.
 class SurfaceAnalysis final : public Analysis {
  public:
   static PluginInfo info();
-  explicit SurfaceAnalysis(const ParamValues& params) : params_(params.json()) {}
+  explicit SurfaceAnalysis(const ParamValues& params);
   Json analyse(const SampledSeries& series, const Json& context) const override;
+  void plot(const Json& result, const SampledSeries& series,
+            const std::filesystem::path& out_dir) const override;
 
  private:
+  SurfaceSettings settings() const;
   Json params_;
 };
 
