@@ -53,6 +53,16 @@ void BM_D2Henon(benchmark::State& state) {
 }
 BENCHMARK(BM_D2Henon)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// TISEAN d2's work with all pairs (-N 0): dimensions 1..10, every pair closer than 2 % (arg 20) or
+// 20 % (arg 200) of the range, counted exactly (box grid), radii binned 8 per octave.
+void BM_D2HenonAllPairs(benchmark::State& state) {
+  for (auto _ : state) {
+    auto sums = correlation_sums_within(henon(), 10, 1, 0, double(state.range(0)) / 1000.0);
+    benchmark::DoNotOptimize(sums.counts);
+  }
+}
+BENCHMARK(BM_D2HenonAllPairs)->Arg(20)->Arg(200)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // TISEAN lyap_k's work for "3 dimensions x 5 radii": -m 2 -M 4, its default radii (5, geometric
 // from 1/1000 to 1/100 of the data range), 50 iterations (S(k) for k = 0..50), every vector a
 // reference point (-n default), Theiler window 0 (-t default), all neighbours within eps.
