@@ -42,6 +42,27 @@ void add_uncounted_pairs(CorrelationSums& sums) {
       h[bins - 1] += std::uint64_t(sums.pairs[b]) - counted;
     }
 }
+
+// Zeroed histograms for dimensions 1..max_dimension of the series x.
+CorrelationSums empty_sums(const std::vector<double>& x, int max_dimension) {
+  CorrelationSums out;
+  out.max_dimension = max_dimension;
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  out.range = *hi - *lo;
+  out.counts.assign(CorrelationSums::blocks * std::size_t(max_dimension) * CorrelationSums::bins,
+                    0);
+  out.pairs.assign(CorrelationSums::blocks, 0.0);
+  return out;
+}
+
+// (x - min) / range: distances come out as fractions of the range directly.
+std::vector<double> normalised(const std::vector<double>& x) {
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  const double scale = 1.0 / (*hi - *lo);
+  std::vector<double> y(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
+  return y;
+}
 }  // namespace
 
 double CorrelationSums::edge(std::size_t bin) {
@@ -50,21 +71,13 @@ double CorrelationSums::edge(std::size_t bin) {
 
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references) {
-  CorrelationSums out;
-  out.max_dimension = max_dimension;
-  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
-  out.range = *hi - *lo;
-  const double scale = 1.0 / out.range;
+  CorrelationSums out = empty_sums(x, max_dimension);
+  std::vector<double> y = normalised(x);
   const std::size_t n = nonlinear::vector_count(x.size(), max_dimension, delay);
   const std::size_t dims = std::size_t(max_dimension);
   const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
   references = std::max<std::size_t>(1, std::min(references, n));
-  out.counts.assign(blocks * dims * bins, 0);
-  out.pairs.assign(blocks, 0.0);
   const std::size_t tau = std::size_t(delay);
-  // Normalised copy: distances come out as fractions of the range directly.
-  std::vector<double> y(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
 #pragma omp parallel
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
@@ -104,20 +117,13 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
 
 CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
                                         int delay, std::size_t theiler, double cut) {
-  CorrelationSums out;
-  out.max_dimension = max_dimension;
+  CorrelationSums out = empty_sums(x, max_dimension);
   out.cut = cut;
-  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
-  out.range = *hi - *lo;
-  const double scale = 1.0 / out.range;
+  std::vector<double> y = normalised(x);
   const std::size_t n = nonlinear::vector_count(x.size(), max_dimension, delay);
   const std::size_t dims = std::size_t(max_dimension);
   const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
-  out.counts.assign(blocks * dims * bins, 0);
-  out.pairs.assign(blocks, 0.0);
   const std::size_t tau = std::size_t(delay);
-  std::vector<double> y(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
   auto block_of = [&](std::size_t i) { return i * blocks / n; };
   // Dimension 1 from the values in sorted order (a pair close in the first coordinate may be far
   // in the second, so the 2-d grid below would miss it); dimensions >= 2 from a box grid on the
