@@ -131,6 +131,8 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   std::vector<std::pair<double, std::uint32_t>> sorted(n);
   for (std::size_t i = 0; i < n; ++i) sorted[i] = {y[i], std::uint32_t(i)};
   std::sort(sorted.begin(), sorted.end());
+  std::vector<double> edges(bins);
+  for (std::size_t k = 0; k < bins; ++k) edges[k] = CorrelationSums::edge(k);
   const std::optional<nonlinear::BoxGrid> grid =
       max_dimension >= 2 ? std::optional<nonlinear::BoxGrid>(std::in_place, y, delay, 2, n, cut)
                          : std::nullopt;
@@ -138,7 +140,7 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
     std::vector<double> local_pairs(blocks, 0.0);
-    auto count_pair = [&](std::size_t i, std::size_t j, std::size_t d, double dist) {
+    auto count_pair = [&](std::size_t i, std::size_t j, std::size_t d, double dist) {  // both ways
       const std::size_t bin = bin_of(dist);
       ++local[(block_of(i) * dims + d) * bins + bin];
       ++local[(block_of(j) * dims + d) * bins + bin];
@@ -146,11 +148,26 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
 #pragma omp for schedule(dynamic, 256) nowait
     for (std::size_t p = 0; p < n; ++p) {
       const std::size_t i = sorted[p].second;
+      const double yi = sorted[p].first;
       local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
                                          (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
-      for (std::size_t q = p + 1; q < n && sorted[q].first - sorted[p].first < cut; ++q) {
-        const std::size_t j = sorted[q].second;
-        if ((j > i ? j - i : i - j) > theiler) count_pair(i, j, 0, sorted[q].first - sorted[p].first);
+      // Vectors closer than each bin edge (capped at the cut), on both sides of yi in sorted
+      // order: two pointers move outward edge by edge, one comparison per pair within the cut
+      // and one histogram update per bin.
+      std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
+      std::size_t right = p + 1, left = p, previous = 0;
+      for (std::size_t k = 0; k < bins && (k == 0 || edges[k - 1] < cut); ++k) {
+        const double e = std::min(edges[k], cut);
+        while (right < n && sorted[right].first - yi < e) ++right;
+        while (left > 0 && yi - sorted[left - 1].first < e) --left;
+        const std::size_t within = (right - p - 1) + (p - left);
+        h[k] += within - previous;
+        previous = within;
+      }
+      // Minus the pairs inside the Theiler window (counted above, in their bins).
+      for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
+        const double dist = std::abs(y[j] - y[i]);
+        if (j != i && dist < cut) --h[bin_of(dist)];
       }
     }
     if (grid) {
@@ -159,12 +176,12 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
 #pragma omp for schedule(dynamic, 64)
       for (std::size_t q = 0; q < n; ++q) {
         const std::size_t i = entries[q].index;
-        std::size_t first[3], last[3];
-        const std::size_t runs = grid->runs_near(y[i], y[i + tau], first, last);
+        std::size_t first[2], last[2];
+        const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
         for (std::size_t run = 0; run < runs; ++run)
           for (std::size_t e = first[run]; e < last[run]; ++e) {
             const std::size_t j = entries[e].index;
-            if (j <= i + theiler) continue;  // each unordered pair once, from its earlier vector
+            if ((j > i ? j - i : i - j) <= theiler) continue;
             double dist = std::abs(y[i] - y[j]);
             for (std::size_t d = 1; d < dims && dist < cut; ++d) {
               dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));

@@ -63,6 +63,26 @@ class BoxGrid {
     }
     return n;
   }
+  // Half of that neighbourhood, for visiting each pair once: the entries after entry q up to the
+  // end of the next box in its row, and the three adjacent boxes of the next row (1 axis: the
+  // rest of its box and the next box). Over all q every pair of points in adjacent boxes is met
+  // exactly once. Returns the run count.
+  std::size_t forward_runs(std::size_t q, std::size_t (&first)[2], std::size_t (&last)[2]) const {
+    const Entry& e = entries_[q];
+    const std::size_t ia = axis_box(e.a);
+    if (axes_ == 1) {
+      first[0] = q + 1;
+      last[0] = start_[std::min(ia + 1, per_axis_ - 1) + 1];
+      return 1;
+    }
+    const std::size_t ib = axis_box(e.b);
+    first[0] = q + 1;
+    last[0] = start_[ia * per_axis_ + std::min(ib + 1, per_axis_ - 1) + 1];
+    if (ia + 1 >= per_axis_) return 1;
+    first[1] = start_[(ia + 1) * per_axis_ + (ib > 0 ? ib - 1 : 0)];
+    last[1] = start_[(ia + 1) * per_axis_ + std::min(ib + 1, per_axis_ - 1) + 1];
+    return 2;
+  }
   const Entry* entries() const { return entries_.data(); }
 
  private:
