@@ -175,8 +175,34 @@ void append_toml_table(std::string& out, const Json& table, const std::string& h
   }
 }
 
+// Analyses are not chosen by `type =` like the other components: a study lists them by name,
+// [analysis] methods = ["<name>", ...], and takes each one's parameters from [analysis.<name>].
+bool is_analysis(const CatalogEntry& e) { return e.kind == analysis_registry().kind(); }
+std::string analysis_table(const CatalogEntry& e) {
+  return fmt::format("{}.{}", e.kind, toml_key(e.info->name));
+}
+
+// Study kinds that read a top-level table (e.g. [analysis]): where a component can be used.
+std::vector<std::string> kinds_reading(const std::string& table) {
+  std::vector<std::string> kinds;
+  for (const auto* entry : study_kind_registry().sorted())
+    if (auto kind = entry->create(ParamValues{})) {
+      const auto tables = kind->tables();
+      if (std::find(tables.begin(), tables.end(), table) != tables.end())
+        kinds.push_back(entry->info.name);
+    }
+  return kinds;
+}
+
 std::string example_toml(const CatalogEntry& e) {
   std::string out;
+  if (is_analysis(e)) {
+    out = fmt::format("[{}]\nmethods = [{}]\n", e.kind, Json(e.info->name).dump());
+    if (e.info->example_params.empty()) return out;
+    out += fmt::format("\n[{}]\n", analysis_table(e));
+    append_toml_table(out, e.info->example_params, analysis_table(e), e.info->params);
+    return out;
+  }
   if (e.kind == study_kind_registry().kind()) {
     out = fmt::format("[study]\nkind = {}\n", Json(e.info->name).dump());
     if (e.info->example_params.empty()) return out;
@@ -280,6 +306,14 @@ std::string describe_entry(const CatalogEntry& e) {
     facts.push_back({"Used as:", fmt::format("[study] kind = \"{}\"", info.name)});
     if (!tables.empty())
       facts.push_back({"Reads tables:", fmt::format("{}", fmt::join(tables, ", "))});
+  } else if (is_analysis(e)) {
+    const auto kinds = kinds_reading(e.kind);
+    std::string usage = fmt::format("[{}] methods = [\"{}\", ...], parameters in [{}]", e.kind,
+                                    info.name, analysis_table(e));
+    if (!kinds.empty())
+      usage += fmt::format(" (study kind{} {})", kinds.size() > 1 ? "s" : "",
+                           fmt::join(kinds, ", "));
+    facts.push_back({"Used as:", usage});
   } else {
     facts.push_back({"Used as:", fmt::format("[{}] type = \"{}\"", e.kind, info.name)});
   }
@@ -288,7 +322,7 @@ std::string describe_entry(const CatalogEntry& e) {
                                                  thread_safety_meaning(info.thread_safety))});
   out += format_table(facts, "  ");
 
-  std::string table = is_kind ? settings_table(e) : e.kind;
+  std::string table = is_kind ? settings_table(e) : is_analysis(e) ? analysis_table(e) : e.kind;
   out += table.empty() ? "\nParameters:\n" : fmt::format("\nParameters ([{}]):\n", table);
   if (info.params.empty()) {
     out += "  (none)\n";

@@ -186,6 +186,12 @@ void expect_examples_read_back(const Registry<Product>& registry,
       }
       ASSERT_EQ(document.size(), 1u) << example;
       EXPECT_EQ(unordered(document.begin().value()), unordered(table)) << example;
+    } else if (table_of_kind == "analysis") {  // listed by name, parameters in [analysis.<name>]
+      EXPECT_EQ(document["analysis"]["methods"], Json::array({entry->info.name})) << example;
+      if (table.empty())
+        EXPECT_FALSE(document["analysis"].contains(entry->info.name)) << example;
+      else
+        EXPECT_EQ(unordered(document["analysis"][entry->info.name]), unordered(table)) << example;
     } else {
       table["type"] = entry->info.name;
       EXPECT_EQ(unordered(document[table_of_kind]), unordered(table)) << example;

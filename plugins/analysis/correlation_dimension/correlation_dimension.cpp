@@ -6,8 +6,11 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <utility>
 
 #include "analysis/embedding/embedding.hpp"
+#include "analysis/nonlinear_common/box_grid.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
@@ -26,6 +29,40 @@ inline std::size_t bin_of(double v) {  // v = distance / range, >= 0
   if (key < key_base) return 0;
   return std::min<std::size_t>(std::size_t(key - key_base) + 1, CorrelationSums::bins - 1);
 }
+
+// Pairs at or beyond the cut go to the last bin, so that the cumulative count reaches the pair
+// total.
+void add_uncounted_pairs(CorrelationSums& sums) {
+  const std::size_t bins = CorrelationSums::bins, dims = std::size_t(sums.max_dimension);
+  for (std::size_t b = 0; b < CorrelationSums::blocks; ++b)
+    for (std::size_t d = 0; d < dims; ++d) {
+      std::uint64_t* h = sums.counts.data() + (b * dims + d) * bins;
+      std::uint64_t counted = 0;
+      for (std::size_t k = 0; k < bins; ++k) counted += h[k];
+      h[bins - 1] += std::uint64_t(sums.pairs[b]) - counted;
+    }
+}
+
+// Zeroed histograms for dimensions 1..max_dimension of the series x.
+CorrelationSums empty_sums(const std::vector<double>& x, int max_dimension) {
+  CorrelationSums out;
+  out.max_dimension = max_dimension;
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  out.range = *hi - *lo;
+  out.counts.assign(CorrelationSums::blocks * std::size_t(max_dimension) * CorrelationSums::bins,
+                    0);
+  out.pairs.assign(CorrelationSums::blocks, 0.0);
+  return out;
+}
+
+// (x - min) / range: distances come out as fractions of the range directly.
+std::vector<double> normalised(const std::vector<double>& x) {
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  const double scale = 1.0 / (*hi - *lo);
+  std::vector<double> y(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
+  return y;
+}
 }  // namespace
 
 double CorrelationSums::edge(std::size_t bin) {
@@ -34,21 +71,13 @@ double CorrelationSums::edge(std::size_t bin) {
 
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references) {
-  CorrelationSums out;
-  out.max_dimension = max_dimension;
-  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
-  out.range = *hi - *lo;
-  const double scale = 1.0 / out.range;
+  CorrelationSums out = empty_sums(x, max_dimension);
+  std::vector<double> y = normalised(x);
   const std::size_t n = nonlinear::vector_count(x.size(), max_dimension, delay);
   const std::size_t dims = std::size_t(max_dimension);
   const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
   references = std::max<std::size_t>(1, std::min(references, n));
-  out.counts.assign(blocks * dims * bins, 0);
-  out.pairs.assign(blocks, 0.0);
   const std::size_t tau = std::size_t(delay);
-  // Normalised copy: distances come out as fractions of the range directly.
-  std::vector<double> y(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
 #pragma omp parallel
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
@@ -65,7 +94,7 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
             dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));
             // The running maximum only grows: this pair is beyond the cut in every higher
             // dimension too, and is counted there through the pair total (overflow bin).
-            if (dist >= CorrelationSums::cut) break;
+            if (dist >= CorrelationSums::sampled_cut) break;
             ++h[d * bins + bin_of(dist)];
           }
         }
@@ -82,15 +111,92 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
       for (std::size_t b = 0; b < blocks; ++b) out.pairs[b] += local_pairs[b];
     }
   }
-  // Pairs at or beyond the cut go to the last bin, so that the cumulative count reaches the
-  // pair total.
-  for (std::size_t b = 0; b < blocks; ++b)
-    for (std::size_t d = 0; d < dims; ++d) {
-      std::uint64_t* h = out.counts.data() + (b * dims + d) * bins;
-      std::uint64_t counted = 0;
-      for (std::size_t k = 0; k < bins; ++k) counted += h[k];
-      h[bins - 1] += std::uint64_t(out.pairs[b]) - counted;
+  add_uncounted_pairs(out);
+  return out;
+}
+
+CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
+                                        int delay, std::size_t theiler, double cut) {
+  CorrelationSums out = empty_sums(x, max_dimension);
+  out.cut = cut;
+  std::vector<double> y = normalised(x);
+  const std::size_t n = nonlinear::vector_count(x.size(), max_dimension, delay);
+  const std::size_t dims = std::size_t(max_dimension);
+  const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
+  const std::size_t tau = std::size_t(delay);
+  auto block_of = [&](std::size_t i) { return i * blocks / n; };
+  // Dimension 1 from the values in sorted order (a pair close in the first coordinate may be far
+  // in the second, so the 2-d grid below would miss it); dimensions >= 2 from a box grid on the
+  // first two coordinates. Pairs closer in time than the Theiler window are skipped in both.
+  std::vector<std::pair<double, std::uint32_t>> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = {y[i], std::uint32_t(i)};
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> edges(bins);
+  for (std::size_t k = 0; k < bins; ++k) edges[k] = CorrelationSums::edge(k);
+  const std::optional<nonlinear::BoxGrid> grid =
+      max_dimension >= 2 ? std::optional<nonlinear::BoxGrid>(std::in_place, y, delay, 2, n, cut)
+                         : std::nullopt;
+#pragma omp parallel
+  {
+    std::vector<std::uint64_t> local(out.counts.size(), 0);
+    std::vector<double> local_pairs(blocks, 0.0);
+    auto count_pair = [&](std::size_t i, std::size_t j, std::size_t d, double dist) {  // both ways
+      const std::size_t bin = bin_of(dist);
+      ++local[(block_of(i) * dims + d) * bins + bin];
+      ++local[(block_of(j) * dims + d) * bins + bin];
+    };
+#pragma omp for schedule(dynamic, 256) nowait
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::size_t i = sorted[p].second;
+      const double yi = sorted[p].first;
+      local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
+                                         (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
+      // Vectors closer than each bin edge (capped at the cut), on both sides of yi in sorted
+      // order: two pointers move outward edge by edge, one comparison per pair within the cut
+      // and one histogram update per bin.
+      std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
+      std::size_t right = p + 1, left = p, previous = 0;
+      for (std::size_t k = 0; k < bins && (k == 0 || edges[k - 1] < cut); ++k) {
+        const double e = std::min(edges[k], cut);
+        while (right < n && sorted[right].first - yi < e) ++right;
+        while (left > 0 && yi - sorted[left - 1].first < e) --left;
+        const std::size_t within = (right - p - 1) + (p - left);
+        h[k] += within - previous;
+        previous = within;
+      }
+      // Minus the pairs inside the Theiler window (counted above, in their bins).
+      for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
+        const double dist = std::abs(y[j] - y[i]);
+        if (j != i && dist < cut) --h[bin_of(dist)];
+      }
     }
+    if (grid) {
+      const nonlinear::BoxGrid::Entry* entries = grid->entries();
+      // Vectors in grid order: consecutive ones share their candidate boxes (cache).
+#pragma omp for schedule(dynamic, 64)
+      for (std::size_t q = 0; q < n; ++q) {
+        const std::size_t i = entries[q].index;
+        std::size_t first[2], last[2];
+        const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
+        for (std::size_t run = 0; run < runs; ++run)
+          for (std::size_t e = first[run]; e < last[run]; ++e) {
+            const std::size_t j = entries[e].index;
+            if ((j > i ? j - i : i - j) <= theiler) continue;
+            double dist = std::abs(y[i] - y[j]);
+            for (std::size_t d = 1; d < dims && dist < cut; ++d) {
+              dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));
+              if (dist < cut) count_pair(i, j, d, dist);  // beyond: so in every higher dimension
+            }
+          }
+      }
+    }
+#pragma omp critical
+    {
+      for (std::size_t k = 0; k < local.size(); ++k) out.counts[k] += local[k];
+      for (std::size_t b = 0; b < blocks; ++b) out.pairs[b] += local_pairs[b];
+    }
+  }
+  add_uncounted_pairs(out);
   return out;
 }
 
@@ -119,7 +225,7 @@ Curve curve(const CorrelationSums& sums, int d, const std::vector<double>& weigh
   for (std::size_t k = 0; k < bins; ++k) {
     c.log_r.push_back(std::log(sums.range * CorrelationSums::edge(k)));
     c.count.push_back(cumulative[k]);
-    const bool counted = CorrelationSums::edge(k) <= CorrelationSums::cut;
+    const bool counted = CorrelationSums::edge(k) <= sums.cut;
     c.log_c.push_back(counted && cumulative[k] > 0 ? std::log(cumulative[k] / pairs) : nan);
   }
   return c;
@@ -201,6 +307,11 @@ PluginInfo CorrelationDimension::info() {
                    "reference vectors compared with all others (sampled references: cost "
                    "references x N x dimensions, memory O(N))",
                    2000, 10),
+      numeric_spec("all_pairs_within", ValueKind::real, "1",
+                   "when given: count every pair closer than this fraction of the signal range "
+                   "(box-assisted, like TISEAN d2 -N 0 -R) instead of sampled references: exact "
+                   "C(r) below it, cost growing with the number of such pairs",
+                   Json(), 0, CorrelationSums::sampled_cut, true),
       numeric_spec("min_pairs", ValueKind::integer, "1",
                    "a correlation sum counts only where at least this many pairs lie within r "
                    "(statistical floor of the scaling region)",
@@ -229,9 +340,13 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
   const std::string name = series.name.empty() ? std::string("series") : series.name;
   nonlinear::check_series(x, max_dimension, embedding.delay, name);
 
+  const auto all_pairs_within = nonlinear::given_real(params_, "all_pairs_within");
   const CorrelationSums sums =
-      correlation_sums(x, max_dimension, embedding.delay, embedding.theiler,
-                       std::size_t(params_.integer("max_reference_points")));
+      all_pairs_within
+          ? correlation_sums_within(x, max_dimension, embedding.delay, embedding.theiler,
+                                    *all_pairs_within)
+          : correlation_sums(x, max_dimension, embedding.delay, embedding.theiler,
+                             std::size_t(params_.integer("max_reference_points")));
   const double min_pairs = double(params_.integer("min_pairs"));
   const double tolerance = params_.real("slope_tolerance");
   const double min_span = std::log(4.0);  // at least a factor 4 in r
@@ -379,6 +494,7 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
   out["theiler_window_samples"] = embedding.theiler;
   out["embedding_source"] = embedding.source;
   out["reference_points"] = params_.integer("max_reference_points");
+  if (all_pairs_within) out["all_pairs_within"] = *all_pairs_within;
   out["by_dimension"] = by_dimension;
   return out;
 }

@@ -26,7 +26,8 @@ struct CorrelationSums {
   // Distances from half the range up are not binned (the last bin holds them): scaling regions
   // lie far below (C <= 0.1), and most pairs of a large series stop there after one or two
   // coordinates, which halves the cost.
-  static constexpr double cut = 0.5;
+  static constexpr double sampled_cut = 0.5;
+  double cut = sampled_cut;  // fraction of the range below which pairs are binned
   int max_dimension = 0;
   double range = 1;  // max - min of the series: r = range x edge
   // counts[(block * max_dimension + (d - 1)) * bins + bin]
@@ -37,6 +38,13 @@ struct CorrelationSums {
 };
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references);
+// The same histograms from every pair (i, j), |i - j| > theiler, closer than `cut` x range (TISEAN
+// d2 with -N 0 and -R = cut): exact C(r) for r < cut x range, no sampling. A box grid of width
+// `cut` on the first two delay coordinates skips the farther pairs, so the cost grows with `cut`
+// (pairs within it), not with N^2. Each pair is counted for both its vectors (as an ordered pair,
+// like correlation_sums), so both schemes share one normalisation.
+CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
+                                        int delay, std::size_t theiler, double cut);
 
 class CorrelationDimension final : public nonlinear::ParameterisedAnalysis {
  public:

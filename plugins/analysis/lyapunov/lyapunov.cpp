@@ -197,6 +197,44 @@ Json curve_json(const MethodResult& m) {
               {"fit_intercept", m.fit.found ? Json(m.fit.intercept) : Json()}};
 }
 
+// The radius x dimension scan of the `radius_scan_count` parameter: the slope of each Kantz curve
+// (TISEAN lyap_k statistic) and the spread of the slopes.
+Json radius_scan(const std::vector<double>& x, const EmbeddingParameters& embedding,
+                 std::size_t steps, std::size_t references, std::size_t count) {
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  std::vector<double> radii;
+  for (std::size_t r = 0; r < count; ++r)
+    radii.push_back((*hi - *lo) * 1e-3 * std::pow(10.0, double(r) / double(count - 1)));
+  const int m0 = std::max(1, embedding.dimension - 1), m1 = embedding.dimension + 1;
+  const auto scan = kantz_scan(x, m0, m1, embedding.delay, embedding.theiler, steps, references,
+                               radii);
+  Json slopes = Json::array(), dimensions = Json::array();
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (int m = m0; m <= m1; ++m) {
+    dimensions.push_back(m);
+    Json row = Json::array();
+    for (std::size_t r = 0; r < radii.size(); ++r) {
+      const auto curve = scan.curve(r, m);
+      const bool complete = std::all_of(curve.begin(), curve.end(),
+                                        [](double v) { return std::isfinite(v); });
+      const auto fit = complete ? linear_region(curve) : LinearRegionFit{};
+      if (!fit.found) {
+        row.push_back(Json());
+        continue;
+      }
+      row.push_back(fit.slope);
+      low = std::min(low, fit.slope);
+      high = std::max(high, fit.slope);
+    }
+    slopes.push_back(row);
+  }
+  return Json{{"radii", radii},
+              {"dimensions", dimensions},
+              {"reference_points", scan.references},
+              {"slopes_per_sample", slopes},
+              {"slope_spread_per_sample", high >= low ? Json(high - low) : Json()}};
+}
+
 }  // namespace
 
 PluginInfo LyapunovAnalysis::info() {
@@ -219,6 +257,13 @@ PluginInfo LyapunovAnalysis::info() {
                    "Kantz neighbourhood radius eps (absent: median distance to the 8th nearest "
                    "neighbour)",
                    Json(), 0, std::numeric_limits<double>::infinity(), true),
+      numeric_spec("radius_scan_count", ValueKind::integer, "1",
+                   "when given: Kantz curves also as TISEAN's lyap_k computes them (rms distance of "
+                   "all neighbours within eps) for embedding dimensions m-1..m+1 x this many radii "
+                   "(geometric, 1/1000 to 1/100 of the signal range: lyap_k's defaults), each "
+                   "with the slope of its linear region; their spread shows how much the exponent "
+                   "depends on eps and m",
+                   Json(), 2, 20),
       nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_reference_points", 200}};
@@ -299,6 +344,8 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
   out["reference_points"] = curves.references;
   out["kantz"] = curve_json(kantz);
   out["rosenstein"] = curve_json(rosenstein);
+  if (const auto count = nonlinear::given_integer(params_, "radius_scan_count"))
+    out["kantz_scan"] = radius_scan(x, embedding, steps, curves.references, std::size_t(*count));
   return out;
 }
 

@@ -6,6 +6,7 @@
 // second of signal time. docs/analysis/chaos.md, section "Largest Lyapunov exponent".
 #include <vector>
 
+#include "analysis/lyapunov/kantz_scan.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
@@ -13,7 +14,7 @@ namespace chatterlab {
 
 // Divergence curves with per-block sums (20 blocks of reference points, for the bootstrap).
 struct DivergenceCurves {
-  static constexpr std::size_t blocks = 20;
+  static constexpr std::size_t blocks = kantz_blocks;
   std::size_t steps = 0;  // k = 0..steps-1
   // sums[(block * steps + k)] and counts likewise, for each method
   std::vector<double> rosenstein_sum, rosenstein_count, kantz_sum, kantz_count;

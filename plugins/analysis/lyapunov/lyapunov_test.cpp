@@ -47,5 +47,62 @@ TEST(Lyapunov, SineDoesNotDiverge) {
   EXPECT_NEAR(per_sample(r), 0.0, 0.005);
 }
 
+
+// kantz_scan (one search at the largest radius, binned by radius, shared coordinate differences,
+// products logged per chunk) against the definition evaluated pair by pair in double precision;
+// the scan sums in single precision, hence 1e-6 (a wrong neighbour set or step is off by >> 1e-3).
+TEST(Lyapunov, KantzScanMatchesDirectEvaluation) {
+  const auto x = test_signals::henon(2500);
+  const int m0 = 1, m1 = 3, delay = 2;
+  const std::size_t theiler = 3, steps = 12;
+  const std::vector<double> radii{0.02, 0.05, 0.1};
+  const auto scan = kantz_scan(x, m0, m1, delay, theiler, steps, 0, radii);
+  const std::size_t history = steps + std::size_t(m1 - 1) * delay;
+  const std::size_t limit = x.size() - history + 1;
+  ASSERT_EQ(scan.references, limit);
+  auto dist2 = [&](std::size_t i, std::size_t j, int m, std::size_t k) {
+    double s = 0;
+    for (int l = 0; l < m; ++l) s += std::pow(x[i + k + std::size_t(l * delay)] - x[j + k + std::size_t(l * delay)], 2);
+    return s;
+  };
+  for (std::size_t r = 0; r < radii.size(); ++r)
+    for (int m = m0; m <= m1; ++m) {
+      std::vector<double> sum(steps, 0.0);
+      double refs = 0;
+      for (std::size_t i = 0; i < limit; ++i) {
+        std::vector<double> mean(steps, 0.0);
+        double n = 0;
+        for (std::size_t j = 0; j < limit; ++j) {
+          if ((j > i ? j - i : i - j) <= theiler || dist2(i, j, m, 0) > radii[r] * radii[r])
+            continue;
+          for (std::size_t k = 0; k < steps; ++k) mean[k] += dist2(i, j, m, k);
+          n += 1;
+        }
+        if (n == 0) continue;
+        refs += 1;
+        for (std::size_t k = 0; k < steps; ++k) sum[k] += 0.5 * std::log(mean[k] / n);
+      }
+      ASSERT_GT(refs, 100) << "radius " << radii[r] << ", m = " << m;
+      const auto curve = scan.curve(r, m);
+      for (std::size_t k = 0; k < steps; ++k)
+        EXPECT_NEAR(curve[k], sum[k] / refs, 1e-6) << "radius " << radii[r] << ", m = " << m << ", k = " << k;
+    }
+}
+
+TEST(LyapunovAccuracy, KantzScanHenon) {
+  // TISEAN lyap_k's setting (m = 2, radii 1/1000..1/100 of the range): every curve's linear region
+  // has the slope lambda1 = 0.419.
+  const Json r = make_analysis("lyapunov", Json{{"embedding_dimension", 2}, {"delay_samples", 1},
+                                                {"radius_scan_count", 3}})
+                     ->analyse(series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
+  const Json& scan = r["kantz_scan"];
+  ASSERT_EQ(scan["dimensions"].size(), 3u);
+  const Json& m2 = scan["slopes_per_sample"][1];
+  for (const auto& slope : m2) {
+    ASSERT_TRUE(slope.is_number());
+    EXPECT_NEAR(slope.get<double>(), 0.419, 0.03);
+  }
+}
+
 }  // namespace
 }  // namespace chatterlab

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "analysis/nonlinear_common/test_signals.hpp"
+#include "chatterlab/catalog.hpp"
 #include "chatterlab/runner.hpp"
 #include "unit/study_test_support.hpp"
 
@@ -112,6 +113,23 @@ TEST_F(SignalAnalysisInput, HenonStudyWritesSummaryAndPlots) {
   EXPECT_TRUE(j["methods"].contains("lyapunov"));
   for (const char* stem : {"embedding_ami", "embedding_fnn", "lyapunov_divergence", "phase_portrait"})
     EXPECT_TRUE(std::filesystem::exists(options.out_dir / (std::string(stem) + ".png"))) << stem;
+}
+
+
+// `chatterlab describe <analysis>` shows how a signal_analysis study names the method and where its
+// parameters go, not a `type =` key that no study reads.
+TEST(SignalAnalysisCatalog, DescribeShowsMethodsListAndParameterTable) {
+  const std::string text = describe_plugin("lyapunov");
+  EXPECT_NE(text.find("Used as:        [analysis] methods = [\"lyapunov\", ...], parameters in "
+                      "[analysis.lyapunov] (study kind signal_analysis)\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("\nParameters ([analysis.lyapunov]):\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("Example:\n  [analysis]\n  methods = [\"lyapunov\"]\n\n"
+                      "  [analysis.lyapunov]\n  max_reference_points = 200\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("type = "), std::string::npos) << text;
 }
 
 }  // namespace

@@ -1,0 +1,37 @@
+#pragma once
+// Kantz's largest-Lyapunov divergence curves over a scan of embedding dimensions and radii, the
+// statistic of TISEAN's lyap_k (MODELS.md N3/N4), used by the `lyapunov` analysis
+// (radius_scan_count) and benchmarked against lyap_k in tests/bench/chaos_bench.cpp.
+#include <cstddef>
+#include <vector>
+
+namespace chatterlab {
+
+// Blocks of consecutive reference points whose sums are kept apart (block bootstrap).
+inline constexpr std::size_t kantz_blocks = 20;
+
+// Kantz's divergence the way TISEAN's lyap_k computes it, for a scan over embedding dimensions
+// [min_dimension, max_dimension] and several radii eps at once: for each reference vector i,
+// every neighbour j (|i - j| > theiler) with |X_i - X_j| <= eps (Euclidean, in that dimension;
+// a neighbour within eps in m + 1 dimensions is also within eps in m) and
+//   S(k) = < ln sqrt( < |X_{i+k} - X_{j+k}|^2 >_j ) >_i .
+// One fixed-radius search at the largest eps serves all radii and dimensions: each neighbour's
+// separation history is computed once (coordinate differences shared by all dimensions) and
+// binned by the smallest eps that holds it; the bins are summed per reference. A box grid on
+// the first (up to) two coordinates does the search. `references` = 0 takes every vector.
+struct KantzScan {
+  int min_dimension = 1, max_dimension = 1;
+  std::vector<double> radii;  // ascending
+  std::size_t steps = 0, references = 0;
+  // Per block of references (kantz_blocks, for a bootstrap) b, radius r, dimension index d = m - min_dimension:
+  // sum[((b * radii + r) * dims + d) * steps + k] of ln rms distance, count likewise.
+  std::vector<double> sum, count;
+  std::size_t dimensions() const { return std::size_t(max_dimension - min_dimension + 1); }
+  // Mean curve S(k) for radius index r and dimension m (NaN where no reference had neighbours).
+  std::vector<double> curve(std::size_t r, int m) const;
+};
+KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_dimension, int delay,
+                     std::size_t theiler, std::size_t steps, std::size_t references,
+                     std::vector<double> radii);
+
+}  // namespace chatterlab
