@@ -33,7 +33,8 @@ Json g6_model() {
 
 std::string g6_study() {
   std::string text = "[study]\nkind = \"simulate\"\n[model]\ntype = \"unbalance_two_dof\"\n";
-  for (const auto& [key, value] : g6_model().items()) text += key + " = " + value.dump() + "\n";
+  const Json model = g6_model();  // named: items() of a temporary would dangle
+  for (const auto& [key, value] : model.items()) text += key + " = " + value.dump() + "\n";
   return text + R"([simulation]
 duration_s = 1.6
 sample_rate_hz = 5000
