@@ -315,6 +315,8 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   static constexpr std::array<std::string_view, 5> kStyles{"lines", "points", "linespoints",
                                                            "impulses", "steps"};
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
+  if (figure.equal_aspect && (figure.log_x || figure.log_y))
+    throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));
 
   std::string data =
       fmt::format("# {}: one block per series (gnuplot index), columns x y\n", figure.title);
@@ -378,8 +380,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   // most of a decade), y with 5 % headroom so extremes do not touch the frame.
   gp +=
       "set style line 100 lc rgb '#e0e0e0' lw 1 dt 1\nset grid ls 100\n"
-      "set autoscale xfix\nset autoscale yfix\n"
-      "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
+      "set autoscale xfix\nset autoscale yfix\n";
+  // Equal aspect: the same 5 % margin on all sides, so a circle centred in the data is centred
+  // in the frame; gnuplot then shrinks one axis' box until the units match.
+  gp += figure.equal_aspect ? "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n"
+                              "set size ratio -1\n"
+                            : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
   gp += script_png_terminal(stem);
   gp += fmt::format("plot {}\n", fmt::join(plots, ", \\\n     "));
   gp += script_svg_replot(stem);

@@ -4,11 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -244,6 +247,59 @@ TEST(Plot, LogCurvesDropAReferenceLineTheAxisCannotShow) {
   // Four decades: gnuplot's own power-of-ten ticks, printed plainly.
   EXPECT_NE(read_all(dir / "log.gp").find("set logscale y\nset format y '%g'\n"),
             std::string::npos);
+}
+
+// Width / height of the first series as drawn in the SVG: the first path of gnuplot's group
+// "gnuplot_plot_1", whose first sub-path is the key's sample line and the rest the data.
+double drawn_aspect(const std::string& svg) {
+  const std::size_t begin = svg.find("d='", svg.find("<g id=\"gnuplot_plot_1\""));
+  if (begin == std::string::npos) return 0.0;
+  const std::size_t end = svg.find('\'', begin + 3);
+  const std::string group = svg.substr(begin + 3, end - begin - 3);
+  double x_lo = 1e300, x_hi = -1e300, y_lo = 1e300, y_hi = -1e300;
+  int moves = 0;
+  for (std::size_t at = 0; at < group.size(); ++at) {
+    const char c = group[at];
+    if (c != 'M' && c != 'L') continue;
+    moves += c == 'M' ? 1 : 0;
+    double x = 0, y = 0;
+    if (std::sscanf(group.c_str() + at + 1, "%lf,%lf", &x, &y) != 2 || moves < 2) continue;
+    x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x);
+    y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
+  }
+  return (x_hi - x_lo) / (y_hi - y_lo);
+}
+
+TEST(Plot, EqualAspectDrawsACircleRound) {
+  fs::path dir = output_dir("equal_aspect");
+  Curves curves;
+  curves.title = "unit circle";
+  curves.x_label = "x [um]";
+  curves.y_label = "y [um]";
+  Series circle = series("circle", {}, {});
+  for (int k = 0; k <= 60; ++k) {
+    circle.x.push_back(std::cos(k * 2 * std::numbers::pi / 60));
+    circle.y.push_back(std::sin(k * 2 * std::numbers::pi / 60));
+  }
+  curves.series.push_back(circle);
+  render(curves, dir, "stretched");
+  curves.equal_aspect = true;
+  render(curves, dir, "round");
+  expect_png(dir / "round.png", 10000);
+  EXPECT_NE(read_all(dir / "round.gp").find("set size ratio -1\n"), std::string::npos);
+  EXPECT_EQ(read_all(dir / "stretched.gp").find("set size ratio"), std::string::npos);
+  // The default frame fills the 4:3 canvas, so the circle comes out an ellipse; with equal
+  // aspect its drawn width and height agree (to the 2-decimal SVG coordinates).
+  EXPECT_GT(std::abs(drawn_aspect(read_all(dir / "stretched.svg")) - 1.0), 0.1);
+  EXPECT_NEAR(drawn_aspect(read_all(dir / "round.svg")), 1.0, 0.01);
+
+  curves.log_y = true;
+  try {
+    render(curves, dir, "log");
+    FAIL() << "expected PlotError";
+  } catch (const PlotError& e) {
+    EXPECT_STREQ(e.what(), "plot 'log': equal aspect needs linear axes");
+  }
 }
 
 TEST(Plot, TitlesWithQuotesAndBackslashesRender) {

@@ -28,6 +28,9 @@ struct Curves {
   bool log_x = false, log_y = false;
   std::optional<double> reference_y;  // e.g. 0 = stability limit, drawn dashed
   std::string reference_label;        // key entry of that line; empty: "y = <reference_y>"
+  // One unit of x as long as one unit of y (gnuplot `set size ratio -1`): polar plots, where a
+  // round part must look round. Not with log axes (PlotError).
+  bool equal_aspect = false;
 };
 
 // A 2-D map of z over a rectangular grid (z[iy * x.size() + ix]; NaN = failed point, drawn as a

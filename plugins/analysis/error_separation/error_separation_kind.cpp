@@ -431,6 +431,7 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
     f.title = fmt::format("{}: polar profile (base circle {:.3g} um + deviation)", title, base);
     f.x_label = "x = (base + deviation) cos(theta) [um]";
     f.y_label = "y [um]";
+    f.equal_aspect = true;  // a round part must look round
     pl::Series profile{"separated profile", {}, {}, "lines"},
         circle{"least-squares circle", {}, {}, "lines"};
     for (std::size_t i = 0; i <= n; ++i) {

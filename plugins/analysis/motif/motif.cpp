@@ -4,6 +4,7 @@
 #include <queue>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 namespace chatterlab::surface {
 
@@ -29,7 +30,12 @@ Motifs combine_motifs(const std::vector<double>& x, const std::vector<double>& y
   }
   std::vector<char> alive(m, 1);
   std::vector<unsigned> version(m, 0);
-  auto height = [&](std::size_t k) { return y[peak[k]]; };
+  // Heights and positions of the boundaries side by side (not looked up through peak[] in the
+  // profile): the merge loop touches them in heap order, and on million-sample profiles the
+  // scattered reads were most of MOTIF's time.
+  std::vector<double> top(m), at(m);
+  for (std::size_t k = 0; k < m; ++k) top[k] = y[peak[k]], at[k] = x[peak[k]];
+  auto height = [&](std::size_t k) { return top[k]; };
 
   // Admissibility of removing interior boundary b (joining its two motifs); key = min(T1, T2).
   auto admissible = [&](std::size_t b, double& key) {
@@ -40,12 +46,15 @@ Motifs combine_motifs(const std::vector<double>& x, const std::vector<double>& y
     const double joined = std::min(y1, y3) - std::min(valley[p1], valley[b]);
     key = std::min(t1, t2);
     return y2 <= std::max(y1, y3)                       // C1 envelope
-           && x[peak[p3]] - x[peak[p1]] <= limit        // C2 width
+           && at[p3] - at[p1] <= limit                  // C2 width
            && joined >= std::max(t1, t2)                // C3 enlargement
            && key < 0.6 * joined;                       // C4 relative depth
   };
   using Candidate = std::tuple<double, std::size_t, unsigned>;
-  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue;
+  std::vector<Candidate> storage;
+  storage.reserve(m);
+  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue(std::greater<>{},
+                                                                               std::move(storage));
   auto consider = [&](std::size_t b) {
     double key;
     if (b < m && admissible(b, key)) queue.emplace(key, b, version[b]);
@@ -70,7 +79,7 @@ Motifs combine_motifs(const std::vector<double>& x, const std::vector<double>& y
     if (next[k] >= m) break;
     out.depths.push_back(height(k) - valley[k]);
     out.depths.push_back(height(next[k]) - valley[k]);
-    out.lengths.push_back(x[peak[next[k]]] - x[peak[k]]);
+    out.lengths.push_back(at[next[k]] - at[k]);
   }
   return out;
 }

@@ -155,6 +155,40 @@ TEST(Roundness, MinimumZoneExactOnAConstructedAnnulus) {
   EXPECT_LE(rd.minimum_zone.RONt, rd.least_squares.RONt + 1e-12);
 }
 
+TEST(Roundness, CartesianPointsBetweenTwoConcentricCircles) {
+  // Known answer in the plane, not in the limacon model: points measured about a part whose true
+  // centre is off the spindle axis by e = (2, -1.5) um, all between the circles of radius R and
+  // R + w about that centre, with outer contacts at 0 and 180 deg and inner ones at 90 and
+  // 270 deg (alternating: that pair of circles is the minimum zone, the outer one the minimum
+  // circumscribed, the inner one the maximum inscribed circle). The instrument sees radii and
+  // angles about the axis; the limacon linearisation then differs from the true circles by at
+  // most e^2 / (2 R), which bounds every difference below.
+  const double big_r = 10000.0, w = 3.0, ex = 2.0, ey = -1.5;  // um
+  const double bound = (ex * ex + ey * ey) / big_r;
+  const std::size_t n = 720;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> inside(0.05 * w, 0.95 * w);
+  std::vector<double> r(n), th(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double phi = 2 * pi * static_cast<double>(i) / static_cast<double>(n);
+    double rho = big_r + inside(rng);
+    if (i == 0 || i == n / 2) rho = big_r + w;
+    if (i == n / 4 || i == 3 * n / 4) rho = big_r;
+    const double x = ex + rho * std::cos(phi), y = ey + rho * std::sin(phi);
+    r[i] = std::hypot(x, y) - big_r;  // radial deviation about the axis
+    th[i] = std::atan2(y, x);
+  }
+  const Roundness rd = roundness(r, th);
+  EXPECT_NEAR(rd.minimum_zone.RONt, w, bound);
+  EXPECT_NEAR(rd.minimum_zone.centre_x, ex, 2 * bound);
+  EXPECT_NEAR(rd.minimum_zone.centre_y, ey, 2 * bound);
+  EXPECT_NEAR(rd.minimum_circumscribed.radius, w, bound);  // radius R + w, less R subtracted
+  EXPECT_NEAR(rd.maximum_inscribed.radius, 0.0, bound);
+  EXPECT_GT(rd.least_squares.RONt, rd.minimum_zone.RONt);  // LS is not the zone here
+  EXPECT_TRUE(rd.minimum_zone.certified && rd.minimum_circumscribed.certified &&
+              rd.maximum_inscribed.certified);
+}
+
 TEST(Roundness, AgreesWithBruteForceOverVertexCircles) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -293,6 +293,7 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
   polar.title = fmt::format("{}: roundness about the LS centre (base circle {:.3g} um)", title, base);
   polar.x_label = "x [um]";
   polar.y_label = "y [um]";
+  polar.equal_aspect = true;  // a round part must look round
   plot::Series profile{"waviness", {}, {}, "lines"};
   for (std::size_t i = 0; i <= n; i += stride) {
     const std::size_t k = i % n;
