@@ -58,6 +58,19 @@ SimulationResult run(const UnbalanceTwoDofParameters& p, double duration_s) {
   return simulate(model, s);
 }
 
+// Complex amplitude X of x = Re(X e^{iwt}) = Re X cos wt - Im X sin wt: least-squares fit of
+// a cos wt + b sin wt to the displacement after from_s (transients decayed).
+std::complex<double> steady_amplitude(const SimulationResult& r, double w, double from_s) {
+  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+    if (r.t_s[i] < from_s) continue;
+    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
+    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
+  }
+  const double det = cc * ss - cs * cs;
+  return {(xc * ss - xs * cs) / det, -(xs * cc - xc * cs) / det};
+}
+
 TEST(UnbalanceTwoDof, SteadyForcedResponseMatchesTheExactTwoByTwoSolution) {
   const auto p = example();
   const SimulationResult r = run(p, 2.2);
@@ -65,14 +78,8 @@ TEST(UnbalanceTwoDof, SteadyForcedResponseMatchesTheExactTwoByTwoSolution) {
   // Least-squares fit of a cos wt + b sin wt over the last second (transients decayed: the
   // slowest mode decays at ~ c/(2m) = 50 /s).
   const double w = kTwoPi * p.wheel_speed_rpm / 60.0;
-  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
-  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
-    if (r.t_s[i] < 1.2) continue;
-    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
-    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
-  }
-  const double det = cc * ss - cs * cs;
-  const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
+  const std::complex<double> fitted = steady_amplitude(r, w, 1.2);
+  const double a = fitted.real(), b = -fitted.imag();
   const std::complex<double> exact = exact_relative_amplitude(p);
   // x = Re(X e^{iwt}) = Re X cos wt - Im X sin wt
   EXPECT_NEAR(std::hypot(a, b), std::abs(exact), 1e-4 * std::abs(exact));
@@ -87,14 +94,7 @@ TEST(UnbalanceTwoDof, SimulatedSteadyStateAgreesWithTheClosedForm) {
   const SimulationResult r = run(p, 2.2);
   ASSERT_EQ(r.status, "completed");
   const double w = unbalance::forcing_frequency_rad_s(p);
-  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
-  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
-    if (r.t_s[i] < 1.2) continue;
-    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
-    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
-  }
-  const double det = cc * ss - cs * cs;
-  const std::complex<double> simulated((xc * ss - xs * cs) / det, -(xs * cc - xc * cs) / det);
+  const std::complex<double> simulated = steady_amplitude(r, w, 1.2);
   const unbalance::SteadyState closed = unbalance::unbalance_response(p);
   const std::complex<double> relative = closed.wheel_m + closed.work_m;
   EXPECT_LT(std::abs(simulated - relative), 1e-3 * std::abs(relative));
