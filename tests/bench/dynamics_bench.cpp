@@ -1,7 +1,8 @@
 // Simulated time per wall time of the dynamics engine (chatterlab/dynamics.hpp) on one core, on
 // the path the `simulate` study kind takes: MODELS.md G1 with both regenerative surfaces and one
-// structural mode, at the default settings that give the 1 % root agreement
-// (PlungeTimeDomainAccuracy tests). Counter speedup = simulated seconds / wall seconds.
+// structural mode, at rtol 1e-4, which still gives the 1 % root agreement for the growing G1
+// response (PlungeTimeDomainAccuracy.SimulationAgreesWithTheRightmostRoot checks it at 1e-4; the
+// engine default stays 1e-6 because decaying responses need it, docs/dynamics.md). Counter speedup = simulated seconds / wall seconds.
 // Numbers: docs/performance.md.
 //
 //   build/ci/tests/bench/dynamics_bench --benchmark_counters_tabular=true
@@ -27,6 +28,9 @@ PlungeRegenerativeParameters one_mode(double frequency_hz) {
   return p;
 }
 
+// The G1 cases' tolerance (see the header comment).
+constexpr double kG1RelativeTolerance = 1e-4;
+
 void run(benchmark::State& state, const TimeDomainModel& model, SimulationSettings settings) {
   double simulated = 0.0, steps = 0.0;
   for (auto _ : state) {
@@ -47,6 +51,7 @@ void G1BothSurfaces(benchmark::State& state) {
   s.sample_rate_hz = 10000.0;
   s.one_sided_contact = false;
   s.divergence_limit_m = 1e6;
+  s.relative_tolerance = kG1RelativeTolerance;
   run(state, model, s);
 }
 BENCHMARK(G1BothSurfaces)->Arg(250)->Arg(1000)->Unit(benchmark::kMillisecond);
@@ -58,6 +63,7 @@ void G1OneSidedContact(benchmark::State& state) {
   s.duration_s = 2.0;
   s.sample_rate_hz = 10000.0;
   s.infeed_rate_m_per_s = 1e-5;
+  s.relative_tolerance = kG1RelativeTolerance;
   run(state, model, s);
 }
 BENCHMARK(G1OneSidedContact)->Unit(benchmark::kMillisecond);
@@ -74,6 +80,7 @@ void G1OneChain(benchmark::State& state) {
   s.sample_rate_hz = 10000.0;
   s.one_sided_contact = false;
   s.divergence_limit_m = 1e6;
+  s.relative_tolerance = kG1RelativeTolerance;
   state.SetLabel(state.range(0) == 0 ? "wheel only" : "work only");
   run(state, model, s);
 }

@@ -135,7 +135,7 @@ struct SimulationSettings {
   // Speed laws per rotor; null: constant at the model's nominal speed.
   std::shared_ptr<const SpeedLaw> speed[rotor_count];
   std::vector<double> snapshot_times_s;  // surfaces recorded at these times (<= duration)
-  double relative_tolerance = 1e-6;  // 1e-6: growth rate to ~1e-5 (docs/dynamics.md)
+  double relative_tolerance = 1e-6;  // growth rate to ~1e-5 relative (docs/dynamics.md)
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz
   double max_steps_per_wave = 8.0;  // largest step <= 1/(this * highest_frequency_hz)
   double divergence_limit_m = 1.0;  // |displacement| beyond this ends the run as "diverged"

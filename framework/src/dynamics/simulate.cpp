@@ -234,7 +234,8 @@ class Engine {
       RotorState& rotor = rotors_[r];
       if (!rotor.surface) continue;
       SurfaceMemory& surface = *rotor.surface;
-      const double end_angle = rotor_angle(r, t_end, state_at(t_end));
+      // A speed law needs no state (no dense-output call per step and rotor).
+      const double end_angle = rotor.law ? rotor.law->angle_rad(t_end) : rotor_angle(r, t_end, state_at(t_end));
       double t_lo = t_start;
       const auto n = static_cast<std::int64_t>(surface.samples_per_rev());
       while (static_cast<double>(surface.next_index()) * surface.spacing_rad() <= end_angle) {

@@ -1,6 +1,7 @@
 #include "dynamics/surface_memory.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -13,7 +14,8 @@ constexpr std::size_t kMargin = 16;  // samples kept beyond one revolution (sten
 
 SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile)
     : n_(samples_per_rev),
-      capacity_(samples_per_rev + kMargin),
+      // A power of two: the ring index is a mask, not an integer division (four per read).
+      capacity_(std::bit_ceil(samples_per_rev + kMargin)),
       spacing_(2.0 * std::numbers::pi / static_cast<double>(samples_per_rev)),
       initial_(std::move(initial_profile)),
       ring_(capacity_, 0.0),
@@ -30,7 +32,7 @@ SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> in
 }
 
 std::size_t SurfaceMemory::slot(std::int64_t k) const {
-  return static_cast<std::size_t>(k % static_cast<std::int64_t>(capacity_));
+  return static_cast<std::size_t>(k) & (capacity_ - 1);  // k >= 0 here
 }
 
 double SurfaceMemory::value(std::int64_t k) const {

@@ -2,7 +2,7 @@
 // Angle-indexed memory of one regenerated surface (wheel or work): samples at the cumulative
 // rotation angles k * 2 pi / n (k = 0, 1, ...), written as the contact point passes them, read
 // "one revolution ago" at any angle by cubic Lagrange interpolation. Indices k < 0 are the
-// surface before the run (the initial profile, periodic). A ring of n + margin samples is
+// surface before the run (the initial profile, periodic). A ring of >= n + margin samples is
 // enough: reads never reach further back than one revolution and a few samples.
 #include <cstddef>
 #include <cstdint>

@@ -12,6 +12,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/plot.hpp"
+#include "kinds/model_table.hpp"
 #include "chatterlab/roots.hpp"
 
 namespace chatterlab {
@@ -29,13 +30,7 @@ constexpr const char* col_certified = "certified";
 constexpr const char* col_certified_real_part = "certified_real_part_per_s";
 constexpr const char* col_certificate = "certificate";
 
-std::unique_ptr<Model> build_model(const Json& model_table) {
-  Json params = model_table;
-  params.erase("type");
-  return model_registry()
-      .at(model_table.at("type").get<std::string>())
-      .create(ParamValues(std::move(params)));
-}
+using kinds_detail::build_model;
 
 // The model's closed-form indicators (chatterlab/closed_form.hpp), if it reports any.
 const ClosedFormIndicators* closed_forms(const Model& model) {

@@ -9,7 +9,21 @@ namespace chatterlab {
 
 using model_params::positive;
 
-AmplitudeModulatedTimeDomain::AmplitudeModulatedTimeDomain(const AmplitudeModulatedParameters& p)
+AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalParameters& p) {
+  const double omega = 2.0 * std::numbers::pi * p.frequency_hz;
+  AmplitudeModulatedParameters f;
+  f.stiffness_n_per_m = p.stiffness_n_per_m;
+  f.mass_kg = p.stiffness_n_per_m / (omega * omega);
+  f.damping_n_s_per_m = 2.0 * p.damping_ratio * std::sqrt(p.stiffness_n_per_m * f.mass_kg);
+  f.grinding_stiffness_n_per_m = p.grinding_stiffness_n_per_m;
+  f.contact_stiffness_n_per_m = p.contact_stiffness_n_per_m;
+  f.overlap_factor = p.overlap_factor;
+  f.modulation_depth = p.modulation_depth;
+  f.wheel_speed_rpm = p.wheel_speed_rpm;
+  return f;
+}
+
+AmplitudeModulatedTimeDomain::AmplitudeModulatedTimeDomain(const AmplitudeModulatedModalParameters& p)
     : p_(p), omega_(2.0 * std::numbers::pi * p.frequency_hz) {}
 
 void AmplitudeModulatedTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
@@ -56,8 +70,8 @@ void AmplitudeModulatedTimeDomain::derivatives(const ContactInput& in, const Con
 }
 
 namespace {
-AmplitudeModulatedParameters read(const ParamValues& v) {
-  AmplitudeModulatedParameters p;
+AmplitudeModulatedModalParameters read(const ParamValues& v) {
+  AmplitudeModulatedModalParameters p;
   p.frequency_hz = v.real("frequency_hz");
   p.damping_ratio = v.real("damping_ratio");
   p.stiffness_n_per_m = v.real("stiffness_n_per_m");

@@ -16,10 +16,14 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/registry.hpp"
+#include "models/amplitude_modulated/floquet_growth.hpp"
 
 namespace chatterlab {
 
-struct AmplitudeModulatedParameters {
+// The plugin's parameters in modal form (natural frequency and damping ratio). A different type
+// from floquet_growth.hpp's AmplitudeModulatedParameters (mass, damping, stiffness), which
+// floquet_parameters converts to: one equation, two parameterisations.
+struct AmplitudeModulatedModalParameters {
   double frequency_hz = 0.0;                  // structural natural frequency sqrt(k/m)/2 pi
   double damping_ratio = 0.0;                 // c / (2 sqrt(k m))
   double stiffness_n_per_m = 0.0;             // k
@@ -31,9 +35,12 @@ struct AmplitudeModulatedParameters {
   double work_speed_rpm = 0.0;                // n_w (reported; the model regenerates the wheel)
 };
 
+// The same model for floquet_growth(): m = k/w^2, c = 2 zeta sqrt(k m).
+AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalParameters& p);
+
 class AmplitudeModulatedTimeDomain final : public TimeDomainModel {
  public:
-  explicit AmplitudeModulatedTimeDomain(const AmplitudeModulatedParameters& p);
+  explicit AmplitudeModulatedTimeDomain(const AmplitudeModulatedModalParameters& p);
   std::size_t state_size() const override { return 2; }
   void initial_state(const Disturbance& d, std::span<double> x) const override;
   void state_scales(double displacement_m, std::span<double> scales) const override;
@@ -45,23 +52,23 @@ class AmplitudeModulatedTimeDomain final : public TimeDomainModel {
   double displacement_m(std::span<const double> state) const override { return state[0]; }
 
  private:
-  AmplitudeModulatedParameters p_;
+  AmplitudeModulatedModalParameters p_;
   double omega_;
 };
 
 class AmplitudeModulated final : public Model {
  public:
   explicit AmplitudeModulated(const ParamValues& values);
-  explicit AmplitudeModulated(AmplitudeModulatedParameters p) : p_(p) {}
+  explicit AmplitudeModulated(AmplitudeModulatedModalParameters p) : p_(p) {}
   static PluginInfo info();
   std::optional<double> wheel_period_s() const override { return 60.0 / p_.wheel_speed_rpm; }
   std::unique_ptr<TimeDomainModel> time_domain() const override {
     return std::make_unique<AmplitudeModulatedTimeDomain>(p_);
   }
-  const AmplitudeModulatedParameters& parameters() const { return p_; }
+  const AmplitudeModulatedModalParameters& parameters() const { return p_; }
 
  private:
-  AmplitudeModulatedParameters p_;
+  AmplitudeModulatedModalParameters p_;
 };
 
 }  // namespace chatterlab

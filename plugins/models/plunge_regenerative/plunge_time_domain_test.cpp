@@ -68,11 +68,18 @@ TEST(PlungeTimeDomainAccuracy, SimulationAgreesWithTheRightmostRoot) {
   ASSERT_TRUE(root.certified);
   EXPECT_NEAR(root.root.real(), 4.790137, 1e-5);  // pinned reference
   EXPECT_NEAR(root.root.imag() / kTwoPi, 361.7148, 1e-3);
-  const SimulationResult r = simulate(model_of(p), linear_settings(4.0));
-  ASSERT_EQ(r.status, "completed");
-  const EnvelopeFit fit = fit_envelope(r.t_s, r.displacement_m, 2.0, 4.0);
-  EXPECT_NEAR(fit.growth_rate_per_s, root.root.real(), 0.01 * root.root.real());
-  EXPECT_NEAR(dominant_frequency(r, 2.0), root.root.imag() / kTwoPi, 0.005 * root.root.imag() / kTwoPi);
+  // The default tolerance and the benchmark's (tests/bench/dynamics_bench.cpp: rtol 1e-4, the
+  // accuracy this growing response needs for the 1 % agreement).
+  for (double relative_tolerance : {SimulationSettings{}.relative_tolerance, 1e-4}) {
+    SCOPED_TRACE(relative_tolerance);
+    SimulationSettings s = linear_settings(4.0);
+    s.relative_tolerance = relative_tolerance;
+    const SimulationResult r = simulate(model_of(p), s);
+    ASSERT_EQ(r.status, "completed");
+    const EnvelopeFit fit = fit_envelope(r.t_s, r.displacement_m, 2.0, 4.0);
+    EXPECT_NEAR(fit.growth_rate_per_s, root.root.real(), 0.01 * root.root.real());
+    EXPECT_NEAR(dominant_frequency(r, 2.0), root.root.imag() / kTwoPi, 0.005 * root.root.imag() / kTwoPi);
+  }
 }
 
 // Wheel regeneration alone (G3's model): the lattice spacing is the wheel frequency, the
@@ -92,6 +99,42 @@ TEST(PlungeTimeDomainAccuracy, WheelOnlyRegenerationAgreesWithItsRoot) {
   // Wheel-only chatter grows faster and sits higher than with both chains (the work chain's
   // process compliance 1/kw softens the loop): 9.17 /s at 409 Hz against 4.79 /s at 362 Hz.
   EXPECT_GT(root.root.real(), root_of(reference_case()).root.real());
+}
+
+// Work regeneration alone: the work lattice puts roots 55/60 = 0.917 Hz apart with nearly equal
+// growth, so an envelope fit beats (fits over 10-20 s windows gave 1.05..1.43 /s). Instead each
+// lattice line's growth is measured on its own: the Hann-spectrum amplitude of the line in two
+// consecutive 10 s windows (0.1 Hz resolution separates the lines), growth = ln(A2/A1)/10 s.
+// The fastest-growing line must be the rightmost root, at its rate. Measured: 378.42 Hz grows at
+// 1.0198 /s (root 1.019 /s at 378.42 Hz); the line at 382.05 Hz grows at 0.989 /s, so the
+// simulation does not support a rightmost root of 1.107 /s at 382.03 Hz.
+TEST(PlungeTimeDomainAccuracy, WorkOnlyLineGrowthAgreesWithItsRoot) {
+  auto p = reference_case();
+  p.wheel_regeneration = false;
+  const RightmostRoot root = root_of(p);
+  SimulationSettings s = linear_settings(28.0);
+  s.sample_rate_hz = 4000.0;
+  const SimulationResult r = simulate(model_of(p), s);
+  ASSERT_EQ(r.status, "completed");
+  auto window = [&](double start_s) {
+    const auto first = static_cast<std::size_t>(start_s * s.sample_rate_hz);
+    const auto count = static_cast<std::size_t>(10.0 * s.sample_rate_hz);
+    return amplitude_spectrum(std::span<const double>(r.displacement_m.data() + first, count), s.sample_rate_hz);
+  };
+  const Spectrum early = window(8.0), late = window(18.0);
+  // Lattice lines within +/- 6 Hz of the root: local maxima of the late spectrum.
+  double best_growth = -1e9, best_frequency = 0.0;
+  for (std::size_t k = 1; k + 1 < late.amplitude.size(); ++k) {
+    if (std::abs(late.frequency_hz[k] - root.root.imag() / kTwoPi) > 6.0) continue;
+    if (!(late.amplitude[k] > late.amplitude[k - 1] && late.amplitude[k] >= late.amplitude[k + 1])) continue;
+    const double growth = std::log(late.amplitude[k] / early.amplitude[k]) / 10.0;
+    if (growth > best_growth) {
+      best_growth = growth;
+      best_frequency = late.frequency_hz[k];
+    }
+  }
+  EXPECT_NEAR(best_growth, root.root.real(), 0.01 * root.root.real());
+  EXPECT_NEAR(best_frequency, root.root.imag() / kTwoPi, 0.15);
 }
 
 // Both chains off: one mode stiffened by the contact, x'' + 2 zeta w x' + w^2 (1 + kc/k) x = 0.

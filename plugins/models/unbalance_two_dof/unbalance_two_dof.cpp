@@ -22,15 +22,15 @@ void UnbalanceTwoDofTimeDomain::state_scales(double displacement_m, std::span<do
   // The forced amplitude U w^2 / k sets the scale when it exceeds the disturbance.
   const double w_g = 2.0 * std::numbers::pi * p_.wheel_speed_rpm / 60.0;
   const double d = std::max(displacement_m, p_.unbalance_kg_m * w_g * w_g /
-                                                (p_.coupling_stiffness() + p_.stiffness_1_n_per_m));
+                                                (unbalance::coupling_stiffness_n_per_m(p_) + p_.wheel_support_stiffness_n_per_m));
   scales[0] = scales[2] = d;
   scales[1] = scales[3] = d * w;
 }
 
 double UnbalanceTwoDofTimeDomain::highest_frequency_hz() const {
-  const double k = p_.coupling_stiffness();
-  const double w1 = std::sqrt((k + p_.stiffness_1_n_per_m) / p_.mass_1_kg);
-  const double w2 = std::sqrt((k + p_.stiffness_2_n_per_m) / p_.mass_2_kg);
+  const double k = unbalance::coupling_stiffness_n_per_m(p_);
+  const double w1 = std::sqrt((k + p_.wheel_support_stiffness_n_per_m) / p_.wheel_mass_kg);
+  const double w2 = std::sqrt((k + p_.work_support_stiffness_n_per_m) / p_.work_mass_kg);
   // The coupled frequencies lie below sqrt(w1^2 + w2^2); the forcing is at the wheel speed.
   return 1.5 * std::max(std::hypot(w1, w2) / (2.0 * std::numbers::pi), p_.wheel_speed_rpm / 60.0);
 }
@@ -43,7 +43,7 @@ void UnbalanceTwoDofTimeDomain::contact(const ContactInput& in, ContactOutput& o
   constexpr auto work = static_cast<std::size_t>(Rotor::work);
   const double relative = in.state[0] + in.state[2];
   out.penetration_m = 1.0;  // linear model: always in contact
-  out.normal_force_n = p_.coupling_stiffness() * relative;  // force through the contact spring
+  out.normal_force_n = unbalance::coupling_stiffness_n_per_m(p_) * relative;  // force through the contact spring
   out.depth_of_cut_m = relative;
   // The work surface keeps a copy of the relative motion: increment over one revolution ago.
   out.removed_m[work] = relative - in.previous_surface_m[work];
@@ -54,25 +54,25 @@ void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const Contac
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
   const double w = 2.0 * std::numbers::pi * in.speed_rpm[wheel] / 60.0;
   const double force = p_.unbalance_kg_m * w * w * std::cos(in.angle_rad[wheel]);
-  const double k = p_.coupling_stiffness();
+  const double k = unbalance::coupling_stiffness_n_per_m(p_);
   const double x1 = in.state[0], v1 = in.state[1], x2 = in.state[2], v2 = in.state[3];
   dx[0] = v1;
-  dx[1] = (force - p_.damping_1_n_s_per_m * v1 - (k + p_.stiffness_1_n_per_m) * x1 - k * x2) / p_.mass_1_kg;
+  dx[1] = (force - p_.wheel_damping_n_s_per_m * v1 - (k + p_.wheel_support_stiffness_n_per_m) * x1 - k * x2) / p_.wheel_mass_kg;
   dx[2] = v2;
-  dx[3] = (-p_.damping_2_n_s_per_m * v2 - (k + p_.stiffness_2_n_per_m) * x2 - k * x1) / p_.mass_2_kg;
+  dx[3] = (-p_.work_damping_n_s_per_m * v2 - (k + p_.work_support_stiffness_n_per_m) * x2 - k * x1) / p_.work_mass_kg;
 }
 
 namespace {
 UnbalanceTwoDofParameters read(const ParamValues& v) {
   UnbalanceTwoDofParameters p;
-  p.mass_1_kg = v.real("mass_1_kg");
-  p.damping_1_n_s_per_m = v.real("damping_1_n_s_per_m");
-  p.stiffness_1_n_per_m = v.real("stiffness_1_n_per_m");
-  p.mass_2_kg = v.real("mass_2_kg");
-  p.damping_2_n_s_per_m = v.real("damping_2_n_s_per_m");
-  p.stiffness_2_n_per_m = v.real("stiffness_2_n_per_m");
+  p.wheel_mass_kg = v.real("mass_1_kg");
+  p.wheel_damping_n_s_per_m = v.real("damping_1_n_s_per_m");
+  p.wheel_support_stiffness_n_per_m = v.real("stiffness_1_n_per_m");
+  p.work_mass_kg = v.real("mass_2_kg");
+  p.work_damping_n_s_per_m = v.real("damping_2_n_s_per_m");
+  p.work_support_stiffness_n_per_m = v.real("stiffness_2_n_per_m");
   p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
-  p.wheel_wear_stiffness_n_per_m = v.real("wheel_wear_stiffness_n_per_m");
+  p.grinding_stiffness_n_per_m = v.real("wheel_wear_stiffness_n_per_m");
   p.unbalance_kg_m = v.real("unbalance_kg_m");
   p.wheel_speed_rpm = v.real("wheel_speed_rpm");
   p.work_speed_rpm = v.real("work_speed_rpm");

@@ -13,21 +13,11 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/registry.hpp"
+#include "models/unbalance_two_dof/unbalance_closed_form.hpp"
 
 namespace chatterlab {
 
-struct UnbalanceTwoDofParameters {
-  double mass_1_kg = 0.0, damping_1_n_s_per_m = 0.0, stiffness_1_n_per_m = 0.0;  // wheel side
-  double mass_2_kg = 0.0, damping_2_n_s_per_m = 0.0, stiffness_2_n_per_m = 0.0;  // work side
-  double contact_stiffness_n_per_m = 0.0;     // kc
-  double wheel_wear_stiffness_n_per_m = 0.0;  // kg
-  double unbalance_kg_m = 0.0;                // U
-  double wheel_speed_rpm = 0.0, work_speed_rpm = 0.0;
-  double coupling_stiffness() const {
-    return contact_stiffness_n_per_m * wheel_wear_stiffness_n_per_m /
-           (contact_stiffness_n_per_m + wheel_wear_stiffness_n_per_m);
-  }
-};
+// The parameters are MODELS.md G6's, shared with the closed form (one definition).
 
 class UnbalanceTwoDofTimeDomain final : public TimeDomainModel {
  public:

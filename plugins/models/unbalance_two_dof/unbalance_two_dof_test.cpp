@@ -10,6 +10,7 @@
 
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/spectrum.hpp"
+#include "models/unbalance_two_dof/unbalance_closed_form.hpp"
 #include "models/unbalance_two_dof/unbalance_two_dof.hpp"
 
 namespace chatterlab {
@@ -19,14 +20,14 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 UnbalanceTwoDofParameters example() {
   UnbalanceTwoDofParameters p;
-  p.mass_1_kg = 60.0;
-  p.damping_1_n_s_per_m = 6000.0;
-  p.stiffness_1_n_per_m = 5e7;
-  p.mass_2_kg = 20.0;
-  p.damping_2_n_s_per_m = 3000.0;
-  p.stiffness_2_n_per_m = 3e7;
+  p.wheel_mass_kg = 60.0;
+  p.wheel_damping_n_s_per_m = 6000.0;
+  p.wheel_support_stiffness_n_per_m = 5e7;
+  p.work_mass_kg = 20.0;
+  p.work_damping_n_s_per_m = 3000.0;
+  p.work_support_stiffness_n_per_m = 3e7;
   p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
+  p.grinding_stiffness_n_per_m = 1e9;
   p.unbalance_kg_m = 1e-4;
   p.wheel_speed_rpm = 1450.0;
   p.work_speed_rpm = 55.0;
@@ -36,9 +37,9 @@ UnbalanceTwoDofParameters example() {
 // Exact steady state: [K - w^2 M + i w C] X = [U w^2, 0] (Cramer's rule), relative X1 + X2.
 std::complex<double> exact_relative_amplitude(const UnbalanceTwoDofParameters& p) {
   using C = std::complex<double>;
-  const double w = kTwoPi * p.wheel_speed_rpm / 60.0, k = p.coupling_stiffness();
-  const C a11(k + p.stiffness_1_n_per_m - p.mass_1_kg * w * w, w * p.damping_1_n_s_per_m);
-  const C a22(k + p.stiffness_2_n_per_m - p.mass_2_kg * w * w, w * p.damping_2_n_s_per_m);
+  const double w = kTwoPi * p.wheel_speed_rpm / 60.0, k = unbalance::coupling_stiffness_n_per_m(p);
+  const C a11(k + p.wheel_support_stiffness_n_per_m - p.wheel_mass_kg * w * w, w * p.wheel_damping_n_s_per_m);
+  const C a22(k + p.work_support_stiffness_n_per_m - p.work_mass_kg * w * w, w * p.work_damping_n_s_per_m);
   const C a12 = k, a21 = k;
   const C f = p.unbalance_kg_m * w * w;
   const C det = a11 * a22 - a12 * a21;
@@ -57,6 +58,19 @@ SimulationResult run(const UnbalanceTwoDofParameters& p, double duration_s) {
   return simulate(model, s);
 }
 
+// Complex amplitude X of x = Re(X e^{iwt}) = Re X cos wt - Im X sin wt: least-squares fit of
+// a cos wt + b sin wt to the displacement after from_s (transients decayed).
+std::complex<double> steady_amplitude(const SimulationResult& r, double w, double from_s) {
+  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
+  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
+    if (r.t_s[i] < from_s) continue;
+    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
+    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
+  }
+  const double det = cc * ss - cs * cs;
+  return {(xc * ss - xs * cs) / det, -(xs * cc - xc * cs) / det};
+}
+
 TEST(UnbalanceTwoDof, SteadyForcedResponseMatchesTheExactTwoByTwoSolution) {
   const auto p = example();
   const SimulationResult r = run(p, 2.2);
@@ -64,19 +78,29 @@ TEST(UnbalanceTwoDof, SteadyForcedResponseMatchesTheExactTwoByTwoSolution) {
   // Least-squares fit of a cos wt + b sin wt over the last second (transients decayed: the
   // slowest mode decays at ~ c/(2m) = 50 /s).
   const double w = kTwoPi * p.wheel_speed_rpm / 60.0;
-  double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
-  for (std::size_t i = 0; i < r.t_s.size(); ++i) {
-    if (r.t_s[i] < 1.2) continue;
-    const double c = std::cos(w * r.t_s[i]), s = std::sin(w * r.t_s[i]), x = r.displacement_m[i];
-    cc += c * c; ss += s * s; cs += c * s; xc += x * c; xs += x * s;
-  }
-  const double det = cc * ss - cs * cs;
-  const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
+  const std::complex<double> fitted = steady_amplitude(r, w, 1.2);
+  const double a = fitted.real(), b = -fitted.imag();
   const std::complex<double> exact = exact_relative_amplitude(p);
   // x = Re(X e^{iwt}) = Re X cos wt - Im X sin wt
   EXPECT_NEAR(std::hypot(a, b), std::abs(exact), 1e-4 * std::abs(exact));
   EXPECT_NEAR(a, exact.real(), 1e-3 * std::abs(exact));
   EXPECT_NEAR(b, -exact.imag(), 1e-3 * std::abs(exact));
+}
+
+// Cross-route: the simulated steady state against the closed form's unbalance_response (the
+// book's 3-1..3-5 damped solve, written independently of this test's Cramer solve): x1 + x2.
+TEST(UnbalanceTwoDof, SimulatedSteadyStateAgreesWithTheClosedForm) {
+  const auto p = example();
+  const SimulationResult r = run(p, 2.2);
+  ASSERT_EQ(r.status, "completed");
+  const double w = unbalance::forcing_frequency_rad_s(p);
+  const std::complex<double> simulated = steady_amplitude(r, w, 1.2);
+  const unbalance::SteadyState closed = unbalance::unbalance_response(p);
+  const std::complex<double> relative = closed.wheel_m + closed.work_m;
+  EXPECT_LT(std::abs(simulated - relative), 1e-3 * std::abs(relative));
+  // The closed form's surface motion is the grinding spring's share of it, (x1 + x2)/(1 + kg/kc).
+  EXPECT_LT(std::abs(closed.relative_m * (1.0 + p.grinding_stiffness_n_per_m / p.contact_stiffness_n_per_m) - relative),
+            1e-12 * std::abs(relative));
 }
 
 TEST(UnbalanceTwoDof, WorkSurfaceCarriesWheelOverWorkSpeedLobes) {
