@@ -207,7 +207,10 @@ SurfaceSettings settings_from(const Json& document, std::size_t rows = 0) {
   };
   s.low_band_upr = band("low_band_upr");
   s.high_band_upr = band("high_band_upr");
-  if (input["closed"] == Json(true) && s.cutoff_mm && input["spacing_mm"].is_number() && rows > 0) {
+  // value()/contains(): operator[] on a const JSON object is undefined for a missing key, and the
+  // analysis plugin's document carries no `closed`/`spacing_mm`.
+  if (input.value("closed", false) && s.cutoff_mm && input.contains("spacing_mm") &&
+      input["spacing_mm"].is_number() && rows > 0) {
     s.cutoff_upr = static_cast<double>(rows) * input["spacing_mm"].get<double>() / *s.cutoff_mm;
     s.cutoff_mm.reset();
   }
