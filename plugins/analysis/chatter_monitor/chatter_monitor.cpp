@@ -10,6 +10,7 @@
 #include "analysis/bp_network/bp_network.hpp"
 #include "analysis/monitor_common/monitor_common.hpp"
 #include "analysis/rbf_density/rbf_density.hpp"
+#include "analysis/study_support/study_support.hpp"
 #include "analysis/window_features/window_features.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
@@ -72,17 +73,6 @@ std::vector<std::string> enabled_detectors(const Json& monitor) {
   return out;
 }
 
-fs::path study_dir(const SourceMap& sources) {
-  const std::string study = sources.locate("input").file;
-  return fs::absolute(fs::path(study)).parent_path();
-}
-
-std::string resolve(const std::string& path, const fs::path& base) {
-  fs::path p(path);
-  if (p.is_relative()) p = base / p;
-  return p.lexically_normal().string();
-}
-
 // The sample rate from a t_s column: uniform steps (to rounding) required.
 double rate_from_time_column(const std::vector<double>& t, const DataTable& table,
                              const std::string& where) {
@@ -109,13 +99,9 @@ void validate_input(Json& document, const SourceMap& sources) {
         sources.locate("input").str()));
   Json input = validate_params(document["input"], input_specs(), "input", sources);
   const std::string where = sources.locate("input.file").str();
-  input["file"] = resolve(input["file"].get<std::string>(), study_dir(sources));
-  DataTable table;
-  try {
-    table = read_data_table(input["file"].get<std::string>());
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: input.file: {}", where, e.what()));
-  }
+  input["file"] = study_support::resolve_data_file(input["file"], "input.file", sources).string();
+  const DataTable table =
+      study_support::read_table_at(input["file"].get<std::string>(), "input.file", sources);
   if (input["column"].is_null()) {
     std::vector<std::string> candidates;
     for (const auto& name : table.names)
@@ -305,7 +291,9 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
   if (validated_detectors.contains("bp_network")) {
     Json& bp = validated_detectors["bp_network"];
     if (bp.contains("weights_file") && bp["weights_file"].is_string())
-      bp["weights_file"] = resolve(bp["weights_file"].get<std::string>(), study_dir(sources));
+      bp["weights_file"] = study_support::resolve_data_file(
+                               bp["weights_file"], "monitor.bp_network.weights_file", sources)
+                               .string();
   }
 
   // Data-dependent limits (window longer than the signal, labels outside it): exit 2 now.

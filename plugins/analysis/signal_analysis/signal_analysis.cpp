@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "analysis/study_support/study_support.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
@@ -96,18 +97,8 @@ void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
         "{}: missing table [input] (file = \"...\", column = \"...\", sample_rate_hz = ...)",
         where("input")));
   Json input = validate_params(document["input"], input_specs(), "input", sources);
-  fs::path file = input["file"].get<std::string>();
-  if (file.is_relative()) {
-    const std::string study_file = sources.locate("input.file").file;
-    if (!study_file.empty()) file = fs::absolute(fs::path(study_file)).parent_path() / file;
-  }
-  file = file.lexically_normal();
-  DataTable table;
-  try {
-    table = read_data_table(file);
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: input.file: {}", where("input.file"), e.what()));
-  }
+  const fs::path file = study_support::resolve_data_file(input["file"], "input.file", sources);
+  const DataTable table = study_support::read_table_at(file, "input.file", sources);
   std::string column;
   if (input["column"].is_string()) {
     column = input["column"].get<std::string>();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "analysis/study_support/study_support.hpp"
 #include "analysis/surface/surface.hpp"
 #include "analysis/waviness/waviness.hpp"
 #include "chatterlab/errors.hpp"
@@ -235,15 +236,6 @@ void check_uniform(const DataTable& table, const std::string& x_column, const So
   }
 }
 
-fs::path resolve_file(const Json& input, const SourceMap& sources) {
-  fs::path file = input["file"].get<std::string>();
-  if (file.is_relative()) {
-    const std::string study = sources.locate("input.file").file;
-    if (!study.empty()) file = fs::absolute(fs::path(study)).parent_path() / file;
-  }
-  return file.lexically_normal();
-}
-
 // ---------------------------------------------------------------- outputs
 std::vector<double> every(const std::vector<double>& v, std::size_t stride) {
   std::vector<double> out;
@@ -387,14 +379,9 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format("{}: {}", sources.locate(key).str(), what));
   };
 
-  const fs::path file = resolve_file(input, sources);
+  const fs::path file = study_support::resolve_data_file(input["file"], "input.file", sources);
   input["file"] = file.string();
-  DataTable table;
-  try {
-    table = read_data_table(file);
-  } catch (const InputError& e) {
-    fail("input.file", fmt::format("input.file: {}", e.what()));
-  }
+  const DataTable table = study_support::read_table_at(file, "input.file", sources);
   const bool closed = input["closed"].get<bool>();
   if (input["x_column"].is_string()) {
     if (closed) fail("input.x_column", "input.x_column: closed profiles are sampled by angle "
