@@ -10,6 +10,7 @@
 // state derivatives given the contact force. The engine owns integration, surface memory,
 // one-sided contact (events), output sampling, divergence and step-size checks.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -121,6 +122,14 @@ class TimeDomainModel {
 
 // ------------------------------------------------------------------ simulation
 
+// One output sample, as SimulationResult stores it (index arrays by Rotor).
+struct OutputSample {
+  double t_s = 0.0, displacement_m = 0.0, force_n = 0.0, depth_of_cut_m = 0.0, infeed_m = 0.0;
+  double speed_rpm[rotor_count] = {0.0, 0.0};
+  double surface_at_contact_m[rotor_count] = {0.0, 0.0};
+  bool in_contact = true;
+};
+
 struct SimulationSettings {
   double duration_s = 1.0;
   double sample_rate_hz = 20000.0;  // output samples (t = i / rate)
@@ -139,6 +148,11 @@ struct SimulationSettings {
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz
   double max_steps_per_wave = 8.0;  // largest step <= 1/(this * highest_frequency_hz)
   double divergence_limit_m = 1.0;  // |displacement| beyond this ends the run as "diverged"
+  // Streaming (long runs, e.g. a 3000 s feed plan): on_sample, when set, is called with every
+  // output sample in time order; with store_samples = false the series of SimulationResult stay
+  // empty and the max_output_samples limit does not apply.
+  std::function<void(const OutputSample&)> on_sample;
+  bool store_samples = true;
 };
 
 struct SurfaceSnapshot {

@@ -60,7 +60,7 @@ void validate(const SimulationSettings& s) {
   positive(s.max_steps_per_wave, "max_steps_per_wave");
   positive(s.divergence_limit_m, "divergence_limit_m");
   const double samples = s.duration_s * s.sample_rate_hz;
-  if (samples > max_output_samples)
+  if (s.store_samples && samples > max_output_samples)
     throw std::invalid_argument(fmt::format(
         "duration_s * sample_rate_hz = {:.4g} output samples exceeds the limit of {:.4g}: shorten "
         "the run or lower the sample rate",
@@ -266,6 +266,21 @@ class Engine {
                              in.previous_surface_m[1]};
     for (double v : values)
       if (!std::isfinite(v)) return false;
+    if (settings_.on_sample) {
+      OutputSample sample;
+      sample.t_s = t;
+      sample.displacement_m = displacement;
+      sample.force_n = out.normal_force_n;
+      sample.depth_of_cut_m = out.depth_of_cut_m;
+      sample.infeed_m = in.infeed_m;
+      for (std::size_t r = 0; r < rotor_count; ++r) {
+        sample.speed_rpm[r] = in.speed_rpm[r];
+        sample.surface_at_contact_m[r] = in.previous_surface_m[r];
+      }
+      sample.in_contact = contact;
+      settings_.on_sample(sample);
+    }
+    if (!settings_.store_samples) return true;
     result_.t_s.push_back(t);
     result_.displacement_m.push_back(displacement);
     result_.force_n.push_back(out.normal_force_n);
@@ -411,7 +426,7 @@ SimulationResult Engine::run() {
   std::size_t next_snapshot = 0;
   const auto sample_count = static_cast<std::size_t>(std::floor(t_end * settings_.sample_rate_hz + 1e-9)) + 1;
   std::size_t next_sample = 0;
-  result_.t_s.reserve(sample_count);
+  if (settings_.store_samples) result_.t_s.reserve(sample_count);
 
   // Contact bookkeeping (one-sided): intervals out of contact.
   auto penetration_now = [&](double t, std::span<const double> x) {

@@ -43,18 +43,6 @@ std::vector<ClosedFormIndicatorSpec> indicator_specs(const Json& document) {
   return indicators ? indicators->indicator_specs() : std::vector<ClosedFormIndicatorSpec>{};
 }
 
-RootSearchOptions search_options(const Json& stability, const CharacteristicFunction& fn) {
-  RootSearchOptions options;
-  const Json& band = stability.at("max_frequency_hz");
-  options.max_frequency_hz =
-      band.is_null() ? StabilityMap::default_band_multiple * fn.natural_frequency_scale_hz()
-                     : band.get<double>();
-  options.max_newton_iterations = stability.at("max_newton_iterations").get<int>();
-  options.newton_relative_tolerance = stability.at("newton_relative_tolerance").get<double>();
-  options.max_function_evaluations = stability.at("max_function_evaluations").get<long>();
-  return options;
-}
-
 // ---------------------------------------------------------------- plots
 bool numeric_axis(const GridAxis& axis) {
   for (const auto& v : axis.values)
@@ -386,10 +374,7 @@ std::vector<Json> StabilityMap::run_point(const Json& point_document,
                                           const PointContext& /*context*/) const {
   const Json& model_table = point_document.at("model");
   auto model = build_model(model_table);
-  auto characteristic = model->characteristic();
-  if (!characteristic) throw PointFailure("the model has no characteristic function here");
-  const RightmostRoot found = find_rightmost_root(
-      *characteristic, search_options(point_document.at("stability"), *characteristic));
+  const RightmostRoot found = kinds_detail::rightmost_root(*model, point_document.at("stability"));
 
   const double growth = found.root.real();
   std::vector<Json> out{growth, std::abs(found.root.imag()) / (2 * std::numbers::pi)};

@@ -1,0 +1,469 @@
+#include "feed_risk/feed_risk.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <stdexcept>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/model.hpp"
+#include "kinds/model_table.hpp"
+
+namespace chatterlab::feed_risk {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double surface_speed_m_per_s(double diameter_mm, double rpm) { return kPi * diameter_mm * 1e-3 * rpm / 60.0; }
+
+// G4: the static grinding stiffness ks = psi b Kv/(1+Kv); the wheel wear stiffness of the same
+// force over a wheel surface passing v_s/v_w times faster, G kw v_s/v_w = G psi b/(1+Kv)
+// (studies/default.toml's derivation of kg).
+double removal_speed_factor(double kv) { return kv / (1.0 + kv); }
+double wear_speed_factor(double kv) { return 1.0 / (1.0 + kv); }
+
+// Groups of G1 parameter sets equal within a relative tolerance (cells of a log grid).
+struct Grouping {
+  std::vector<std::size_t> group_of_item;
+  std::vector<std::size_t> representative;  // item index per group
+};
+
+Grouping group_items(const std::vector<SegmentProcess>& items, double tolerance) {
+  Grouping g;
+  std::map<std::array<long long, 4>, std::size_t> cells;
+  auto cell = [&](double v) { return std::llround(std::log(v) / std::max(tolerance, 1e-15)); };
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const SegmentProcess& s = items[i];
+    const std::array<long long, 4> key{cell(s.work_speed_rpm), cell(s.contact_stiffness_n_per_m),
+                                       cell(s.wheel_wear_stiffness_n_per_m),
+                                       cell(s.work_removal_stiffness_n_per_m)};
+    auto [it, inserted] = cells.emplace(key, g.representative.size());
+    if (inserted) g.representative.push_back(i);
+    g.group_of_item.push_back(it->second);
+  }
+  return g;
+}
+
+struct RootValue {
+  double growth_rate_per_s = kNaN, frequency_hz = kNaN;
+  bool certified = false;
+  std::string error;
+};
+
+// One certified rightmost root per group (OpenMP over groups; each thread builds its own model).
+std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettings& p,
+                                    const std::vector<SegmentProcess>& items, const Grouping& g,
+                                    const RootSettings& settings) {
+  std::vector<RootValue> values(g.representative.size());
+  const auto n = static_cast<long>(values.size());
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    try {
+      auto model = kinds_detail::build_model(segment_model_table(model_table, p, items[g.representative[u]]));
+      const RightmostRoot root = kinds_detail::rightmost_root(*model, settings.stability);
+      values[u].growth_rate_per_s = root.root.real();
+      values[u].frequency_hz = std::abs(root.root.imag()) / (2 * kPi);
+      values[u].certified = root.certified;
+    } catch (const std::exception& e) {
+      values[u].error = e.what();
+    }
+  }
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (!values[i].error.empty())
+      throw PointFailure(fmt::format("root search failed at x = {:.4g} mm (work {:.4g} rpm, kc = {:.4g} N/m): {}",
+                                     items[g.representative[i]].x_mid_mm, items[g.representative[i]].work_speed_rpm,
+                                     items[g.representative[i]].contact_stiffness_n_per_m, values[i].error));
+  return values;
+}
+
+}  // namespace
+
+const char* to_string(Risk risk) {
+  switch (risk) {
+    case Risk::stable: return "stable";
+    case Risk::marginal: return "marginal";
+    case Risk::chatter: return "chatter";
+  }
+  return "?";
+}
+
+// ------------------------------------------------------------------ process model
+
+double contact_width_mm(const ProcessSettings& p, const planner::GeneratrixValue& part) {
+  if (p.contact_width_mm) return *p.contact_width_mm;
+  // Curvature of the part's generatrix seen from the wheel: > 0 where the part is convex (f'' < 0).
+  const double kappa = -part.d2 / std::pow(1.0 + part.d1 * part.d1, 1.5);
+  double section_width = p.wheel_thickness_mm;
+  double inverse_rho = kappa;
+  if (p.profiled_wheel) {
+    inverse_rho += 1.0 / p.edge_radius_mm;
+    section_width = 2.0 * p.edge_radius_mm * std::sin(0.5 * p.edge_angle_deg * kPi / 180.0);
+  }
+  const double h = p.depth_of_cut_mm;
+  if (!(inverse_rho > 0.0)) return section_width;  // conforming or concave: the whole section
+  const double rho = 1.0 / inverse_rho;
+  if (h >= rho) return section_width;
+  return std::min(section_width, 2.0 * std::sqrt(h * (2.0 * rho - h)));
+}
+
+SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentConditions& c,
+                           const planner::Generatrix& generatrix) {
+  SegmentProcess s;
+  s.x_mid_mm = 0.5 * (c.x_start_mm + c.x_end_mm);
+  const planner::GeneratrixValue part = generatrix.evaluate(s.x_mid_mm);
+  s.radius_mm = c.radius_mm;
+  s.work_speed_rpm = c.spindle_speed_rpm;
+  const double d_w = 2.0 * c.radius_mm, d_s = p.wheel_diameter_mm;
+  s.work_surface_speed_m_per_s = surface_speed_m_per_s(d_w, c.spindle_speed_rpm);
+  const double v_s = surface_speed_m_per_s(d_s, p.wheel_speed_rpm);
+  s.speed_ratio = s.work_surface_speed_m_per_s / v_s;
+  s.equivalent_diameter_mm = d_w * d_s / (d_w + d_s);
+  s.contact_length_mm = std::sqrt(p.depth_of_cut_mm * s.equivalent_diameter_mm);
+  s.contact_width_mm = contact_width_mm(p, part);
+  s.axial_feed_per_rev_mm = std::abs(c.axial_speed_mm_per_s) * 60.0 / c.spindle_speed_rpm;
+  s.overlap_ratio = std::max(0.0, 1.0 - s.axial_feed_per_rev_mm / s.contact_width_mm);
+
+  const double width = s.contact_width_mm / p.reference_contact_width_mm;
+  double removal = 1.0, wear = 1.0;
+  if (p.speed_scaling) {
+    const double kv_ref = surface_speed_m_per_s(2.0 * p.reference_work_radius_mm, p.reference_work_speed_rpm) /
+                          surface_speed_m_per_s(d_s, p.reference_wheel_speed_rpm);
+    removal = removal_speed_factor(s.speed_ratio) / removal_speed_factor(kv_ref);
+    wear = wear_speed_factor(s.speed_ratio) / wear_speed_factor(kv_ref);
+  }
+  s.contact_stiffness_n_per_m = p.reference_contact_stiffness_n_per_m * width;
+  s.work_removal_stiffness_n_per_m = p.reference_work_removal_stiffness_n_per_m * width * removal;
+  s.wheel_wear_stiffness_n_per_m = p.reference_wheel_wear_stiffness_n_per_m * width * wear;
+  return s;
+}
+
+Json segment_model_table(const Json& model_table, const ProcessSettings& p, const SegmentProcess& s) {
+  Json t = model_table;
+  t["wheel_speed_rpm"] = p.wheel_speed_rpm;
+  t["work_speed_rpm"] = s.work_speed_rpm;
+  t["contact_stiffness_n_per_m"] = s.contact_stiffness_n_per_m;
+  t["wheel_wear_stiffness_n_per_m"] = s.wheel_wear_stiffness_n_per_m;
+  t["work_removal_stiffness_n_per_m"] = s.work_removal_stiffness_n_per_m;
+  return t;
+}
+
+// ------------------------------------------------------------------ risk
+
+void accumulate(const std::vector<planner::SegmentConditions>& plan, const RiskThresholds& thresholds,
+                PlanRisk& risk) {
+  double log_a = 0.0, floored = 0.0;
+  risk.max_growth_rate_per_s = -std::numeric_limits<double>::infinity();
+  risk.max_floored_log_amplification = 0.0;
+  risk.worst = Risk::stable;
+  for (double& t : risk.time_in_risk_s) t = 0.0;
+  const double chatter_log = std::log(thresholds.chatter_amplification);
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    SegmentRisk& r = risk.segments[k];
+    const double growth = r.growth_rate_per_s * plan[k].duration_s;
+    log_a += growth;
+    floored = std::max(0.0, floored + growth);
+    r.log_amplification = log_a;
+    r.floored_log_amplification = floored;
+    if (floored >= chatter_log)
+      r.risk = Risk::chatter;
+    else if (r.growth_rate_per_s > -thresholds.marginal_growth_rate_per_s || floored > 0.0)
+      r.risk = Risk::marginal;
+    else
+      r.risk = Risk::stable;
+    risk.max_growth_rate_per_s = std::max(risk.max_growth_rate_per_s, r.growth_rate_per_s);
+    risk.max_floored_log_amplification = std::max(risk.max_floored_log_amplification, floored);
+    risk.worst = std::max(risk.worst, r.risk);
+    risk.time_in_risk_s[static_cast<int>(r.risk)] += plan[k].duration_s;
+  }
+  risk.final_log_amplification = log_a;
+}
+
+namespace {
+
+// Growth rate per segment, averaged over `phases` frozen work speeds n (1 + a sin phi_j) (S2,
+// eqs 5-37..5-39: the amplitude after many revolutions is the product of the per-revolution
+// factors); a = 0 is the root at the segment's own conditions.
+PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
+                   const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
+                   const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
+                   int phases) {
+  PlanRisk risk;
+  for (const auto& c : plan) risk.process.push_back(map_segment(p, c, generatrix));
+  const int phase_count = amplitude_ratio > 0.0 ? std::max(phases, 1) : 1;
+  std::vector<SegmentProcess> items;
+  items.reserve(risk.process.size() * static_cast<std::size_t>(phase_count));
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    for (int j = 0; j < phase_count; ++j) {
+      planner::SegmentConditions c = plan[k];
+      c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / phase_count);
+      items.push_back(phase_count == 1 ? risk.process[k] : map_segment(p, c, generatrix));
+    }
+  const Grouping g = group_items(items, roots.condition_tolerance);
+  const std::vector<RootValue> values = solve_groups(model_table, p, items, g, roots);
+  risk.groups = values.size();
+  risk.segments.resize(plan.size());
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    SegmentRisk& r = risk.segments[k];
+    r.growth_rate_per_s = 0.0;
+    r.certified = true;
+    double best = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < phase_count; ++j) {
+      const std::size_t item = k * static_cast<std::size_t>(phase_count) + static_cast<std::size_t>(j);
+      const RootValue& v = values[g.group_of_item[item]];
+      r.growth_rate_per_s += v.growth_rate_per_s / phase_count;
+      r.certified = r.certified && v.certified;
+      if (v.growth_rate_per_s > best) {
+        best = v.growth_rate_per_s;
+        r.chatter_frequency_hz = v.frequency_hz;
+        r.group = g.group_of_item[item];
+      }
+    }
+  }
+  accumulate(plan, thresholds, risk);
+  return risk;
+}
+
+}  // namespace
+
+PlanRisk evaluate_roots(const Json& model_table, const ProcessSettings& p,
+                        const std::vector<planner::SegmentConditions>& plan,
+                        const planner::Generatrix& generatrix, const RootSettings& roots,
+                        const RiskThresholds& thresholds) {
+  return rate_plan(model_table, p, plan, generatrix, roots, thresholds, 0.0, 1);
+}
+
+// ------------------------------------------------------------------ simulation
+
+namespace {
+
+class AlongPlanModel final : public TimeDomainModel {
+ public:
+  AlongPlanModel(std::vector<std::unique_ptr<TimeDomainModel>> models, std::vector<std::size_t> model_of_segment,
+                 std::vector<double> segment_start_s, double wheel_rpm, double work_rpm)
+      : models_(std::move(models)), model_of_segment_(std::move(model_of_segment)),
+        start_s_(std::move(segment_start_s)), wheel_rpm_(wheel_rpm), work_rpm_(work_rpm) {}
+
+  std::size_t state_size() const override { return models_.front()->state_size(); }
+  void initial_state(const Disturbance& d, std::span<double> state) const override {
+    at(0.0).initial_state(d, state);
+  }
+  void state_scales(double displacement_m, std::span<double> scales) const override {
+    at(0.0).state_scales(displacement_m, scales);
+  }
+  double highest_frequency_hz() const override {
+    double f = 0.0;
+    for (const auto& m : models_) f = std::max(f, m->highest_frequency_hz());
+    return f;
+  }
+  bool regenerates(Rotor rotor) const override { return models_.front()->regenerates(rotor); }
+  double nominal_speed_rpm(Rotor rotor) const override { return rotor == Rotor::wheel ? wheel_rpm_ : work_rpm_; }
+  void contact(const ContactInput& in, ContactOutput& out) const override { at(in.t_s).contact(in, out); }
+  void derivatives(const ContactInput& in, const ContactOutput& contact, std::span<double> dx) const override {
+    at(in.t_s).derivatives(in, contact, dx);
+  }
+  double displacement_m(std::span<const double> state) const override { return models_.front()->displacement_m(state); }
+
+ private:
+  // The segment in progress at t (the last whose start is <= t).
+  const TimeDomainModel& at(double t) const {
+    auto it = std::upper_bound(start_s_.begin(), start_s_.end(), t);
+    const std::size_t k = it == start_s_.begin() ? 0 : static_cast<std::size_t>(it - start_s_.begin()) - 1;
+    return *models_[model_of_segment_[k]];
+  }
+  std::vector<std::unique_ptr<TimeDomainModel>> models_;
+  std::vector<std::size_t> model_of_segment_;
+  std::vector<double> start_s_;
+  double wheel_rpm_, work_rpm_;
+};
+
+}  // namespace
+
+std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const ProcessSettings& p,
+                                                  const std::vector<planner::SegmentConditions>& plan,
+                                                  const PlanRisk& risk) {
+  // Own grouping of the segments' parameters (exact to 1e-9): the risk's groups may merge
+  // segments within the root tolerance or come from averaged phases.
+  const Grouping g = group_items(risk.process, 1e-9);
+  std::map<std::size_t, std::size_t> model_of_group;
+  std::vector<std::unique_ptr<TimeDomainModel>> models;
+  std::vector<std::size_t> model_of_segment;
+  std::vector<double> start;
+  const double t0 = plan.empty() ? 0.0 : plan.front().start_s;
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    auto [it, inserted] = model_of_group.emplace(g.group_of_item[k], models.size());
+    if (inserted) {
+      auto model = kinds_detail::build_model(segment_model_table(model_table, p, risk.process[k]));
+      auto td = model->time_domain();
+      if (!td) throw std::invalid_argument("the model has no time-domain form");
+      models.push_back(std::move(td));
+    }
+    model_of_segment.push_back(it->second);
+    start.push_back(plan[k].start_s - t0);
+  }
+  return std::make_unique<AlongPlanModel>(std::move(models), std::move(model_of_segment), std::move(start),
+                                          p.wheel_speed_rpm, plan.front().spindle_speed_rpm);
+}
+
+double fitted_growth_rate_per_s(const std::vector<RevolutionRow>& rows, double t0, double t1) {
+  double n = 0, st = 0, sy = 0, stt = 0, sty = 0;
+  for (const RevolutionRow& r : rows) {
+    if (r.t_s < t0 || r.t_s > t1 || !(r.vibration_amplitude_m > 0)) continue;
+    const double y = std::log(r.vibration_amplitude_m);
+    n += 1;
+    st += r.t_s;
+    sy += y;
+    stt += r.t_s * r.t_s;
+    sty += r.t_s * y;
+  }
+  const double d = n * stt - st * st;
+  return n >= 3 && d > 0 ? (n * sty - st * sy) / d : kNaN;
+}
+
+AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSettings& p,
+                                        const std::vector<planner::SegmentConditions>& plan,
+                                        const PlanRisk& risk, const AlongPlanSettings& settings) {
+  AlongPlanSimulation out;
+  const auto started = std::chrono::steady_clock::now();
+  const double t0 = plan.front().start_s;
+  const double duration = plan.back().start_s + plan.back().duration_s - t0;
+  std::shared_ptr<const SpeedLaw> work = settings.work_speed;
+  if (!work) work = make_modulated_speed(plan.front().spindle_speed_rpm, SpeedModulation::constant, 0.0, 0.0);
+  // x at time t: linear inside each segment.
+  auto x_at = [&](double t) {
+    auto it = std::upper_bound(plan.begin(), plan.end(), t + t0,
+                               [](double v, const planner::SegmentConditions& c) { return v < c.start_s; });
+    const std::size_t k = it == plan.begin() ? 0 : static_cast<std::size_t>(it - plan.begin()) - 1;
+    const auto& c = plan[k];
+    const double u = std::clamp((t + t0 - c.start_s) / c.duration_s, 0.0, 1.0);
+    return c.x_start_mm + u * (c.x_end_mm - c.x_start_mm);
+  };
+  // Per work revolution: extremes of the displacement and of the work surface generated
+  // (surface one revolution ago at the contact + this pass's removal).
+  long revolution = 0;
+  double x_min = 0, x_max = 0, w_min = 0, w_max = 0, t_sum = 0;
+  long count = 0;
+  auto flush = [&]() {
+    if (count == 0) return;
+    RevolutionRow row;
+    row.t_s = t_sum / static_cast<double>(count);
+    row.x_mm = x_at(row.t_s);
+    row.vibration_amplitude_m = 0.5 * (x_max - x_min);
+    row.work_waviness_m = 0.5 * (w_max - w_min);
+    row.growth_rate_per_s = kNaN;
+    out.revolutions.push_back(row);
+    count = 0;
+  };
+  SimulationSettings s;
+  s.duration_s = duration;
+  s.sample_rate_hz = settings.sample_rate_hz;
+  s.disturbance = {settings.initial_waviness_m, 0.0};
+  s.initial_waviness_m = settings.initial_waviness_m;
+  s.seed = settings.seed;
+  s.one_sided_contact = false;  // the linear model of the roots (perturbation about the steady cut)
+  s.speed[static_cast<std::size_t>(Rotor::work)] = work;
+  s.relative_tolerance = settings.relative_tolerance;
+  s.store_samples = false;
+  s.on_sample = [&](const OutputSample& sample) {
+    const long rev = static_cast<long>(std::floor(work->angle_rad(sample.t_s) / (2 * kPi)));
+    if (rev != revolution) {
+      flush();
+      revolution = rev;
+    }
+    const double surface = sample.surface_at_contact_m[static_cast<std::size_t>(Rotor::work)] + sample.depth_of_cut_m;
+    if (count == 0) {
+      x_min = x_max = sample.displacement_m;
+      w_min = w_max = surface;
+      t_sum = 0;
+    }
+    x_min = std::min(x_min, sample.displacement_m);
+    x_max = std::max(x_max, sample.displacement_m);
+    w_min = std::min(w_min, surface);
+    w_max = std::max(w_max, surface);
+    t_sum += sample.t_s;
+    ++count;
+  };
+  try {
+    auto model = along_plan_model(model_table, p, plan, risk);
+    const SimulationResult r = simulate(*model, s);
+    flush();
+    out.status = r.status;
+    out.failed = r.diverged;
+    out.steps = r.steps;
+  } catch (const std::exception& e) {
+    flush();
+    out.status = fmt::format("simulation failed: {}", e.what());
+    out.failed = true;
+  }
+  // Rolling growth rate over fit_window_revolutions around each row (the first revolution, where
+  // the random initial surface is not yet regenerated, is left out).
+  const auto half = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * settings.fit_window_revolutions)));
+  auto& rows = out.revolutions;
+  for (std::size_t i = 1 + half; i + half < rows.size(); ++i)
+    rows[i].growth_rate_per_s = fitted_growth_rate_per_s(rows, rows[i - half].t_s, rows[i + half].t_s);
+  for (RevolutionRow& row : rows) row.t_s += t0;
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return out;
+}
+
+// ------------------------------------------------------------------ optimisation
+
+OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const Replan& replan,
+                        double baseline_time_s, const planner::Generatrix& generatrix,
+                        const RootSettings& roots, const RiskThresholds& thresholds,
+                        const OptimiseSettings& settings) {
+  OptimiseResult result;
+  RootSettings coarse = roots;
+  coarse.condition_tolerance = settings.condition_tolerance;
+  std::map<double, std::vector<planner::SegmentConditions>> plans;  // by planning speed
+  bool found = false;
+  for (double a : settings.amplitude_ratios) {
+    const double lo = settings.spindle_min_rpm / (1.0 - a), hi = settings.spindle_max_rpm / (1.0 + a);
+    if (!(a >= 0.0 && a < 1.0) || lo > hi * (1 + 1e-12))
+      throw std::invalid_argument(fmt::format("amplitude ratio {} leaves no spindle speed in [{}, {}] rpm", a,
+                                              settings.spindle_min_rpm, settings.spindle_max_rpm));
+    const int steps = lo < hi ? std::max(settings.speed_steps, 1) : 1;
+    for (int i = 0; i < steps; ++i) {
+      Candidate c;
+      c.amplitude_ratio = a;
+      c.spindle_speed_rpm = steps == 1 ? std::min(lo, hi) : lo + (hi - lo) * i / (steps - 1);
+      c.planning_speed_rpm = c.spindle_speed_rpm * (1.0 - a);
+      auto it = plans.find(c.planning_speed_rpm);
+      if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
+      std::vector<planner::SegmentConditions> plan = it->second;
+      for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
+      const PlanRisk risk = rate_plan(model_table, p, plan, generatrix, coarse, thresholds, a, settings.phase_samples);
+      c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
+      c.time_factor = c.total_time_s / baseline_time_s;
+      c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
+      c.max_floored_log_amplification = risk.max_floored_log_amplification;
+      c.worst = risk.worst;
+      c.admissible = c.time_factor <= settings.max_time_factor * (1 + 1e-12);
+      result.candidates.push_back(c);
+      if (!c.admissible) continue;
+      const Candidate& b = result.candidates[result.best];
+      const bool better = !found || c.max_floored_log_amplification < b.max_floored_log_amplification - 1e-9 ||
+                          (std::abs(c.max_floored_log_amplification - b.max_floored_log_amplification) <= 1e-9 &&
+                           (c.max_growth_rate_per_s < b.max_growth_rate_per_s - 1e-9 ||
+                            (std::abs(c.max_growth_rate_per_s - b.max_growth_rate_per_s) <= 1e-9 &&
+                             c.total_time_s < b.total_time_s)));
+      if (better) {
+        result.best = result.candidates.size() - 1;
+        result.best_plan = std::move(plan);
+        found = true;
+      }
+    }
+  }
+  if (!found) throw PointFailure("chatter-aware planning: no candidate within the time limit");
+  return result;
+}
+
+}  // namespace chatterlab::feed_risk

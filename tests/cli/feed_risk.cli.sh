@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# feed_risk end to end (docs/feed_risk.md): at constant conditions every segment's growth rate is
+# stability_map's at the same model, the amplification is the integral of the growth rate, the
+# simulation along the plan grows at the root's rate; the files and plots exist; bad input exits 2
+# with the reason and writes nothing.
+source "$(dirname "$0")/lib.sh"
+bin=$1 work=$2 src=$3
+rm -rf "$work" && mkdir -p "$work"
+
+# ---- constant conditions against stability_map
+out="$work/constant"
+expect_exit 0 "$work/constant" "$bin" run "$src/studies/feed_risk_constant.toml" --out "$out"
+map="$work/map.toml"
+{ echo '[study]'; echo 'kind = "stability_map"'; sed -n '/^\[model\]/,/^wheel_regeneration/p' "$src/studies/feed_risk_constant.toml"; } >"$map"
+expect_exit 0 "$work/map" "$bin" run "$map" --out "$work/map_out"
+root=$(csv_column "$work/map_out/results.csv" growth_rate_per_s)
+frequency=$(csv_column "$work/map_out/results.csv" chatter_frequency_hz)
+[ "$(csv_column "$out/segments.csv" growth_rate_per_s | sort -u | wc -l)" = "1" ] || fail "constant plan: more than one growth rate"
+seg=$(csv_column "$out/segments.csv" growth_rate_per_s | head -n 1)
+awk -v a="$seg" -v b="$root" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0 && d <= 1e-12 * b) }' ||
+  fail "segment growth $seg vs stability_map $root"
+seg_f=$(csv_column "$out/segments.csv" chatter_frequency_hz | head -n 1)
+close_to "$seg_f" "$frequency" 1e-9 || fail "segment chatter frequency $seg_f vs $frequency"
+# ln A = root x total time
+total=$(csv_column "$out/results.csv" total_time_s)
+log_a=$(csv_column "$out/results.csv" final_log_amplification)
+awk -v l="$log_a" -v r="$root" -v t="$total" 'BEGIN { d = l - r * t; if (d < 0) d = -d; exit !(d <= 1e-9 * r * t) }' ||
+  fail "ln A $log_a vs root x time $root x $total"
+[ "$(csv_column "$out/results.csv" worst_risk)" = "chatter" ] || fail "constant plan should be chatter"
+[ "$(csv_column "$out/results.csv" simulation_status)" = "completed" ] || fail "simulation status"
+# The simulation's rolling growth rate over the second half agrees with the root within 6 % (the work lattice's neighbouring roots grow almost as fast, so the envelope approaches the rightmost root's rate slowly: 0.34 vs 0.356 /s after 30 s).
+fitted=$(awk -F, -v t="$total" 'NR > 1 && $1 > t / 2 && $6 == $6 + 0 { s += $6; n++ } END { if (n) print s / n }' "$out/along_x.csv")
+awk -v f="$fitted" -v r="$root" 'BEGIN { d = f - r; if (d < 0) d = -d; exit !(f != "" && d <= 0.06 * r) }' ||
+  fail "simulated growth $fitted vs root $root"
+expect_plots "$out" growth_along_x waviness_along_x amplification_over_time
+for f in segments.csv along_x.csv summary.json; do [ -s "$out/$f" ] || fail "$f missing"; done
+
+# ---- saved plan (plan_dir) gives the same risk as the plan made in the study
+expect_exit 0 "$work/plan" "$bin" run <(sed -e 's/kind = "feed_risk"/kind = "feed_plan"/' -e '/^\[model\]/,/^wheel_regeneration/d' -e '/^\[feed_risk\]/,$d' "$src/studies/feed_risk_constant.toml") --out "$work/saved_plan"
+saved="$work/saved.toml"
+sed -e '/^\[machine\]/,/^thickness_mm/d' "$src/studies/feed_risk_constant.toml" >"$saved"
+printf 'plan_dir = "%s"\n[feed_risk.simulation]\nenabled = false\n' "$work/saved_plan" >>"$saved"
+expect_exit 0 "$work/saved" "$bin" run "$saved" --out "$work/saved_out"
+close_to "$(csv_column "$work/saved_out/results.csv" final_log_amplification)" "$log_a" 1e-9 || fail "saved plan ln A"
+
+# ---- bad input: exit 2, reason in the message, nothing written
+bad() {  # bad NAME EXPECTED_TEXT: runs $work/NAME.toml
+  local name=$1 text=$2
+  expect_exit 2 "$work/$name" "$bin" run "$work/$name.toml" --out "$work/${name}_out"
+  grep -q "$text" "$work/$name.err" || fail "$name: message lacks '$text': $(cat "$work/$name.err")"
+  [ ! -e "$work/${name}_out" ] || fail "$name: output written"
+}
+study="$src/studies/feed_risk_constant.toml"
+without_plan_tables() { sed '/^\[machine\]/,/^thickness_mm/d' "$study"; }
+# A model without the G1 parameters the process model writes.
+sed -e '/^\[model\]/,/^wheel_regeneration/c\[model]\ntype = "linear_dde"\na0 = [[0.0, 1.0], [-1.3, -0.1]]' "$study" >"$work/model_mismatch.toml"
+bad model_mismatch "plan/model mismatch: .* has no 'wheel_speed_rpm'"
+{ without_plan_tables; echo "plan_dir = \"$work/no_such_plan\""; } >"$work/missing_plan.toml"
+bad missing_plan "cannot open (a saved feed plan needs summary.json)"
+mkdir -p "$work/half_plan" && cp "$work/saved_plan/summary.json" "$work/half_plan/"
+{ without_plan_tables; echo "plan_dir = \"$work/half_plan\""; } >"$work/missing_pulses.toml"
+bad missing_pulses "pulses.csv: cannot open (a saved feed plan needs pulses.csv)"
+{ without_plan_tables | sed 's/^\[feed_risk\]$/[wheel]\ndiameter_mm = 500.0\n[feed_risk]/'; echo "plan_dir = \"$work/saved_plan\""; } >"$work/wheel_mismatch.toml"
+bad wheel_mismatch "wheel.diameter_mm = 500.0: plan/model mismatch: the saved plan in .* has wheel.diameter_mm = 400"
+range='s/^spindle_speed_rpm = 300.0/spindle_speed_rpm = { from = 250.0, to = 300.0 }/'
+{ sed "$range" "$study"; printf '[feed_risk.optimise]\nmodulation_amplitude_ratios = [0.0, 1.0]\n'; } >"$work/stop_spindle.toml"
+bad stop_spindle "amplitude ratio 1 would stop or reverse the spindle"
+{ sed "$range" "$study"; printf '[feed_risk.optimise]\nmodulation_amplitude_ratios = [0.2]\n'; } >"$work/spindle_range.toml"
+bad spindle_range "spindle range violated: with amplitude ratio 0.2 no mean speed"
+# A saved plan whose spindle speed (top-level key, not the machine's range) lies outside the range.
+cp -r "$work/saved_plan" "$work/fast_plan"
+sed -i 's/^  "spindle_speed_rpm": 300.0/  "spindle_speed_rpm": 320.0/' "$work/fast_plan/summary.json"
+{ without_plan_tables; echo "plan_dir = \"$work/fast_plan\""; } >"$work/plan_speed.toml"
+bad plan_speed "spindle range violated: the plan runs the spindle at 320 rpm"
+finish
