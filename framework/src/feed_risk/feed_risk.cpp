@@ -366,12 +366,14 @@ AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSe
   s.duration_s = duration;
   s.sample_rate_hz = settings.sample_rate_hz;
   s.disturbance = {settings.initial_waviness_m, 0.0};
-  s.initial_waviness_m = settings.initial_waviness_m;
+  s.initial_waviness_m = settings.random_initial_surfaces ? settings.initial_waviness_m : 0.0;
   s.seed = settings.seed;
   s.one_sided_contact = false;  // the linear model of the roots (perturbation about the steady cut)
   s.speed[static_cast<std::size_t>(Rotor::work)] = work;
   s.relative_tolerance = settings.relative_tolerance;
+  s.samples_per_wave = settings.samples_per_wave;
   s.store_samples = false;
+  s.divergence_limit_m = settings.divergence_limit_m;
   s.on_sample = [&](const OutputSample& sample) {
     const long rev = static_cast<long>(std::floor(work->angle_rad(sample.t_s) / (2 * kPi)));
     if (rev != revolution) {
@@ -396,7 +398,8 @@ AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSe
     const SimulationResult r = simulate(*model, s);
     flush();
     out.status = r.status;
-    out.failed = r.diverged;
+    out.diverged = r.diverged;
+    out.end_time_s = r.end_time_s + t0;
     out.steps = r.steps;
   } catch (const std::exception& e) {
     flush();

@@ -122,9 +122,17 @@ void accumulate(const std::vector<planner::SegmentConditions>& plan, const RiskT
 struct AlongPlanSettings {
   double sample_rate_hz = 4000.0;
   double relative_tolerance = 1e-4;
-  double initial_waviness_m = 1e-6;  // random initial surfaces and initial displacement
+  double samples_per_wave = 8.0;  // surface samples per wave at the highest frequency (engine: 16)
+  double initial_waviness_m = 1e-6;  // initial structural displacement (the disturbance)
+  // Random initial wheel and work surfaces of +/- initial_waviness_m as well: white noise up to the
+  // surface grid's resolution, which the integrator then resolves at every revolution (about 10x
+  // the steps on the G8 machine); off by default, the displacement alone excites every mode.
+  bool random_initial_surfaces = false;
   std::uint64_t seed = 1;
   double fit_window_revolutions = 10.0;  // rolling fit of ln(envelope) for the growth rate
+  // The linear model stops being valid once the vibration exceeds the depth of cut (the wheel
+  // leaves the work): the run ends there as "diverged" (the kind sets the depth of cut).
+  double divergence_limit_m = 1.0;
   // Work spindle: null = constant at the plan's speed.
   std::shared_ptr<const SpeedLaw> work_speed;
 };
@@ -140,7 +148,9 @@ struct RevolutionRow {
 struct AlongPlanSimulation {
   std::vector<RevolutionRow> revolutions;
   std::string status;  // engine status, or the failure message
-  bool failed = false;
+  bool failed = false;    // numerical failure (the integrator gave up)
+  bool diverged = false;  // the vibration reached the divergence limit (the depth of cut)
+  double end_time_s = 0.0;
   long steps = 0;
   double wall_s = 0.0;
 };

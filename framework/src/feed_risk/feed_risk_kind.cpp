@@ -41,6 +41,12 @@ ParamSpec optional(ParamSpec spec) {
   return spec;
 }
 
+ParamSpec param_spec_bool(std::string key, std::string description) {
+  ParamSpec spec = param_spec(std::move(key), ValueKind::boolean, "1", std::move(description));
+  spec.default_value = false;
+  return spec;
+}
+
 std::vector<ParamSpec> simulation_specs() {
   ParamSpec enabled = param_spec("enabled", ValueKind::boolean, "1", "run the simulation along the plan");
   enabled.default_value = true;
@@ -52,6 +58,13 @@ std::vector<ParamSpec> simulation_specs() {
   return {enabled,
           with_default(positive("sample_rate_hz", "Hz", "output samples reduced per work revolution"), 4000.0),
           tolerance, seed,
+          with_default(positive("samples_per_wave", "1",
+                                "surface samples per wave at the model's highest frequency (the engine's "
+                                "default is 16; 8 halves the cost, growth rates change by ~0.1 %)"),
+                       8.0),
+          param_spec_bool("random_initial_surfaces",
+                          "random initial wheel and work surfaces of +/- initial_waviness_um as well as the "
+                          "initial displacement (white noise up to the surface resolution: ~10x the steps)"),
           with_default(positive("fit_window_revolutions", "1",
                                 "work revolutions in the rolling fit of the simulated growth rate"),
                        10.0)};
@@ -206,6 +219,12 @@ constexpr const char* columns[] = {
 
 Json number_or_null(double v) { return std::isfinite(v) ? Json(v) : Json(); }
 
+// results.csv simulation_status: completed, reached_depth_of_cut (the linear model ends where the
+// wheel would leave the work; the rows up to there are kept) or failed (numerical failure).
+const char* simulation_outcome(const AlongPlanSimulation& sim) {
+  return sim.failed ? "failed" : sim.diverged ? "reached_depth_of_cut" : "completed";
+}
+
 double plan_time(const std::vector<SegmentConditions>& plan) {
   return plan.back().start_s + plan.back().duration_s - plan.front().start_s;
 }
@@ -216,11 +235,14 @@ double max_waviness_um(const AlongPlanSimulation& sim) {
   return 1e6 * w;
 }
 
-// Predicted waviness amplitude [um]: the initial waviness times the floored amplification
-// (exponent capped so the number stays finite; the linear model is invalid long before).
-double predicted_um(double initial_waviness_um, double floored_log) {
-  return initial_waviness_um * std::exp(std::min(floored_log, 600.0));
-}
+// Predicted waviness amplitude [um]: the initial waviness times the floored amplification, at most
+// the depth of cut (beyond it the wheel leaves the work and the linear prediction ends).
+struct Waviness {
+  double initial_um, cap_um;
+  double operator()(double floored_log) const {
+    return std::min(cap_um, initial_um * std::exp(std::min(floored_log, 600.0)));
+  }
+};
 
 // Floored ln amplification at time t (linear inside the segment in progress).
 double floored_log_at(const std::vector<SegmentConditions>& plan, const PlanRisk& risk, double t) {
@@ -233,7 +255,7 @@ double floored_log_at(const std::vector<SegmentConditions>& plan, const PlanRisk
 }
 
 void write_segments(const fs::path& path, const std::vector<SegmentConditions>& plan, const PlanRisk& risk,
-                    double w0_um) {
+                    const Waviness& predicted_um) {
   const std::vector<std::string> header{
       "segment", "start_s", "duration_s", "x_start_mm", "x_end_mm", "radius_mm", "axial_speed_mm_per_s",
       "work_speed_rpm", "work_surface_speed_m_per_s", "speed_ratio", "equivalent_diameter_mm",
@@ -252,14 +274,14 @@ void write_segments(const fs::path& path, const std::vector<SegmentConditions>& 
                           s.contact_stiffness_n_per_m, s.wheel_wear_stiffness_n_per_m,
                           s.work_removal_stiffness_n_per_m, r.growth_rate_per_s, r.chatter_frequency_hz,
                           r.certified ? 1.0 : 0.0, r.log_amplification, r.floored_log_amplification,
-                          predicted_um(w0_um, r.floored_log_amplification), static_cast<double>(r.risk)};
+                          predicted_um(r.floored_log_amplification), static_cast<double>(r.risk)};
     for (std::size_t i = 0; i < header.size(); ++i) c[i][k] = row[i];
   }
   write_file_atomically(path, csv_text(header, c));
 }
 
 void write_along_x(const fs::path& path, const std::vector<SegmentConditions>& plan, const PlanRisk& risk,
-                   const AlongPlanSimulation& sim, double w0_um) {
+                   const AlongPlanSimulation& sim, const Waviness& predicted_um) {
   const std::vector<std::string> header{"t_s", "x_mm", "predicted_waviness_um", "simulated_vibration_um",
                                         "simulated_waviness_um", "simulated_growth_rate_per_s"};
   const auto& rows = sim.revolutions;
@@ -267,7 +289,7 @@ void write_along_x(const fs::path& path, const std::vector<SegmentConditions>& p
   for (std::size_t i = 0; i < rows.size(); ++i) {
     c[0][i] = rows[i].t_s;
     c[1][i] = rows[i].x_mm;
-    c[2][i] = predicted_um(w0_um, floored_log_at(plan, risk, rows[i].t_s));
+    c[2][i] = predicted_um(floored_log_at(plan, risk, rows[i].t_s));
     c[3][i] = 1e6 * rows[i].vibration_amplitude_m;
     c[4][i] = 1e6 * rows[i].work_waviness_m;
     c[5][i] = rows[i].growth_rate_per_s;
@@ -290,7 +312,7 @@ void draw(const plot::Curves& figure, const fs::path& dir, const std::string& st
 }
 
 void draw_plots(const Json& document, const fs::path& dir, const std::vector<SegmentConditions>& plan,
-                const PlanRisk& risk, const AlongPlanSimulation* sim, double w0_um, Json& failures) {
+                const PlanRisk& risk, const AlongPlanSimulation* sim, const Waviness& predicted_um, Json& failures) {
   const std::string name = title_of(document);
   plot::Curves growth;
   growth.title = fmt::format("{}: growth rate along the plan", name);
@@ -316,14 +338,15 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
   draw(growth, dir, "growth_along_x", failures);
 
   plot::Curves waviness;
-  waviness.title = fmt::format("{}: work-surface waviness along the plan", name);
+  waviness.title = fmt::format("{}: waviness along x", name);
   waviness.x_label = "axial contact position x [mm]";
   waviness.y_label = "waviness amplitude [um]";
   waviness.log_y = true;
-  plot::Series predicted{"predicted: initial x accumulated amplification (roots)", {}, {}, "lines"};
+  plot::Series predicted{"predicted: initial x accumulated amplification (roots), at most the depth of cut",
+                         {}, {}, "lines"};
   for (std::size_t k = 0; k < plan.size(); ++k) {
     predicted.x.push_back(plan[k].x_end_mm);
-    predicted.y.push_back(predicted_um(w0_um, risk.segments[k].floored_log_amplification));
+    predicted.y.push_back(predicted_um(risk.segments[k].floored_log_amplification));
   }
   waviness.series.push_back(predicted);
   if (sim) {
@@ -335,6 +358,8 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
       }
     if (!simulated.x.empty()) waviness.series.push_back(simulated);
   }
+  waviness.reference_y = predicted_um.cap_um;
+  waviness.reference_label = "depth of cut (the linear model ends: the wheel leaves the work)";
   draw(waviness, dir, "waviness_along_x", failures);
 
   plot::Curves amplification;
@@ -526,6 +551,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   const RiskThresholds thresholds = thresholds_of(fr);
   const RootSettings roots{document.at("stability"), fr.at("condition_tolerance").get<double>()};
   const double w0_um = fr.at("initial_waviness_um").get<double>();
+  const Waviness predicted_um{w0_um, 1e3 * p.depth_of_cut_mm};
   const Json& model = document.at("model");
 
   const PlanRisk risk = evaluate_roots(model, p, src.segments, *generatrix, roots, thresholds);
@@ -533,7 +559,10 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   sim_settings.sample_rate_hz = sim_table.at("sample_rate_hz").get<double>();
   sim_settings.relative_tolerance = sim_table.at("relative_tolerance").get<double>();
   sim_settings.initial_waviness_m = 1e-6 * w0_um;
+  sim_settings.divergence_limit_m = 1e-3 * p.depth_of_cut_mm;
   sim_settings.seed = sim_table.at("seed").get<std::uint64_t>();
+  sim_settings.samples_per_wave = sim_table.at("samples_per_wave").get<double>();
+  sim_settings.random_initial_surfaces = sim_table.at("random_initial_surfaces").get<bool>();
   sim_settings.fit_window_revolutions = sim_table.at("fit_window_revolutions").get<double>();
   const bool simulate = sim_table.at("enabled").get<bool>();
   AlongPlanSimulation sim;
@@ -548,7 +577,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
       {"max_growth_rate_per_s", risk.max_growth_rate_per_s},
       {"final_log_amplification", risk.final_log_amplification},
       {"max_log_amplification", risk.max_floored_log_amplification},
-      {"max_predicted_waviness_um", predicted_um(w0_um, risk.max_floored_log_amplification)},
+      {"max_predicted_waviness_um", predicted_um(risk.max_floored_log_amplification)},
       {"worst_risk", to_string(risk.worst)},
       {"time_in_risk_s", {{"stable", risk.time_in_risk_s[0]}, {"marginal", risk.time_in_risk_s[1]},
                           {"chatter", risk.time_in_risk_s[2]}}},
@@ -556,7 +585,8 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
                       {"chatter_amplification", thresholds.chatter_amplification}}},
   };
   if (simulate)
-    summary["simulation"] = {{"status", sim.status}, {"failed", sim.failed}, {"steps", sim.steps},
+    summary["simulation"] = {{"status", sim.status}, {"failed", sim.failed}, {"diverged", sim.diverged},
+                             {"end_time_s", sim.end_time_s}, {"steps", sim.steps},
                              {"wall_s", sim.wall_s}, {"revolutions", sim.revolutions.size()},
                              {"max_work_waviness_um", max_waviness_um(sim)}};
 
@@ -604,23 +634,23 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
                  {"search_max_log_amplification", c.max_floored_log_amplification},
                  {"max_growth_rate_per_s", best_risk.max_growth_rate_per_s},
                  {"max_log_amplification", best_risk.max_floored_log_amplification},
-                 {"max_predicted_waviness_um", predicted_um(w0_um, best_risk.max_floored_log_amplification)},
+                 {"max_predicted_waviness_um", predicted_um(best_risk.max_floored_log_amplification)},
                  {"worst_risk", to_string(best_risk.worst)},
                  {"candidates", rows}};
     if (simulate)
-      optimised["simulation"] = {{"status", best_sim.status}, {"failed", best_sim.failed},
+      optimised["simulation"] = {{"status", best_sim.status}, {"failed", best_sim.failed}, {"diverged", best_sim.diverged},
                                  {"max_work_waviness_um", max_waviness_um(best_sim)}};
     summary["optimised"] = optimised;
   }
 
   if (!context.artifact_dir.empty()) {
     const fs::path& dir = context.artifact_dir;
-    write_segments(dir / "segments.csv", src.segments, risk, w0_um);
-    if (simulate) write_along_x(dir / "along_x.csv", src.segments, risk, sim, w0_um);
+    write_segments(dir / "segments.csv", src.segments, risk, predicted_um);
+    if (simulate) write_along_x(dir / "along_x.csv", src.segments, risk, sim, predicted_um);
     Json failures = Json::array();
-    if (context.plots) draw_plots(document, dir, src.segments, risk, simulate ? &sim : nullptr, w0_um, failures);
+    if (context.plots) draw_plots(document, dir, src.segments, risk, simulate ? &sim : nullptr, predicted_um, failures);
     if (best) {
-      write_segments(dir / "optimised_segments.csv", best->best_plan, best_risk, w0_um);
+      write_segments(dir / "optimised_segments.csv", best->best_plan, best_risk, predicted_um);
       const auto& cands = best->candidates;
       std::vector<std::vector<double>> c(7, std::vector<double>(cands.size()));
       for (std::size_t i = 0; i < cands.size(); ++i) {
@@ -664,7 +694,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
           plot::Series s{label, {}, {}, "lines"};
           for (std::size_t k = 0; k < plan.size(); ++k) {
             s.x.push_back(plan[k].x_end_mm);
-            s.y.push_back(predicted_um(w0_um, r.segments[k].floored_log_amplification));
+            s.y.push_back(predicted_um(r.segments[k].floored_log_amplification));
           }
           return s;
         };
@@ -673,6 +703,19 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
         compare.series.push_back(series(fmt::format("after: {:.1f} rpm, a = {}, {:.0f} s", chosen.spindle_speed_rpm,
                                                     chosen.amplitude_ratio, chosen.total_time_s),
                                         best->best_plan, best_risk));
+        if (simulate) {
+          auto simulated = [](const std::string& label, const AlongPlanSimulation& run) {
+            plot::Series s{label, {}, {}, "lines"};
+            for (const RevolutionRow& r : run.revolutions)
+              if (r.work_waviness_m > 0) {
+                s.x.push_back(r.x_mm);
+                s.y.push_back(1e6 * r.work_waviness_m);
+              }
+            return s;
+          };
+          compare.series.push_back(simulated("before, simulated", sim));
+          compare.series.push_back(simulated("after, simulated", best_sim));
+        }
         draw(compare, dir, "before_after", failures);
       }
     }
@@ -689,11 +732,11 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
           number_or_null(risk.max_growth_rate_per_s),
           number_or_null(risk.final_log_amplification),
           number_or_null(risk.max_floored_log_amplification),
-          number_or_null(predicted_um(w0_um, risk.max_floored_log_amplification)),
+          number_or_null(predicted_um(risk.max_floored_log_amplification)),
           to_string(risk.worst),
           risk.time_in_risk_s[2],
           simulate && !sim.revolutions.empty() ? Json(max_waviness_um(sim)) : Json(),
-          simulate ? Json(sim.failed ? "failed" : "completed") : Json("off"),
+          simulate ? Json(simulation_outcome(sim)) : Json("off"),
           optional_number("spindle_speed_rpm"),
           optional_number("modulation_amplitude_ratio"),
           optional_number("total_time_s"),

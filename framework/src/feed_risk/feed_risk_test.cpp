@@ -187,7 +187,7 @@ TEST(FeedRiskAccuracy, SimulationAlongAConstantPlanGrowsAtTheRootsRate) {
   AlongPlanSettings settings;
   settings.initial_waviness_m = 1e-12;
   const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
-  ASSERT_FALSE(sim.failed) << sim.status;
+  ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
   ASSERT_GT(sim.revolutions.size(), 290u);  // 60 s at 5 rev/s
   const double fitted = fitted_growth_rate_per_s(sim.revolutions, 30.0, 60.0);
   const double root = risk.segments.front().growth_rate_per_s;
