@@ -43,6 +43,27 @@ printf 'plan_dir = "%s"\n[feed_risk.simulation]\nenabled = false\n' "$work/saved
 expect_exit 0 "$work/saved" "$bin" run "$saved" --out "$work/saved_out"
 close_to "$(csv_column "$work/saved_out/results.csv" final_log_amplification)" "$log_a" 1e-9 || fail "saved plan ln A"
 
+# ---- chatter-aware planning on the constant study: 250-300 rpm, time at most 1.2 x
+opt="$work/optimise.toml"
+{ sed 's/^spindle_speed_rpm = 300.0/spindle_speed_rpm = { from = 250.0, to = 300.0 }/' "$src/studies/feed_risk_constant.toml"
+  printf '[feed_risk.optimise]\nspeed_steps = 6\nmodulation_amplitude_ratios = [0.0, 0.05]\n'; } >"$opt"
+expect_exit 0 "$work/optimise" "$bin" run "$opt" --out "$work/optimise_out"
+o="$work/optimise_out"
+base_t=$(csv_column "$o/results.csv" total_time_s)
+opt_t=$(csv_column "$o/results.csv" optimised_total_time_s)
+awk -v a="$opt_t" -v b="$base_t" 'BEGIN { exit !(a >= b - 1e-9 && a <= 1.2 * b + 1e-9) }' || fail "optimised time $opt_t vs $base_t"
+base_w=$(csv_column "$o/results.csv" max_predicted_waviness_um)
+opt_w=$(csv_column "$o/results.csv" optimised_max_predicted_waviness_um)
+awk -v a="$opt_w" -v b="$base_w" 'BEGIN { exit !(a <= b) }' || fail "optimised waviness $opt_w above $base_w"
+[ "$(csv_column "$o/optimisation.csv" spindle_speed_rpm | wc -l)" = "12" ] || fail "optimisation.csv: not 12 candidates"
+# The chatter-aware pulses cover the same path: every motor's pulse sum equals the baseline plan's.
+for motor in lower_pulses middle_pulses upper_pulses; do
+  a=$(csv_column "$o/optimised_pulses.csv" $motor | awk '{ s += $1 } END { print s }')
+  b=$(csv_column "$work/saved_plan/pulses.csv" $motor | awk '{ s += $1 } END { print s }')
+  [ "$a" = "$b" ] || fail "optimised $motor sum $a vs baseline $b"
+done
+expect_plots "$o" optimisation before_after
+
 # ---- bad input: exit 2, reason in the message, nothing written
 bad() {  # bad NAME EXPECTED_TEXT: runs $work/NAME.toml
   local name=$1 text=$2

@@ -142,21 +142,39 @@ std::vector<SegmentConditions> conditions_of(const planner::Schedule& s, const p
 }
 
 // The feed planner at a given spindle speed (what feed_plan plans, without its reports).
-std::vector<SegmentConditions> plan_at(const PlanSource& src, double spindle_rpm) {
+planner::Schedule schedule_at(const PlanSource& src, double spindle_rpm) {
   auto generatrix = planner::build_generatrix(src.part);
   auto kinematics = planner::build_kinematics(src.machine);
   planner::FeedConstraints constraints = planner::build_constraints(src.machine, src.plan, *kinematics);
   constraints.spindle_speed_rpm = spindle_rpm;
   const planner::WearSweep sweep = planner::build_sweep(src.plan, src.wheel);
   try {
-    const planner::Schedule s = planner::plan_feed(
-        *generatrix, *kinematics, constraints, planner::segment_length_mm(src.plan, constraints),
-        planner::sweep_function(sweep, generatrix->x_min_mm()), true,
-        planner::wheel_contact(planner::build_wheel(src.wheel)));
-    return conditions_of(s, *generatrix);
+    return planner::plan_feed(*generatrix, *kinematics, constraints, planner::segment_length_mm(src.plan, constraints),
+                              planner::sweep_function(sweep, generatrix->x_min_mm()), true,
+                              planner::wheel_contact(planner::build_wheel(src.wheel)));
   } catch (const std::exception& e) {
     throw PointFailure(fmt::format("no plan at {} rpm: {}", spindle_rpm, e.what()));
   }
+}
+
+std::vector<SegmentConditions> plan_at(const PlanSource& src, double spindle_rpm) {
+  return conditions_of(schedule_at(src, spindle_rpm), *planner::build_generatrix(src.part));
+}
+
+// The chatter-aware plan's pulses in feed_plan's pulses.csv format (segment, start_s, duration_s,
+// <motor>_pulses), so the machine can run it.
+void write_pulses(const fs::path& path, const planner::FeedPlan& plan) {
+  std::vector<std::string> header{"segment", "start_s", "duration_s"};
+  for (const MotorAxis& m : plan.motors) header.push_back(m.name + "_pulses");
+  std::vector<std::vector<double>> c(header.size(), std::vector<double>(plan.segments.size()));
+  for (std::size_t k = 0; k < plan.segments.size(); ++k) {
+    c[0][k] = static_cast<double>(k);
+    c[1][k] = plan.segments[k].start_s;
+    c[2][k] = plan.segments[k].duration_s;
+    for (std::size_t m = 0; m < plan.motors.size(); ++m)
+      c[3 + m][k] = static_cast<double>(plan.segments[k].pulses[m]);
+  }
+  write_file_atomically(path, csv_text(header, c));
 }
 
 PlanSource plan_source(const Json& document) {
@@ -413,7 +431,9 @@ PluginInfo FeedRiskKind::info() {
       optional(positive("contact_width_mm", "mm", "fixed contact width instead of the geometric one")),
       scaling,
       with_default(positive("initial_waviness_um", "um",
-                            "amplitude of the initial work/wheel waviness and disturbance"),
+                            "disturbance level: the predicted waviness starts here, the simulation's initial "
+                            "displacement (settings in [feed_risk.simulation] and [feed_risk.optimise], "
+                            "docs/feed_risk.md)"),
                    1.0),
       with_default(positive("marginal_growth_rate_per_s", "1/s",
                             "risk class marginal: growth rate above minus this value"),
@@ -646,6 +666,11 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   if (!context.artifact_dir.empty()) {
     const fs::path& dir = context.artifact_dir;
     write_segments(dir / "segments.csv", src.segments, risk, predicted_um);
+    if (best) {
+      // Re-planned once more at the chosen planning speed (deterministic: the same plan).
+      write_pulses(dir / "optimised_pulses.csv",
+                   schedule_at(src, best->candidates[best->best].planning_speed_rpm).plan);
+    }
     if (simulate) write_along_x(dir / "along_x.csv", src.segments, risk, sim, predicted_um);
     Json failures = Json::array();
     if (context.plots) draw_plots(document, dir, src.segments, risk, simulate ? &sim : nullptr, predicted_um, failures);

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <set>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
@@ -177,6 +178,63 @@ TEST(FeedRisk, AmplificationIsTheIntegralOfTheGrowthRate) {
   // The peak of the integral is at t = 10 s (sigma = 0): 2*10 - 100/10 = 10 = ln A > ln 10: chatter.
   EXPECT_EQ(risk.worst, Risk::chatter);
   EXPECT_EQ(risk.segments.front().risk, Risk::marginal);  // growing, not yet 10x
+}
+
+TEST(FeedRisk, OptimiserReplansRatesAndKeepsTheTimeLimit) {
+  auto part = cylinder(100.0, 600.0);
+  const ProcessSettings p = reference_process();
+  const RootSettings roots{stability_table(), 1e-9};
+  // The planner's behaviour in miniature: the axial-speed bound grows with the spindle speed, so
+  // the same 20 segments take 300/n times as long at n rpm.
+  std::vector<double> replanned_at;
+  const Replan replan = [&](double rpm) {
+    replanned_at.push_back(rpm);
+    return constant_plan(20, 300.0 / rpm, 100.0, rpm);
+  };
+  OptimiseSettings o;
+  o.spindle_min_rpm = 250.0;
+  o.spindle_max_rpm = 300.0;
+  o.speed_steps = 6;
+  o.amplitude_ratios = {0.0, 0.05};
+  o.phase_samples = 4;
+  o.max_time_factor = 1.1;
+  o.condition_tolerance = 1e-9;
+  const OptimiseResult r = optimise(model_table(), p, replan, 20.0, *part, roots, {}, o);
+  ASSERT_EQ(r.candidates.size(), 12u);
+  const Candidate& best = r.candidates[r.best];
+  EXPECT_TRUE(best.admissible);
+  for (const Candidate& c : r.candidates) {
+    // Time factor = 300 / planning speed; beyond 1.1 (planning below 272.7 rpm) not admissible.
+    EXPECT_NEAR(c.time_factor, 300.0 / c.planning_speed_rpm, 1e-9);
+    EXPECT_EQ(c.admissible, c.time_factor <= 1.1 + 1e-9);
+    EXPECT_NEAR(c.planning_speed_rpm, c.spindle_speed_rpm * (1 - c.amplitude_ratio), 1e-9);
+    if (c.admissible) {
+      EXPECT_LE(best.max_floored_log_amplification, c.max_floored_log_amplification + 1e-9);
+    }
+    // The modulated speed range stays inside the machine's.
+    EXPECT_GE(c.spindle_speed_rpm * (1 - c.amplitude_ratio), 250.0 - 1e-9);
+    EXPECT_LE(c.spindle_speed_rpm * (1 + c.amplitude_ratio), 300.0 + 1e-9);
+    if (c.amplitude_ratio == 0.0) {
+      // Unmodulated: the segment's own root (as evaluate_roots gives it).
+      const PlanRisk direct = evaluate_roots(model_table(), p, constant_plan(20, 1.0, 100.0, c.spindle_speed_rpm),
+                                             *part, roots, {});
+      EXPECT_DOUBLE_EQ(c.max_growth_rate_per_s, direct.max_growth_rate_per_s);
+    } else {
+      // Modulated: the mean of the roots at the frozen speeds n (1 + a sin((j + 1/2) pi/2)), j = 0..3.
+      double mean = 0.0;
+      for (int j = 0; j < 4; ++j) {
+        const double rpm = c.spindle_speed_rpm * (1 + 0.05 * std::sin(2 * std::numbers::pi * (j + 0.5) / 4));
+        mean += evaluate_roots(model_table(), p, constant_plan(1, 1.0, 100.0, rpm), *part, roots, {})
+                    .max_growth_rate_per_s / 4;
+      }
+      EXPECT_NEAR(c.max_growth_rate_per_s, mean, 1e-12);
+    }
+  }
+  // Replanned once per distinct planning speed, the best plan at the best candidate's mean speed.
+  std::set<double> planning_speeds;
+  for (const Candidate& c : r.candidates) planning_speeds.insert(c.planning_speed_rpm);
+  EXPECT_EQ(replanned_at.size(), planning_speeds.size());
+  EXPECT_EQ(r.best_plan.front().spindle_speed_rpm, best.spindle_speed_rpm);
 }
 
 TEST(FeedRiskAccuracy, SimulationAlongAConstantPlanGrowsAtTheRootsRate) {
