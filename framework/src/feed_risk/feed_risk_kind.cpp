@@ -381,7 +381,7 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
   draw(waviness, dir, "waviness_along_x", failures);
 
   plot::Curves amplification;
-  amplification.title = fmt::format("{}: accumulated amplification over time", name);
+  amplification.title = fmt::format("{}: ln amplification over time", name);
   amplification.x_label = "time t [s]";
   amplification.y_label = "ln(amplitude / initial amplitude)";
   plot::Series raw{"integral of the growth rate", {}, {}, "lines"}, floored{"floored at the disturbance level (0)", {}, {}, "lines"};

@@ -180,6 +180,31 @@ TEST(FeedRisk, AmplificationIsTheIntegralOfTheGrowthRate) {
   EXPECT_EQ(risk.segments.front().risk, Risk::marginal);  // growing, not yet 10x
 }
 
+TEST(FeedRisk, StreamedSamplesAreTheStoredSamples) {
+  // The engine's streaming option (SimulationSettings::on_sample, store_samples) hands out exactly
+  // the samples it would store; with storage off the series stay empty.
+  auto model = kinds_detail::build_model(model_table())->time_domain();
+  SimulationSettings s;
+  s.duration_s = 0.5;
+  s.sample_rate_hz = 2000.0;
+  s.one_sided_contact = false;
+  const SimulationResult stored = simulate(*model, s);
+  std::vector<OutputSample> streamed;
+  s.on_sample = [&](const OutputSample& sample) { streamed.push_back(sample); };
+  s.store_samples = false;
+  const SimulationResult lean = simulate(*model, s);
+  EXPECT_TRUE(lean.t_s.empty());
+  EXPECT_TRUE(lean.displacement_m.empty());
+  ASSERT_EQ(streamed.size(), stored.t_s.size());
+  for (std::size_t i = 0; i < streamed.size(); ++i) {
+    EXPECT_EQ(streamed[i].t_s, stored.t_s[i]);
+    EXPECT_EQ(streamed[i].displacement_m, stored.displacement_m[i]);
+    EXPECT_EQ(streamed[i].depth_of_cut_m, stored.depth_of_cut_m[i]);
+    EXPECT_EQ(streamed[i].surface_at_contact_m[1], stored.surface_at_contact_m[1][i]);
+  }
+  EXPECT_EQ(lean.steps, stored.steps);
+}
+
 TEST(FeedRisk, OptimiserReplansRatesAndKeepsTheTimeLimit) {
   auto part = cylinder(100.0, 600.0);
   const ProcessSettings p = reference_process();
