@@ -328,6 +328,25 @@ double fitted_growth_rate_per_s(const std::vector<RevolutionRow>& rows, double t
   return n >= 3 && d > 0 ? (n * sty - st * sy) / d : kNaN;
 }
 
+std::shared_ptr<const SpeedLaw> plan_spindle_speed(const std::vector<planner::SegmentConditions>& plan) {
+  bool constant = true;
+  for (const auto& c : plan) constant = constant && c.spindle_speed_rpm == plan.front().spindle_speed_rpm;
+  if (constant) return make_modulated_speed(plan.front().spindle_speed_rpm, SpeedModulation::constant, 0.0, 0.0);
+  // Each segment's speed held over the segment: a schedule with a short linear ramp (1 ms) at
+  // each change, times from the plan's start.
+  std::vector<double> times{0.0}, rpm{plan.front().spindle_speed_rpm};
+  const double t0 = plan.front().start_s;
+  for (std::size_t k = 1; k < plan.size(); ++k) {
+    if (plan[k].spindle_speed_rpm == plan[k - 1].spindle_speed_rpm) continue;
+    const double t = plan[k].start_s - t0;
+    times.push_back(std::max(t - 1e-3, times.back() + 1e-9));
+    rpm.push_back(plan[k - 1].spindle_speed_rpm);
+    times.push_back(std::max(t, times.back() + 1e-9));
+    rpm.push_back(plan[k].spindle_speed_rpm);
+  }
+  return make_scheduled_speed(std::move(times), std::move(rpm));
+}
+
 AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSettings& p,
                                         const std::vector<planner::SegmentConditions>& plan,
                                         const PlanRisk& risk, const AlongPlanSettings& settings) {
@@ -336,7 +355,7 @@ AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSe
   const double t0 = plan.front().start_s;
   const double duration = plan.back().start_s + plan.back().duration_s - t0;
   std::shared_ptr<const SpeedLaw> work = settings.work_speed;
-  if (!work) work = make_modulated_speed(plan.front().spindle_speed_rpm, SpeedModulation::constant, 0.0, 0.0);
+  if (!work) work = plan_spindle_speed(plan);
   // x at time t: linear inside each segment.
   auto x_at = [&](double t) {
     auto it = std::upper_bound(plan.begin(), plan.end(), t + t0,

@@ -133,7 +133,7 @@ struct AlongPlanSettings {
   // The linear model stops being valid once the vibration exceeds the depth of cut (the wheel
   // leaves the work): the run ends there as "diverged" (the kind sets the depth of cut).
   double divergence_limit_m = 1.0;
-  // Work spindle: null = constant at the plan's speed.
+  // Work spindle: null = the plan's own speeds (plan_spindle_speed).
   std::shared_ptr<const SpeedLaw> work_speed;
 };
 
@@ -160,6 +160,10 @@ struct AlongPlanSimulation {
 std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const ProcessSettings& p,
                                                   const std::vector<planner::SegmentConditions>& plan,
                                                   const PlanRisk& risk);
+
+// The plan's spindle speed as a SpeedLaw: constant, or (a plan whose segments differ) each
+// segment's speed held over the segment, with 1 ms linear ramps between (make_scheduled_speed).
+std::shared_ptr<const SpeedLaw> plan_spindle_speed(const std::vector<planner::SegmentConditions>& plan);
 
 // The simulation along the whole plan, bilateral (linear, as the roots) contact, streamed: never
 // throws for a numerical failure (recorded in status/failed).

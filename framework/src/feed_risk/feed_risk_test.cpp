@@ -262,6 +262,58 @@ TEST(FeedRisk, OptimiserReplansRatesAndKeepsTheTimeLimit) {
   EXPECT_EQ(r.best_plan.front().spindle_speed_rpm, best.spindle_speed_rpm);
 }
 
+TEST(FeedRiskAccuracy, SimulationFollowsTheSegmentsConditionsAndSpindleSchedule) {
+  // 30 s at radius 100 mm and 300 rpm, then 30 s at radius 80 mm and 280 rpm: two condition
+  // groups (kw scales with Kv, G4) and a spindle-speed step. The wrapper switches the contact law
+  // and the schedule the work delay at 30 s; each stretch's simulated growth approaches its root.
+  auto part = cylinder(100.0, 600.0);
+  auto plan = constant_plan(60, 1.0, 100.0, 300.0);
+  for (std::size_t k = 30; k < 60; ++k) {
+    plan[k].radius_mm = 80.0;
+    plan[k].spindle_speed_rpm = 280.0;
+  }
+  const ProcessSettings p = reference_process();
+  const PlanRisk risk = evaluate_roots(model_table(), p, plan, *part, {stability_table(), 1e-3}, {});
+  EXPECT_EQ(risk.groups, 2u);
+  const double first = risk.segments.front().growth_rate_per_s, second = risk.segments.back().growth_rate_per_s;
+  AlongPlanSettings settings;
+  settings.initial_waviness_m = 1e-12;
+  const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
+  ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
+  // Revolutions counted by the schedule: 30 s x 5 /s + 30 s x 4.667 /s = 290.
+  EXPECT_NEAR(static_cast<double>(sim.revolutions.size()), 290.0, 1.5);
+  const double fitted_first = fitted_growth_rate_per_s(sim.revolutions, 12.0, 30.0);
+  const double fitted_second = fitted_growth_rate_per_s(sim.revolutions, 42.0, 60.0);
+  // Measured: 0.3451 vs 0.3560 /s and -0.5619 vs -0.5424 /s (the neighbouring lattice roots,
+  // see the constant-plan test).
+  EXPECT_GT(first, 0.0);
+  EXPECT_LT(second, 0.0);
+  EXPECT_NEAR(fitted_first, first, 0.06 * std::abs(first));
+  EXPECT_NEAR(fitted_second, second, 0.06 * std::abs(second));
+}
+
+TEST(FeedRisk, ModulatedSpindleCountsRevolutionsByTheSpeedLaw) {
+  // The optimiser's modulated spindle (make_modulated_speed) drives the simulation: 10 s at
+  // 300 rpm +- 5 % at 0.5 Hz is 5 whole modulation periods, i.e. exactly 50 work revolutions.
+  auto part = cylinder(100.0, 600.0);
+  const auto plan = constant_plan(10, 1.0, 100.0, 300.0);
+  const ProcessSettings p = reference_process();
+  const PlanRisk risk = evaluate_roots(model_table(), p, plan, *part, {stability_table(), 1e-3}, {});
+  AlongPlanSettings settings;
+  settings.initial_waviness_m = 1e-12;
+  settings.work_speed = make_modulated_speed(300.0, SpeedModulation::sinusoidal, 0.05, 0.5);
+  const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
+  ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
+  EXPECT_NEAR(static_cast<double>(sim.revolutions.size()), 50.0, 1.0);
+  // The plan's own schedule: constant plans get a constant law, a speed step a schedule.
+  auto stepped = plan;
+  for (std::size_t k = 5; k < 10; ++k) stepped[k].spindle_speed_rpm = 250.0;
+  auto law = plan_spindle_speed(stepped);
+  EXPECT_DOUBLE_EQ(law->rpm(2.0), 300.0);
+  EXPECT_DOUBLE_EQ(law->rpm(7.0), 250.0);
+  EXPECT_NEAR(law->angle_rad(10.0) / (2 * std::numbers::pi), 25.0 + 250.0 / 12.0, 1e-3);
+}
+
 TEST(FeedRiskAccuracy, SimulationAlongAConstantPlanGrowsAtTheRootsRate) {
   auto part = cylinder(100.0, 600.0);
   const auto plan = constant_plan(60, 1.0, 100.0, 300.0);
