@@ -87,6 +87,24 @@ std::vector<SegmentConditions> constant_plan(std::size_t n, double duration_s, d
   return plan;
 }
 
+// The roots and the simulation along `plan` on the 600 mm cylinder of radius 100 mm (start
+// amplitude 1e-12 m, optional work spindle law).
+struct RatedRun {
+  PlanRisk risk;
+  AlongPlanSimulation sim;
+};
+RatedRun rate_and_simulate(const std::vector<SegmentConditions>& plan,
+                           std::shared_ptr<const SpeedLaw> work_speed = nullptr) {
+  auto part = cylinder(100.0, 600.0);
+  RatedRun run;
+  run.risk = evaluate_roots(model_table(), reference_process(), plan, *part, {stability_table(), 1e-3}, {});
+  AlongPlanSettings settings;
+  settings.initial_waviness_m = 1e-12;
+  settings.work_speed = std::move(work_speed);
+  run.sim = simulate_along_plan(model_table(), reference_process(), plan, run.risk, settings);
+  return run;
+}
+
 TEST(FeedRiskProcess, ContactWidthFromTheSectionAndTheDepth) {
   ProcessSettings p = reference_process();
   // Flat face on a straight generatrix: the whole face.
@@ -266,19 +284,14 @@ TEST(FeedRiskAccuracy, SimulationFollowsTheSegmentsConditionsAndSpindleSchedule)
   // 30 s at radius 100 mm and 300 rpm, then 30 s at radius 80 mm and 280 rpm: two condition
   // groups (kw scales with Kv, G4) and a spindle-speed step. The wrapper switches the contact law
   // and the schedule the work delay at 30 s; each stretch's simulated growth approaches its root.
-  auto part = cylinder(100.0, 600.0);
   auto plan = constant_plan(60, 1.0, 100.0, 300.0);
   for (std::size_t k = 30; k < 60; ++k) {
     plan[k].radius_mm = 80.0;
     plan[k].spindle_speed_rpm = 280.0;
   }
-  const ProcessSettings p = reference_process();
-  const PlanRisk risk = evaluate_roots(model_table(), p, plan, *part, {stability_table(), 1e-3}, {});
+  const auto [risk, sim] = rate_and_simulate(plan);
   EXPECT_EQ(risk.groups, 2u);
   const double first = risk.segments.front().growth_rate_per_s, second = risk.segments.back().growth_rate_per_s;
-  AlongPlanSettings settings;
-  settings.initial_waviness_m = 1e-12;
-  const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
   ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
   // Revolutions counted by the schedule: 30 s x 5 /s + 30 s x 4.667 /s = 290.
   EXPECT_NEAR(static_cast<double>(sim.revolutions.size()), 290.0, 1.5);
@@ -295,14 +308,9 @@ TEST(FeedRiskAccuracy, SimulationFollowsTheSegmentsConditionsAndSpindleSchedule)
 TEST(FeedRisk, ModulatedSpindleCountsRevolutionsByTheSpeedLaw) {
   // The optimiser's modulated spindle (make_modulated_speed) drives the simulation: 10 s at
   // 300 rpm +- 5 % at 0.5 Hz is 5 whole modulation periods, i.e. exactly 50 work revolutions.
-  auto part = cylinder(100.0, 600.0);
   const auto plan = constant_plan(10, 1.0, 100.0, 300.0);
-  const ProcessSettings p = reference_process();
-  const PlanRisk risk = evaluate_roots(model_table(), p, plan, *part, {stability_table(), 1e-3}, {});
-  AlongPlanSettings settings;
-  settings.initial_waviness_m = 1e-12;
-  settings.work_speed = make_modulated_speed(300.0, SpeedModulation::sinusoidal, 0.05, 0.5);
-  const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
+  const AlongPlanSimulation sim =
+      rate_and_simulate(plan, make_modulated_speed(300.0, SpeedModulation::sinusoidal, 0.05, 0.5)).sim;
   ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
   EXPECT_NEAR(static_cast<double>(sim.revolutions.size()), 50.0, 1.0);
   // The plan's own schedule: constant plans get a constant law, a speed step a schedule.
@@ -315,13 +323,8 @@ TEST(FeedRisk, ModulatedSpindleCountsRevolutionsByTheSpeedLaw) {
 }
 
 TEST(FeedRiskAccuracy, SimulationAlongAConstantPlanGrowsAtTheRootsRate) {
-  auto part = cylinder(100.0, 600.0);
-  const auto plan = constant_plan(60, 1.0, 100.0, 300.0);
-  const ProcessSettings p = reference_process();
-  const PlanRisk risk = evaluate_roots(model_table(), p, plan, *part, {stability_table(), 1e-3}, {});
-  AlongPlanSettings settings;
-  settings.initial_waviness_m = 1e-12;
-  const AlongPlanSimulation sim = simulate_along_plan(model_table(), p, plan, risk, settings);
+  const auto [risk, sim] = rate_and_simulate(constant_plan(60, 1.0, 100.0, 300.0));
+  const AlongPlanSettings settings;
   ASSERT_FALSE(sim.failed || sim.diverged) << sim.status;
   ASSERT_GT(sim.revolutions.size(), 290u);  // 60 s at 5 rev/s
   const double fitted = fitted_growth_rate_per_s(sim.revolutions, 30.0, 60.0);
