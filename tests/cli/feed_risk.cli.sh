@@ -64,6 +64,30 @@ for motor in lower_pulses middle_pulses upper_pulses; do
 done
 expect_plots "$o" optimisation before_after
 
+# ---- the simulation reaching the depth of cut: recorded, root results kept, prediction capped
+shallow="$work/shallow.toml"
+sed 's/^depth_of_cut_mm = 0.01/depth_of_cut_mm = 0.001/' "$src/studies/feed_risk_constant.toml" >"$shallow"
+expect_exit 0 "$work/shallow" "$bin" run "$shallow" --out "$work/shallow_out"
+[ "$(csv_column "$work/shallow_out/results.csv" simulation_status)" = "reached_depth_of_cut" ] || fail "shallow: simulation status"
+close_to "$(csv_column "$work/shallow_out/results.csv" max_growth_rate_per_s)" "$root" 1e-12 || fail "shallow: root kept"
+close_to "$(csv_column "$work/shallow_out/results.csv" max_predicted_waviness_um)" 1 1e-12 || fail "shallow: prediction not capped at 1 um"
+grep -q '"diverged": true' "$work/shallow_out/summary.json" || fail "shallow: summary lacks diverged"
+
+# ---- P3 problem 2 (roots and re-planning; the simulations are left to the shipped study, 75 s):
+# chatter at the planner's 300 rpm, the chatter-aware plan at 290 rpm is stable, 3103 s.
+p2="$work/p2.toml"
+{ cat "$src/studies/feed_risk_problem2.toml"; printf '[feed_risk.simulation]\nenabled = false\n'; } |
+  sed 's/^modulation_amplitude_ratios = .*/modulation_amplitude_ratios = [0.0]/' >"$p2"
+expect_exit 0 "$work/p2" "$bin" run "$p2" --out "$work/p2_out"
+r="$work/p2_out/results.csv"
+[ "$(csv_column "$r" worst_risk)" = "chatter" ] || fail "problem 2: not chatter at 300 rpm"
+awk -v g="$(csv_column "$r" max_growth_rate_per_s)" 'BEGIN { exit !(g > 0.1 && g < 0.2) }' || fail "problem 2: max growth"
+close_to "$(csv_column "$r" optimised_spindle_speed_rpm)" 290 1e-9 || fail "problem 2: chosen speed"
+close_to "$(csv_column "$r" optimised_total_time_s)" 3103.448 0.01 || fail "problem 2: chosen time"
+[ "$(sed -n '/"optimised"/,$p' "$work/p2_out/summary.json" | grep -m1 '"worst_risk"' | tr -d ' ,')" = '"worst_risk":"stable"' ] ||
+  fail "problem 2: chosen plan not stable"
+expect_plots "$work/p2_out" growth_along_x waviness_along_x amplification_over_time optimisation before_after
+
 # ---- bad input: exit 2, reason in the message, nothing written
 bad() {  # bad NAME EXPECTED_TEXT: runs $work/NAME.toml
   local name=$1 text=$2

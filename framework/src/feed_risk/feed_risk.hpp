@@ -74,7 +74,7 @@ struct RiskThresholds {
   // marginal: growth rate above -marginal_growth_rate_per_s, or an amplitude still above the
   // disturbance level (accumulated amplification > 1); chatter: accumulated amplification at or
   // above chatter_amplification.
-  double marginal_growth_rate_per_s = 1.0;
+  double marginal_growth_rate_per_s = 0.1;
   double chatter_amplification = 10.0;
 };
 enum class Risk { stable = 0, marginal = 1, chatter = 2 };

@@ -437,7 +437,7 @@ PluginInfo FeedRiskKind::info() {
                    1.0),
       with_default(positive("marginal_growth_rate_per_s", "1/s",
                             "risk class marginal: growth rate above minus this value"),
-                   1.0),
+                   0.1),
       amplification,
       tolerance,
   };
