@@ -361,7 +361,7 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
   waviness.y_label = "waviness amplitude [um]";
   waviness.log_y = true;
   plot::Series predicted{"predicted: initial x accumulated amplification (roots), at most the depth of cut",
-                         {}, {}, "lines"};
+                         {plan.front().x_start_mm}, {predicted_um(0.0)}, "lines"};
   for (std::size_t k = 0; k < plan.size(); ++k) {
     predicted.x.push_back(plan[k].x_end_mm);
     predicted.y.push_back(predicted_um(risk.segments[k].floored_log_amplification));
@@ -716,7 +716,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
         compare.y_label = "waviness amplitude [um]";
         compare.log_y = true;
         auto series = [&](const std::string& label, const std::vector<SegmentConditions>& plan, const PlanRisk& r) {
-          plot::Series s{label, {}, {}, "lines"};
+          plot::Series s{label, {plan.front().x_start_mm}, {predicted_um(0.0)}, "lines"};
           for (std::size_t k = 0; k < plan.size(); ++k) {
             s.x.push_back(plan[k].x_end_mm);
             s.y.push_back(predicted_um(r.segments[k].floored_log_amplification));
