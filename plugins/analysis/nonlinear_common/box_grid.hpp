@@ -84,6 +84,10 @@ class BoxGrid {
     return 2;
   }
   const Entry* entries() const { return entries_.data(); }
+  // Rows: the boxes of the first axis. Row u's points are entries [row_begin(u), row_begin(u + 1))
+  // (stored box by box along the second axis), so adjacent rows are adjacent in storage.
+  std::size_t rows() const { return per_axis_; }
+  std::size_t row_begin(std::size_t u) const { return start_[axes_ == 2 ? u * per_axis_ : u]; }
 
  private:
   std::size_t axis_box(double v) const {
