@@ -124,7 +124,11 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   const std::size_t dims = std::size_t(max_dimension);
   const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
   const std::size_t tau = std::size_t(delay);
-  auto block_of = [&](std::size_t i) { return i * blocks / n; };
+  // Bootstrap block of each vector, looked up (a division per pair cost as much as the count).
+  std::vector<std::uint8_t> block_of_vector(n);
+  for (std::size_t i = 0; i < n; ++i) block_of_vector[i] = std::uint8_t(i * blocks / n);
+  auto block_of = [&](std::size_t i) { return std::size_t(block_of_vector[i]); };
+  static_assert(CorrelationSums::blocks <= 256);
   // Dimension 1 from the values in sorted order (a pair close in the first coordinate may be far
   // in the second, so the 2-d grid below would miss it); dimensions >= 2 from a box grid on the
   // first two coordinates. Pairs closer in time than the Theiler window are skipped in both.
@@ -140,55 +144,117 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
     std::vector<double> local_pairs(blocks, 0.0);
-    auto count_pair = [&](std::size_t i, std::size_t j, std::size_t d, double dist) {  // both ways
-      const std::size_t bin = bin_of(dist);
-      ++local[(block_of(i) * dims + d) * bins + bin];
-      ++local[(block_of(j) * dims + d) * bins + bin];
+    // Dimensions >= 2 count into a compact table first: 32-bit counts, only the bins below the
+    // cut, the blocks of one (dimension, bin) side by side. Its busy part (the top octaves below
+    // the cut) then stays in L1, where the full 64-bit [block][dimension][bin] rows did not.
+    const std::size_t kept_bins = bin_of(cut) + 1;
+    std::vector<std::uint32_t> compact(dims * kept_bins * blocks, 0);
+    std::uint64_t updates = 0;  // since the last flush: no compact count can exceed it
+    auto flush = [&] {
+      for (std::size_t d = 1; d < dims; ++d)
+        for (std::size_t bin = 0; bin < kept_bins; ++bin)
+          for (std::size_t b = 0; b < blocks; ++b) {
+            std::uint32_t& c = compact[(d * kept_bins + bin) * blocks + b];
+            local[(b * dims + d) * bins + bin] += c;
+            c = 0;
+          }
+      updates = 0;
     };
-#pragma omp for schedule(dynamic, 256) nowait
-    for (std::size_t p = 0; p < n; ++p) {
-      const std::size_t i = sorted[p].second;
-      const double yi = sorted[p].first;
-      local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
-                                         (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
-      // Vectors closer than each bin edge (capped at the cut), on both sides of yi in sorted
-      // order: two pointers move outward edge by edge, one comparison per pair within the cut
-      // and one histogram update per bin.
-      std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
-      std::size_t right = p + 1, left = p, previous = 0;
-      for (std::size_t k = 0; k < bins && (k == 0 || edges[k - 1] < cut); ++k) {
-        const double e = std::min(edges[k], cut);
-        while (right < n && sorted[right].first - yi < e) ++right;
-        while (left > 0 && yi - sorted[left - 1].first < e) --left;
-        const std::size_t within = (right - p - 1) + (p - left);
-        h[k] += within - previous;
-        previous = within;
+    auto count_pair = [&](std::size_t block_i, std::size_t block_j, std::size_t d,
+                          double dist) {  // both ways
+      std::uint32_t* row = compact.data() + (d * kept_bins + bin_of(dist)) * blocks;
+      ++row[block_i];
+      ++row[block_j];
+    };
+    // Dimension 1: the vectors closer than each bin edge e_k (capped at the cut) on either side
+    // of yi in sorted order form a stretch [left_k, right_k) around p; as p moves up, yi grows
+    // and both ends only move up, so one pointer per edge slides along (O(bins) per vector, not
+    // O(pairs within the cut)). Chunks of consecutive p: pointers found by bisection per chunk.
+    std::size_t edge_count = 0;
+    while (edge_count < bins && (edge_count == 0 || edges[edge_count - 1] < cut)) ++edge_count;
+    std::vector<double> capped(edge_count);
+    for (std::size_t k = 0; k < edge_count; ++k) capped[k] = std::min(edges[k], cut);
+    std::vector<std::size_t> left(edge_count), right(edge_count);
+    constexpr std::size_t chunk = 512;
+#pragma omp for schedule(dynamic, 1) nowait
+    for (std::size_t c = 0; c < (n + chunk - 1) / chunk; ++c) {
+      const std::size_t p0 = c * chunk, p1 = std::min(n, p0 + chunk);
+      for (std::size_t k = 0; k < edge_count; ++k) {
+        const double y0 = sorted[p0].first, e = capped[k];
+        left[k] = std::size_t(std::partition_point(sorted.begin(), sorted.begin() + std::ptrdiff_t(p0),
+                                                   [&](const auto& v) { return !(y0 - v.first < e); }) -
+                              sorted.begin());
+        right[k] = std::size_t(std::partition_point(sorted.begin() + std::ptrdiff_t(p0 + 1), sorted.end(),
+                                                    [&](const auto& v) { return v.first - y0 < e; }) -
+                               sorted.begin());
       }
-      // Minus the pairs inside the Theiler window (counted above, in their bins).
-      for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
-        const double dist = std::abs(y[j] - y[i]);
-        if (j != i && dist < cut) --h[bin_of(dist)];
+      for (std::size_t p = p0; p < p1; ++p) {
+        const std::size_t i = sorted[p].second;
+        const double yi = sorted[p].first;
+        local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
+                                           (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
+        std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
+        std::size_t previous = 0;
+        for (std::size_t k = 0; k < edge_count; ++k) {
+          const double e = capped[k];
+          std::size_t r = std::max(right[k], p + 1), l = left[k];
+          while (r < n && sorted[r].first - yi < e) ++r;
+          while (l < p && !(yi - sorted[l].first < e)) ++l;
+          right[k] = r;
+          left[k] = l;
+          const std::size_t within = (r - p - 1) + (p - l);
+          h[k] += within - previous;
+          previous = within;
+        }
+        // Minus the pairs inside the Theiler window (counted above, in their bins).
+        for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
+          const double dist = std::abs(y[j] - y[i]);
+          if (j != i && dist < cut) --h[bin_of(dist)];
+        }
       }
     }
     if (grid) {
       const nonlinear::BoxGrid::Entry* entries = grid->entries();
-      // Vectors in grid order: consecutive ones share their candidate boxes (cache).
-#pragma omp for schedule(dynamic, 64)
-      for (std::size_t q = 0; q < n; ++q) {
-        const std::size_t i = entries[q].index;
-        std::size_t first[2], last[2];
-        const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
-        for (std::size_t run = 0; run < runs; ++run)
-          for (std::size_t e = first[run]; e < last[run]; ++e) {
-            const std::size_t j = entries[e].index;
-            if ((j > i ? j - i : i - j) <= theiler) continue;
-            double dist = std::abs(y[i] - y[j]);
-            for (std::size_t d = 1; d < dims && dist < cut; ++d) {
-              dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));
-              if (dist < cut) count_pair(i, j, d, dist);  // beyond: so in every higher dimension
+      // Row by row of the grid (each pair once: a vector's forward runs lie in its own row and
+      // the next), with the coordinates and blocks of those two rows copied in grid order.
+      nonlinear::CopiedCoordinates coordinates;
+      std::vector<std::uint8_t> window_block;
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t row = 0; row < grid->rows(); ++row) {
+        const std::size_t row_first = grid->row_begin(row), row_end = grid->row_begin(row + 1);
+        if (row_first == row_end) continue;
+        const std::size_t window_end = grid->row_begin(std::min(row + 2, grid->rows()));
+        coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, dims);
+        window_block.resize(window_end - row_first);
+        for (std::size_t e = row_first; e < window_end; ++e)
+          window_block[e - row_first] = block_of_vector[entries[e].index];
+        for (std::size_t q = row_first; q < row_end; ++q) {
+          const std::size_t i = entries[q].index;
+          const std::size_t block_i = window_block[q - row_first];
+          const double* yi = coordinates.of(q);
+          std::size_t first[2], last[2];
+          const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
+          // At most 2 (dims - 1) updates per candidate pair.
+          std::uint64_t bound = 0;
+          for (std::size_t run = 0; run < runs; ++run)
+            bound += 2 * (dims - 1) * (last[run] - first[run]);
+          if (updates + bound > std::numeric_limits<std::uint32_t>::max()) flush();
+          updates += bound;
+          for (std::size_t run = 0; run < runs; ++run)
+            for (std::size_t e = first[run]; e < last[run]; ++e) {
+              const std::size_t j = entries[e].index;
+              if ((j > i ? j - i : i - j) <= theiler) continue;
+              const std::size_t block_j = window_block[e - row_first];
+              const double* yj = coordinates.of(e);
+              double dist = std::abs(yi[0] - yj[0]);
+              for (std::size_t d = 1; d < dims && dist < cut; ++d) {
+                dist = std::max(dist, std::abs(yi[d] - yj[d]));
+                if (dist < cut) count_pair(block_i, block_j, d, dist);  // beyond: in every higher d
+              }
             }
-          }
+        }
       }
+      flush();
     }
 #pragma omp critical
     {

@@ -69,32 +69,18 @@ struct NeighbourSums {
 
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
 // copied in grid order: the candidates of a reference in the middle row then lie in three
-// contiguous stretches of this copy, read in order, instead of at random places in the series
-// (loading those was most of the cost). Rows are the unit of work of a thread.
+// contiguous stretches of this copy, read in order, instead of at random places in the series.
+// The delay coordinates again, densely: the profile pass reads only these, so the candidates of
+// a box stay in L1. Rows are the unit of work of a thread.
 struct RowWindow {
-  std::size_t begin = 0;        // grid entry of the first copied point
-  std::vector<double> history;  // (entry - begin) * padded + t
-  // The delay coordinates x_{j + l delay}, l < coordinates, of each point again, densely: the
-  // profile pass reads only these, so the candidates of a box stay in L1.
-  std::size_t coordinates = 0;
-  std::vector<double> coordinate;  // (entry - begin) * coordinates + l
+  nonlinear::CopiedCoordinates history;     // x_{j + t}, t < history, padded
+  nonlinear::CopiedCoordinates coordinate;  // x_{j + l delay}, up to the last group of four
   void fill(const ScanShape& s, const nonlinear::BoxGrid& grid, const double* x,
             std::size_t first_entry, std::size_t end_entry) {
-    begin = first_entry;
-    // Up to the last coordinate of the last group of four dimensions (zeros beyond).
-    coordinates = std::size_t(s.min_dimension) + 4 * ((s.dims + 3) / 4);
-    history.resize((end_entry - first_entry) * s.padded);
-    coordinate.resize((end_entry - first_entry) * coordinates);
-    const nonlinear::BoxGrid::Entry* entries = grid.entries();
-    for (std::size_t q = first_entry; q < end_entry; ++q) {
-      const double* from = x + entries[q].index;
-      double* to = history.data() + (q - first_entry) * s.padded;
-      std::copy_n(from, s.history, to);
-      std::fill(to + s.history, to + s.padded, 0.0);
-      const std::size_t used = std::size_t(s.min_dimension) + s.dims - 1;
-      for (std::size_t l = 0; l < coordinates; ++l)
-        coordinate[(q - first_entry) * coordinates + l] = l < used ? from[l * s.step] : 0.0;
-    }
+    history.fill(grid, x, 1, first_entry, end_entry, s.history, s.padded);
+    coordinate.fill(grid, x, s.step, first_entry, end_entry,
+                    std::size_t(s.min_dimension) + s.dims - 1,
+                    std::size_t(s.min_dimension) + 4 * ((s.dims + 3) / 4));
   }
 };
 
@@ -141,8 +127,9 @@ inline void add_separations(const double* xi, const double* histories, std::size
                                                                  NeighbourSums& sums) {
   const nonlinear::BoxGrid::Entry* entries = grid.entries();
   const std::size_t i = entries[q].index;
-  const double* histories = window.history.data();
-  const double* xi = histories + (q - window.begin) * s.padded;
+  const std::size_t window_begin = window.history.begin();
+  const double* histories = window.history.of(window_begin);
+  const double* xi = window.history.of(q);
   const double eps2 = s.radii2[s.radii - 1];
   std::size_t first[3], last[3];
   const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
@@ -164,7 +151,7 @@ inline void add_separations(const double* xi, const double* histories, std::size
     for (std::size_t c = first[run]; c < last[run]; ++c) {
       const nonlinear::BoxGrid::Entry& e = entries[c];
       const double d0 = (e.a - a) * (e.a - a) + (e.b - b) * (e.b - b);
-      near[kept] = std::uint32_t(c - window.begin);
+      near[kept] = std::uint32_t(c - window_begin);
       near_distance2[kept] = d0;
       kept += d0 <= eps2 ? 1 : 0;
     }
@@ -173,14 +160,14 @@ inline void add_separations(const double* xi, const double* histories, std::size
   // lanes of the squared coordinate differences), compared with every radius at once; the code
   // is the dot product of the bin numbers with the place values (radii + 1)^(4 g + d).
   const std::size_t groups = (s.dims + 3) / 4;
-  const double* ci = window.coordinate.data() + (q - window.begin) * window.coordinates;
+  const double* ci = window.coordinate.of(q);
   const std::size_t m0 = std::size_t(s.min_dimension);
   std::int32_t* __restrict near_slot = sums.near_slot.data();
   for (std::size_t p = 0; p < kept; ++p) {
     near_slot[p] = -1;
-    const std::size_t j = entries[window.begin + near[p]].index;
+    const std::size_t j = entries[window_begin + near[p]].index;
     if ((j > i ? j - i : i - j) <= s.theiler) continue;
-    const double* cj = window.coordinate.data() + std::size_t(near[p]) * window.coordinates;
+    const double* cj = window.coordinate.of(window_begin + near[p]);
     double d0 = near_distance2[p];
     for (std::size_t l = std::size_t(s.axes); l < m0; ++l) d0 += (ci[l] - cj[l]) * (ci[l] - cj[l]);
     if (d0 > eps2 || d0 <= s.floor2) continue;

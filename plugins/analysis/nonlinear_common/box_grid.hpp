@@ -100,4 +100,32 @@ class BoxGrid {
   std::vector<Entry> entries_;
 };
 
+// The delay coordinates x_{j + l delay}, l < used, of the points of a range of grid entries (a
+// few adjacent rows), copied densely in grid order with `stride` values per point (zeros from
+// `used` on): the candidates of a box then lie in contiguous memory instead of at random places
+// of the series, which is what the pair loops were waiting on.
+class CopiedCoordinates {
+ public:
+  void fill(const BoxGrid& grid, const double* x, std::size_t delay, std::size_t first_entry,
+            std::size_t end_entry, std::size_t used, std::size_t stride) {
+    begin_ = first_entry;
+    stride_ = stride;
+    values_.resize((end_entry - first_entry) * stride);
+    const BoxGrid::Entry* entries = grid.entries();
+    for (std::size_t q = first_entry; q < end_entry; ++q) {
+      const double* from = x + entries[q].index;
+      double* to = values_.data() + (q - first_entry) * stride;
+      for (std::size_t l = 0; l < stride; ++l) to[l] = l < used ? from[l * delay] : 0.0;
+    }
+  }
+  // The copied coordinates of grid entry q (within the filled range).
+  const double* of(std::size_t q) const { return values_.data() + (q - begin_) * stride_; }
+  std::size_t begin() const { return begin_; }
+  std::size_t stride() const { return stride_; }
+
+ private:
+  std::size_t begin_ = 0, stride_ = 0;
+  std::vector<double> values_;
+};
+
 }  // namespace chatterlab::nonlinear
