@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <utility>
@@ -62,6 +63,94 @@ std::vector<double> normalised(const std::vector<double>& x) {
   std::vector<double> y(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
   return y;
+}
+
+using Vector4 = double __attribute__((vector_size(32)));          // AVX2; SSE2: two halves
+using Bits4 = std::uint64_t __attribute__((vector_size(32)));
+
+// What the pair pass of correlation_sums_within shares between its vectors: the grid, the
+// coordinates and bootstrap blocks of the rows in hand (copied in grid order), and the compact
+// per-thread counts, indexed [(dimension index d * kept_bins + bin) * blocks + block].
+struct PairPass {
+  const nonlinear::BoxGrid* grid = nullptr;
+  const nonlinear::CopiedCoordinates* coordinates = nullptr;  // stride: dimensions rounded to 4
+  const std::uint8_t* window_block = nullptr;                 // from window_begin on
+  std::size_t window_begin = 0, dims = 0, theiler = 0, kept_bins = 0;
+  double cut = 0;
+  std::uint32_t* compact = nullptr;
+  std::vector<Bits4> row_base;  // d * kept_bins * blocks for the dimension indices d of a group
+  std::vector<std::size_t>* kept = nullptr;  // scratch
+};
+
+// Every pair (vector of grid entry q, a vector in its forward runs) closer than the cut in the
+// maximum norm, counted in every dimension 2..dims where it stays closer (for both of its
+// vectors' blocks). First the candidates closer than the cut in the first two coordinates (the
+// grid's), compacted without branches (about half of them are not); then, per kept pair, the
+// coordinate differences four dimensions at a time, their running maximum across the lanes
+// and the bins from the exponent bits, before the scalar count updates.
+[[gnu::target_clones("avx2", "default")]] void count_forward_pairs(const PairPass& pass,
+                                                                   std::size_t q,
+                                                                   const std::size_t* first,
+                                                                   const std::size_t* last,
+                                                                   std::size_t runs) {
+  const nonlinear::BoxGrid::Entry* entries = pass.grid->entries();
+  const std::size_t i = entries[q].index;
+  const double a = entries[q].a, b = entries[q].b;
+  std::size_t candidates = 0;
+  for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
+  if (pass.kept->size() < candidates) pass.kept->resize(candidates);
+  std::size_t* __restrict kept = pass.kept->data();
+  std::size_t count = 0;
+  for (std::size_t run = 0; run < runs; ++run)
+    for (std::size_t e = first[run]; e < last[run]; ++e) {
+      const std::size_t j = entries[e].index;
+      const double d01 = std::max(std::abs(entries[e].a - a), std::abs(entries[e].b - b));
+      kept[count] = e;
+      count += (d01 < pass.cut) & ((j > i ? j - i : i - j) > pass.theiler) ? 1 : 0;
+    }
+  const std::size_t groups = pass.coordinates->stride() / 4, blocks = CorrelationSums::blocks;
+  const std::size_t block_i = pass.window_block[q - pass.window_begin];
+  const double* yi = pass.coordinates->of(q);
+  // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
+  const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
+  std::uint64_t offset[4 * 8];  // of each dimension's count row
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t e = kept[k];
+    const double* yj = pass.coordinates->of(e);
+    Vector4 carry = {};
+    Vector4 closer = {};  // per lane: dimensions closer than the cut (a prefix of them)
+    for (std::size_t g = 0; g < groups; ++g) {
+      Vector4 own, other;
+      std::memcpy(&own, yi + 4 * g, sizeof own);
+      std::memcpy(&other, yj + 4 * g, sizeof other);
+      Vector4 v = own - other;
+      v = v < 0 ? -v : v;
+      // Running maximum over the dimensions: the maximum-norm distance in each.
+      const Vector4 zero = {};
+      Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
+      v = v > shifted ? v : shifted;
+      shifted = __builtin_shuffle(v, zero, Bits4{4, 4, 0, 1});
+      v = v > shifted ? v : shifted;
+      v = v > carry ? v : carry;
+      carry = Vector4{v[3], v[3], v[3], v[3]};
+      closer += v < pass.cut ? Vector4{1, 1, 1, 1} : Vector4{};
+      const Vector4 clamped = v > floor ? v : Vector4{floor, floor, floor, floor};
+      Bits4 key;
+      std::memcpy(&key, &clamped, sizeof key);
+      const Bits4 row = pass.row_base[g] + ((key >> 49) - (key_base - 1)) * blocks;
+      std::memcpy(offset + 4 * g, &row, sizeof row);
+    }
+    const std::size_t block_j = pass.window_block[e - pass.window_begin];
+    // Beyond the cut in one dimension: beyond it in every higher one (counted as uncounted).
+    // Dimension index 0 is counted by the sorted pass.
+    const auto within = std::size_t((closer[0] + closer[1]) + (closer[2] + closer[3]));
+    const std::size_t end = std::min(within, pass.dims);
+    for (std::size_t d = 1; d < end; ++d) {
+      std::uint32_t* row = pass.compact + offset[d];
+      ++row[block_i];
+      ++row[block_j];
+    }
+  }
 }
 }  // namespace
 
@@ -160,12 +249,6 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
           }
       updates = 0;
     };
-    auto count_pair = [&](std::size_t block_i, std::size_t block_j, std::size_t d,
-                          double dist) {  // both ways
-      std::uint32_t* row = compact.data() + (d * kept_bins + bin_of(dist)) * blocks;
-      ++row[block_i];
-      ++row[block_j];
-    };
     // Dimension 1: the vectors closer than each bin edge e_k (capped at the cut) on either side
     // of yi in sorted order form a stretch [left_k, right_k) around p; as p moves up, yi grows
     // and both ends only move up, so one pointer per edge slides along (O(bins) per vector, not
@@ -194,8 +277,13 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
         local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
                                            (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
         std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
+        // Bins below the gap to the nearest value on either side hold nothing: start above.
+        // (Pointers of skipped edges lag behind and catch up when next used.)
+        double gap = cut;
+        if (p + 1 < n) gap = std::min(gap, sorted[p + 1].first - yi);
+        if (p > 0) gap = std::min(gap, yi - sorted[p - 1].first);
         std::size_t previous = 0;
-        for (std::size_t k = 0; k < edge_count; ++k) {
+        for (std::size_t k = std::min(bin_of(gap), edge_count); k < edge_count; ++k) {
           const double e = capped[k];
           std::size_t r = std::max(right[k], p + 1), l = left[k];
           while (r < n && sorted[r].first - yi < e) ++r;
@@ -219,19 +307,31 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
       // the next), with the coordinates and blocks of those two rows copied in grid order.
       nonlinear::CopiedCoordinates coordinates;
       std::vector<std::uint8_t> window_block;
+      std::vector<std::size_t> kept;
+      PairPass pass;
+      pass.grid = &*grid;
+      pass.coordinates = &coordinates;
+      pass.dims = dims;
+      pass.theiler = theiler;
+      pass.kept_bins = kept_bins;
+      pass.cut = cut;
+      pass.compact = compact.data();
+      pass.row_base.assign((dims + 3) / 4, Bits4{});
+      for (std::size_t d = 0; d < 4 * pass.row_base.size(); ++d)
+        pass.row_base[d / 4][d % 4] = d * kept_bins * blocks;
+      pass.kept = &kept;
 #pragma omp for schedule(dynamic, 1)
       for (std::size_t row = 0; row < grid->rows(); ++row) {
         const std::size_t row_first = grid->row_begin(row), row_end = grid->row_begin(row + 1);
         if (row_first == row_end) continue;
         const std::size_t window_end = grid->row_begin(std::min(row + 2, grid->rows()));
-        coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, dims);
+        coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, 4 * ((dims + 3) / 4));
         window_block.resize(window_end - row_first);
         for (std::size_t e = row_first; e < window_end; ++e)
           window_block[e - row_first] = block_of_vector[entries[e].index];
+        pass.window_begin = row_first;
+        pass.window_block = window_block.data();
         for (std::size_t q = row_first; q < row_end; ++q) {
-          const std::size_t i = entries[q].index;
-          const std::size_t block_i = window_block[q - row_first];
-          const double* yi = coordinates.of(q);
           std::size_t first[2], last[2];
           const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
           // At most 2 (dims - 1) updates per candidate pair.
@@ -240,18 +340,7 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
             bound += 2 * (dims - 1) * (last[run] - first[run]);
           if (updates + bound > std::numeric_limits<std::uint32_t>::max()) flush();
           updates += bound;
-          for (std::size_t run = 0; run < runs; ++run)
-            for (std::size_t e = first[run]; e < last[run]; ++e) {
-              const std::size_t j = entries[e].index;
-              if ((j > i ? j - i : i - j) <= theiler) continue;
-              const std::size_t block_j = window_block[e - row_first];
-              const double* yj = coordinates.of(e);
-              double dist = std::abs(yi[0] - yj[0]);
-              for (std::size_t d = 1; d < dims && dist < cut; ++d) {
-                dist = std::max(dist, std::abs(yi[d] - yj[d]));
-                if (dist < cut) count_pair(block_i, block_j, d, dist);  // beyond: in every higher d
-              }
-            }
+          count_forward_pairs(pass, q, first, last, runs);
         }
       }
       flush();
