@@ -78,7 +78,9 @@ struct PairPass {
   std::size_t window_begin = 0, dims = 0, theiler = 0, kept_bins = 0;
   double cut = 0;
   std::uint32_t* compact = nullptr;
-  std::vector<Bits4> row_base;  // d * kept_bins * blocks for the dimension indices d of a group
+  // d * kept_bins * blocks for each dimension index d (padded to groups of four; plain integers
+  // loaded with memcpy: heap storage of 32-byte vectors is not reliably 32-byte aligned).
+  std::vector<std::uint64_t> row_base;
   std::vector<std::size_t>* kept = nullptr;  // scratch
 };
 
@@ -137,7 +139,9 @@ struct PairPass {
       const Vector4 clamped = v > floor ? v : Vector4{floor, floor, floor, floor};
       Bits4 key;
       std::memcpy(&key, &clamped, sizeof key);
-      const Bits4 row = pass.row_base[g] + ((key >> 49) - (key_base - 1)) * blocks;
+      Bits4 row;
+      std::memcpy(&row, pass.row_base.data() + 4 * g, sizeof row);
+      row += ((key >> 49) - (key_base - 1)) * blocks;
       std::memcpy(offset + 4 * g, &row, sizeof row);
     }
     const std::size_t block_j = pass.window_block[e - pass.window_begin];
@@ -316,9 +320,9 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
       pass.kept_bins = kept_bins;
       pass.cut = cut;
       pass.compact = compact.data();
-      pass.row_base.assign((dims + 3) / 4, Bits4{});
-      for (std::size_t d = 0; d < 4 * pass.row_base.size(); ++d)
-        pass.row_base[d / 4][d % 4] = d * kept_bins * blocks;
+      pass.row_base.resize(4 * ((dims + 3) / 4));
+      for (std::size_t d = 0; d < pass.row_base.size(); ++d)
+        pass.row_base[d] = d * kept_bins * blocks;
       pass.kept = &kept;
 #pragma omp for schedule(dynamic, 1)
       for (std::size_t row = 0; row < grid->rows(); ++row) {

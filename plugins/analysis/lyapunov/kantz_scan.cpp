@@ -47,8 +47,10 @@ struct ScanShape {
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
   // Profile codes: place value (radii + 1)^d of dimension index d = 4 g + lane (0 beyond dims),
   // and which lanes add a coordinate (all but lane 0 of the first group).
-  std::vector<Vector4> places;
-  Vector4 increment_mask[2] = {{0, 1, 1, 1}, {1, 1, 1, 1}};
+  // (Plain doubles, loaded with memcpy: heap storage of 32-byte vectors is not reliably
+  // 32-byte aligned.)
+  std::vector<double> places;  // 4 per group
+  double increment_mask[2][4] = {{0, 1, 1, 1}, {1, 1, 1, 1}};
 };
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
@@ -64,7 +66,8 @@ struct NeighbourSums {
   std::vector<double> near_distance2;    // their squared distance on those axes
   std::vector<std::int32_t> near_slot;   // their slot (-1: not a neighbour)
   std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
-  std::vector<std::uint32_t> member_end; // per slot
+  std::vector<std::uint32_t> member_end; // slot boundaries in members (used + 1)
+  std::vector<std::uint32_t> member_position;  // counting-sort positions
 };
 
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
@@ -178,16 +181,25 @@ inline void add_separations(const double* xi, const double* histories, std::size
       load4(own, ci + m0 - 1 + 4 * g);
       load4(other, cj + m0 - 1 + 4 * g);
       const Vector4 difference = own - other;
-      Vector4 distance = difference * difference * s.increment_mask[g > 0 ? 1 : 0];
+      Vector4 mask, places;
+      std::memcpy(&mask, s.increment_mask[g > 0 ? 1 : 0], sizeof mask);
+      std::memcpy(&places, s.places.data() + 4 * g, sizeof places);
+      Vector4 distance = difference * difference * mask;
       distance += Vector4{0, distance[0], distance[1], distance[2]};
       distance += Vector4{0, 0, distance[0], distance[1]};
       distance += d0;
       d0 = distance[3];
-      Vector4 bin = {};
-      const Vector4 one = {1, 1, 1, 1}, zero = {};
-      for (std::size_t k = 0; k < s.radii; ++k) bin += distance > s.radii2[k] ? one : zero;
-      const Vector4 weighted = bin * s.places[g];
-      code += (weighted[0] + weighted[1]) + (weighted[2] + weighted[3]);
+      // Place value for every radius below the distance (two sums: shorter dependency chains).
+      const Vector4 zero = {};
+      Vector4 even = {}, odd = {};
+      std::size_t k = 0;
+      for (; k + 1 < s.radii; k += 2) {
+        even += distance > s.radii2[k] ? places : zero;
+        odd += distance > s.radii2[k + 1] ? places : zero;
+      }
+      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
+      const Vector4 total = even + odd;
+      code += (total[0] + total[1]) + (total[2] + total[3]);
     }
     const auto profile = std::uint32_t(code);
     std::int32_t slot = sums.slot_of[profile];
@@ -202,22 +214,28 @@ inline void add_separations(const double* xi, const double* histories, std::size
   const std::size_t used = sums.profiles.size();
   if (sums.slots.size() < used * s.padded) sums.slots.resize(used * s.padded);
   std::fill_n(sums.slots.begin(), std::ptrdiff_t(used * s.padded), 0.0);
-  sums.slot_count.assign(used, 0.0);
-  sums.member_end.assign(used + 1, 0);
+  // Four interleaved counters per slot (by p mod 4): consecutive neighbours of one profile
+  // would otherwise wait on each other's increment of the same counter.
+  constexpr std::size_t interleave = 4;
+  std::uint32_t* __restrict position = sums.member_position.data();
+  sums.member_position.assign(used * interleave + 1, 0);
+  position = sums.member_position.data();
   for (std::size_t p = 0; p < kept; ++p)
-    if (near_slot[p] >= 0) ++sums.member_end[std::size_t(near_slot[p]) + 1];
-  for (std::size_t slot = 0; slot < used; ++slot) {
-    sums.slot_count[slot] = double(sums.member_end[slot + 1]);
-    sums.member_end[slot + 1] += sums.member_end[slot];
-  }
+    if (near_slot[p] >= 0) ++position[std::size_t(near_slot[p]) * interleave + (p % interleave) + 1];
+  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
+  sums.slot_count.resize(used);
+  sums.member_end.resize(used + 1);
+  for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
+  for (std::size_t slot = 0; slot < used; ++slot)
+    sums.slot_count[slot] = double(sums.member_end[slot + 1] - sums.member_end[slot]);
   std::uint32_t* __restrict members = sums.members.data();
   for (std::size_t p = 0; p < kept; ++p)
-    if (near_slot[p] >= 0) members[sums.member_end[std::size_t(near_slot[p])]++] = near[p];
-  // member_end[slot] is now the end of that slot's members (its begin, the previous slot's end).
+    if (near_slot[p] >= 0)
+      members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
   const std::size_t vectors = s.padded / 4;  // even: padded is a multiple of 8
   for (std::size_t slot = 0; slot < used; ++slot) {
-    const std::uint32_t* begin = members + (slot > 0 ? sums.member_end[slot - 1] : 0);
-    const std::uint32_t* end = members + sums.member_end[slot];
+    const std::uint32_t* begin = members + sums.member_end[slot];
+    const std::uint32_t* end = members + sums.member_end[slot + 1];
     double* sum = sums.slots.data() + slot * s.padded;
     std::size_t v = 0;
     for (; v + 8 <= vectors; v += 8)
@@ -313,9 +331,9 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
-  shape.places.assign((dims + 3) / 4, Vector4{});
+  shape.places.assign(4 * ((dims + 3) / 4), 0.0);
   double place = 1;
-  for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d / 4][d % 4] = place;
+  for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
   const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back());
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
