@@ -233,6 +233,8 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   const std::optional<nonlinear::BoxGrid> grid =
       max_dimension >= 2 ? std::optional<nonlinear::BoxGrid>(std::in_place, y, delay, 2, n, cut)
                          : std::nullopt;
+  const std::vector<std::size_t> row_order =
+      grid ? grid->rows_most_work_first() : std::vector<std::size_t>{};
 #pragma omp parallel
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
@@ -325,9 +327,9 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
         pass.row_base[d] = d * kept_bins * blocks;
       pass.kept = &kept;
 #pragma omp for schedule(dynamic, 1)
-      for (std::size_t row = 0; row < grid->rows(); ++row) {
+      for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
+        const std::size_t row = row_order[rank];
         const std::size_t row_first = grid->row_begin(row), row_end = grid->row_begin(row + 1);
-        if (row_first == row_end) continue;
         const std::size_t window_end = grid->row_begin(std::min(row + 2, grid->rows()));
         coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, 4 * ((dims + 3) / 4));
         window_block.resize(window_end - row_first);

@@ -193,6 +193,7 @@ inline void add_separations(const double* xi, const double* histories, std::size
       const Vector4 zero = {};
       Vector4 even = {}, odd = {};
       std::size_t k = 0;
+#pragma GCC unroll 4
       for (; k + 1 < s.radii; k += 2) {
         even += distance > s.radii2[k] ? places : zero;
         odd += distance > s.radii2[k + 1] ? places : zero;
@@ -350,6 +351,8 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
 
+  const std::vector<std::size_t> row_order = grid.rows_most_work_first();
+  const double digit_scale = 1.0 / double(nr + 1);
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
@@ -378,8 +381,8 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       pending[block] = 0;
     };
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t row = 0; row < grid.rows(); ++row) {
-      if (grid.row_begin(row) == grid.row_begin(row + 1)) continue;
+    for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
+      const std::size_t row = row_order[rank];
       window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
                   grid.row_begin(std::min(row + 2, grid.rows())));
       for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q) {
@@ -395,8 +398,13 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
           std::uint32_t code = sums.profiles[slot];
           sums.slot_of[code] = -1;
           const double* from = sums.slots.data() + slot * shape.padded;
-          for (std::size_t d = 0; d < dims; ++d, code /= std::uint32_t(nr + 1)) {
-            const std::size_t ri = code % (nr + 1);
+          for (std::size_t d = 0; d < dims; ++d) {
+            // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per
+            // digit was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away
+            // from an integer).
+            const auto quotient = std::uint32_t((double(code) + 0.5) * digit_scale);
+            const std::size_t ri = code - quotient * std::uint32_t(nr + 1);
+            code = quotient;
             if (ri == nr) break;
             double* to = bins.data() + (ri * dims + d) * shape.padded;
             for (std::size_t t = 0; t < shape.padded; ++t) to[t] += from[t];

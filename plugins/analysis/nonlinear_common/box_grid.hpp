@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace chatterlab::nonlinear {
@@ -88,6 +89,23 @@ class BoxGrid {
   // (stored box by box along the second axis), so adjacent rows are adjacent in storage.
   std::size_t rows() const { return per_axis_; }
   std::size_t row_begin(std::size_t u) const { return start_[axes_ == 2 ? u * per_axis_ : u]; }
+  // The non-empty rows, the most work first: a row's pair work grows with its points times the
+  // points of it and its neighbour rows. Handed out in this order (dynamic scheduling), the big
+  // rows start early and the threads finish together.
+  std::vector<std::size_t> rows_most_work_first() const {
+    auto points = [&](std::size_t u) { return row_begin(u + 1) - row_begin(u); };
+    std::vector<std::pair<double, std::size_t>> work;
+    for (std::size_t u = 0; u < per_axis_; ++u) {
+      if (points(u) == 0) continue;
+      const std::size_t around =
+          points(u) + (u > 0 ? points(u - 1) : 0) + (u + 1 < per_axis_ ? points(u + 1) : 0);
+      work.emplace_back(-double(points(u)) * double(around), u);
+    }
+    std::sort(work.begin(), work.end());
+    std::vector<std::size_t> order;
+    for (const auto& w : work) order.push_back(w.second);
+    return order;
+  }
 
  private:
   std::size_t axis_box(double v) const {
