@@ -357,8 +357,9 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
   // every `flush` references of the block (a log per reference and entry would cost as much as
-  // the neighbours) or when they approach under/overflow.
-  constexpr std::size_t flush = 8;
+  // the neighbours) or when they approach under/overflow: every product is checked against
+  // 1e-200 / 1e200 after each factor, whatever the interval.
+  constexpr std::size_t flush = 32;
 #pragma omp parallel
   {
     // Per-thread accumulators, merged once at the end: no shared writes in the loop.
