@@ -3,7 +3,8 @@
 // 20 % radius range, lyap_k 11-20 s over 3 dimensions x 5 radii). Parameters follow TISEAN's
 // defaults where the two tools share them (lyap_spec: m = 2, delay 1, 30 neighbours, every
 // point a reference; lyap_k: m = 2..4, 5 radii, 50 iterations, every point a reference); d2 runs our sampled-reference scheme
-// (2000 references x all vectors, dimensions 1..10, all radii at once). Run single-threaded
+// (2000 references x all vectors, dimensions 1..10, all radii at once) and, like for like, every
+// pair within 2 % / 20 % of the range (BM_D2HenonAllPairs). Run single-threaded
 // (OMP_NUM_THREADS=1) and with 2 threads; docs/performance.md records the figures.
 #include <benchmark/benchmark.h>
 
