@@ -66,6 +66,7 @@ std::vector<double> normalised(const std::vector<double>& x) {
 }
 
 using Vector4 = double __attribute__((vector_size(32)));          // AVX2; SSE2: two halves
+constexpr std::size_t max_pair_dimensions = 32;  // of correlation_sums_within (the parameter: 30)
 using Bits4 = std::uint64_t __attribute__((vector_size(32)));
 
 // What the pair pass of correlation_sums_within shares between its vectors: the grid, the
@@ -115,7 +116,7 @@ struct PairPass {
   const double* yi = pass.coordinates->of(q);
   // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
   const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
-  std::uint64_t offset[4 * 8];  // of each dimension's count row
+  std::uint64_t offset[max_pair_dimensions];  // of each dimension's count row
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t e = kept[k];
     const double* yj = pass.coordinates->of(e);
@@ -210,6 +211,10 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
 
 CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
                                         int delay, std::size_t theiler, double cut) {
+  if (max_dimension < 1 || std::size_t(max_dimension) > max_pair_dimensions || !(cut > 0))
+    throw PointFailure(fmt::format("correlation_sums_within: needs 1 <= dimensions <= {} and a "
+                                   "positive cut (got {} and {})",
+                                   max_pair_dimensions, max_dimension, cut));
   CorrelationSums out = empty_sums(x, max_dimension);
   out.cut = cut;
   std::vector<double> y = normalised(x);
