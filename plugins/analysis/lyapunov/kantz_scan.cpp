@@ -45,6 +45,7 @@ struct ScanShape {
   std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
+  double digit_scale = 1;          // 1 / (radii + 1)
   // Profile codes: place value (radii + 1)^d of dimension index d = 4 g + lane (0 beyond dims),
   // and which lanes add a coordinate (all but lane 0 of the first group).
   // (Plain doubles, loaded with memcpy: heap storage of 32-byte vectors is not reliably
@@ -60,8 +61,7 @@ struct ScanShape {
 struct NeighbourSums {
   std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
   std::vector<std::uint32_t> profiles;   // code of each used slot
-  std::vector<double> slots;             // slot * padded + t
-  std::vector<double> slot_count;
+  std::vector<double*> targets;          // the bins a slot adds to
   std::vector<std::uint32_t> near;       // candidates within the largest radius on the grid axes
   std::vector<double> near_distance2;    // their squared distance on those axes
   std::vector<std::int32_t> near_slot;   // their slot (-1: not a neighbour)
@@ -95,7 +95,7 @@ inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 template <std::size_t Vectors>
 inline void add_separations(const double* xi, const double* histories, std::size_t padded,
                             const std::uint32_t* member, const std::uint32_t* member_end,
-                            std::size_t offset, double* sum) {
+                            std::size_t offset, double* const* targets, std::size_t target_count) {
   Vector4 acc[Vectors] = {};
   Vector4 reference[Vectors];
   for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
@@ -108,12 +108,14 @@ inline void add_separations(const double* xi, const double* histories, std::size
       acc[v] += d * d;
     }
   }
-  for (std::size_t v = 0; v < Vectors; ++v) {
-    Vector4 total;
-    load4(total, sum + offset + 4 * v);
-    total += acc[v];
-    std::memcpy(sum + offset + 4 * v, &total, sizeof total);
-  }
+  for (std::size_t target = 0; target < target_count; ++target)
+    for (std::size_t v = 0; v < Vectors; ++v) {
+      double* sum = targets[target] + offset + 4 * v;
+      Vector4 total;
+      load4(total, sum);
+      total += acc[v];
+      std::memcpy(sum, &total, sizeof total);
+    }
 }
 
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
@@ -127,7 +129,8 @@ inline void add_separations(const double* xi, const double* histories, std::size
                                                                  const nonlinear::BoxGrid& grid,
                                                                  const RowWindow& window,
                                                                  std::size_t q,
-                                                                 NeighbourSums& sums) {
+                                                                 NeighbourSums& sums,
+                                                                 double* bins, double* bin_count) {
   const nonlinear::BoxGrid::Entry* entries = grid.entries();
   const std::size_t i = entries[q].index;
   const std::size_t window_begin = window.history.begin();
@@ -213,8 +216,6 @@ inline void add_separations(const double* xi, const double* histories, std::size
   }
   // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums.
   const std::size_t used = sums.profiles.size();
-  if (sums.slots.size() < used * s.padded) sums.slots.resize(used * s.padded);
-  std::fill_n(sums.slots.begin(), std::ptrdiff_t(used * s.padded), 0.0);
   // Four interleaved counters per slot (by p mod 4): consecutive neighbours of one profile
   // would otherwise wait on each other's increment of the same counter.
   constexpr std::size_t interleave = 4;
@@ -224,30 +225,45 @@ inline void add_separations(const double* xi, const double* histories, std::size
   for (std::size_t p = 0; p < kept; ++p)
     if (near_slot[p] >= 0) ++position[std::size_t(near_slot[p]) * interleave + (p % interleave) + 1];
   for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
-  sums.slot_count.resize(used);
   sums.member_end.resize(used + 1);
   for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
-  for (std::size_t slot = 0; slot < used; ++slot)
-    sums.slot_count[slot] = double(sums.member_end[slot + 1] - sums.member_end[slot]);
   std::uint32_t* __restrict members = sums.members.data();
   for (std::size_t p = 0; p < kept; ++p)
     if (near_slot[p] >= 0)
       members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
+  // Each profile's sums go straight to the bin of its radius in every dimension where it is
+  // within the largest radius.
   const std::size_t vectors = s.padded / 4;  // even: padded is a multiple of 8
+  std::vector<double*>& targets = sums.targets;
+  targets.resize(s.dims);
   for (std::size_t slot = 0; slot < used; ++slot) {
+    std::uint32_t code = sums.profiles[slot];
+    sums.slot_of[code] = -1;
     const std::uint32_t* begin = members + sums.member_end[slot];
     const std::uint32_t* end = members + sums.member_end[slot + 1];
-    double* sum = sums.slots.data() + slot * s.padded;
+    std::size_t target_count = 0;
+    for (std::size_t d = 0; d < s.dims; ++d) {
+      // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per digit
+      // was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away from an
+      // integer).
+      const auto quotient = std::uint32_t((double(code) + 0.5) * s.digit_scale);
+      const std::size_t ri = code - quotient * std::uint32_t(s.radii + 1);
+      code = quotient;
+      if (ri == s.radii) break;
+      targets[target_count++] = bins + (ri * s.dims + d) * s.padded;
+      bin_count[ri * s.dims + d] += double(end - begin);
+    }
     std::size_t v = 0;
     for (; v + 8 <= vectors; v += 8)
-      add_separations<8>(xi, histories, s.padded, begin, end, 4 * v, sum);
+      add_separations<8>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
     switch (vectors - v) {
-      case 6: add_separations<6>(xi, histories, s.padded, begin, end, 4 * v, sum); break;
-      case 4: add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, sum); break;
-      case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, sum); break;
+      case 6: add_separations<6>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 4: add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
+  sums.profiles.clear();
 }
 
 // One reference's table: the summed histories of its neighbours binned by radius and dimension
@@ -332,6 +348,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
+  shape.digit_scale = 1.0 / double(nr + 1);
   shape.places.assign(4 * ((dims + 3) / 4), 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
@@ -352,7 +369,6 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
 
   const std::vector<std::size_t> row_order = grid.rows_most_work_first();
-  const double digit_scale = 1.0 / double(nr + 1);
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
@@ -392,27 +408,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
         const std::size_t block = block_of(i);
         std::fill(bins.begin(), bins.end(), 0.0);
         std::fill(bin_count.begin(), bin_count.end(), 0.0);
-        gather_neighbours(shape, grid, window, q, sums);
-        // Each profile's sums go to the bin of its radius in every dimension where it is within
-        // the largest radius.
-        for (std::size_t slot = 0; slot < sums.profiles.size(); ++slot) {
-          std::uint32_t code = sums.profiles[slot];
-          sums.slot_of[code] = -1;
-          const double* from = sums.slots.data() + slot * shape.padded;
-          for (std::size_t d = 0; d < dims; ++d) {
-            // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per
-            // digit was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away
-            // from an integer).
-            const auto quotient = std::uint32_t((double(code) + 0.5) * digit_scale);
-            const std::size_t ri = code - quotient * std::uint32_t(nr + 1);
-            code = quotient;
-            if (ri == nr) break;
-            double* to = bins.data() + (ri * dims + d) * shape.padded;
-            for (std::size_t t = 0; t < shape.padded; ++t) to[t] += from[t];
-            bin_count[ri * dims + d] += sums.slot_count[slot];
-          }
-        }
-        sums.profiles.clear();
+        gather_neighbours(shape, grid, window, q, sums, bins.data(), bin_count.data());
         const bool extreme = multiply_mean_squares(
             shape, steps, bins.data(), bin_count.data(), running.data(), mean_square.data(),
             product.data() + block * row_size, factors.data() + block * row_size);
