@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <utility>
@@ -63,6 +64,99 @@ std::vector<double> normalised(const std::vector<double>& x) {
   for (std::size_t i = 0; i < x.size(); ++i) y[i] = (x[i] - *lo) * scale;
   return y;
 }
+
+using Vector4 = double __attribute__((vector_size(32)));          // AVX2; SSE2: two halves
+constexpr std::size_t max_pair_dimensions = 32;  // of correlation_sums_within (the parameter: 30)
+using Bits4 = std::uint64_t __attribute__((vector_size(32)));
+
+// What the pair pass of correlation_sums_within shares between its vectors: the grid, the
+// coordinates and bootstrap blocks of the rows in hand (copied in grid order), and the compact
+// per-thread counts, indexed [(dimension index d * kept_bins + bin) * blocks + block].
+struct PairPass {
+  const nonlinear::BoxGrid* grid = nullptr;
+  const nonlinear::CopiedCoordinates* coordinates = nullptr;  // stride: dimensions rounded to 4
+  const std::uint8_t* window_block = nullptr;                 // from window_begin on
+  std::size_t window_begin = 0, dims = 0, theiler = 0, kept_bins = 0;
+  double cut = 0;
+  std::uint32_t* compact = nullptr;
+  // d * kept_bins * blocks for each dimension index d (padded to groups of four; plain integers
+  // loaded with memcpy: heap storage of 32-byte vectors is not reliably 32-byte aligned).
+  std::vector<std::uint64_t> row_base;
+  std::vector<std::size_t>* kept = nullptr;  // scratch
+};
+
+// Every pair (vector of grid entry q, a vector in its forward runs) closer than the cut in the
+// maximum norm, counted in every dimension 2..dims where it stays closer (for both of its
+// vectors' blocks). First the candidates closer than the cut in the first two coordinates (the
+// grid's), compacted without branches (about half of them are not); then, per kept pair, the
+// coordinate differences four dimensions at a time, their running maximum across the lanes
+// and the bins from the exponent bits, before the scalar count updates.
+[[gnu::target_clones("avx2", "default")]] void count_forward_pairs(const PairPass& pass,
+                                                                   std::size_t q,
+                                                                   const std::size_t* first,
+                                                                   const std::size_t* last,
+                                                                   std::size_t runs) {
+  const nonlinear::BoxGrid::Entry* entries = pass.grid->entries();
+  const std::size_t i = entries[q].index;
+  const double a = entries[q].a, b = entries[q].b;
+  std::size_t candidates = 0;
+  for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
+  if (pass.kept->size() < candidates) pass.kept->resize(candidates);
+  std::size_t* __restrict kept = pass.kept->data();
+  std::size_t count = 0;
+  for (std::size_t run = 0; run < runs; ++run)
+    for (std::size_t e = first[run]; e < last[run]; ++e) {
+      const std::size_t j = entries[e].index;
+      const double d01 = std::max(std::abs(entries[e].a - a), std::abs(entries[e].b - b));
+      kept[count] = e;
+      count += (d01 < pass.cut) & ((j > i ? j - i : i - j) > pass.theiler) ? 1 : 0;
+    }
+  const std::size_t groups = pass.coordinates->stride() / 4, blocks = CorrelationSums::blocks;
+  const std::size_t block_i = pass.window_block[q - pass.window_begin];
+  const double* yi = pass.coordinates->of(q);
+  // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
+  const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
+  std::uint64_t offset[max_pair_dimensions];  // of each dimension's count row
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t e = kept[k];
+    const double* yj = pass.coordinates->of(e);
+    Vector4 carry = {};
+    Vector4 closer = {};  // per lane: dimensions closer than the cut (a prefix of them)
+    for (std::size_t g = 0; g < groups; ++g) {
+      Vector4 own, other;
+      std::memcpy(&own, yi + 4 * g, sizeof own);
+      std::memcpy(&other, yj + 4 * g, sizeof other);
+      Vector4 v = own - other;
+      v = v < 0 ? -v : v;
+      // Running maximum over the dimensions: the maximum-norm distance in each.
+      const Vector4 zero = {};
+      Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
+      v = v > shifted ? v : shifted;
+      shifted = __builtin_shuffle(v, zero, Bits4{4, 4, 0, 1});
+      v = v > shifted ? v : shifted;
+      v = v > carry ? v : carry;
+      carry = Vector4{v[3], v[3], v[3], v[3]};
+      closer += v < pass.cut ? Vector4{1, 1, 1, 1} : Vector4{};
+      const Vector4 clamped = v > floor ? v : Vector4{floor, floor, floor, floor};
+      Bits4 key;
+      std::memcpy(&key, &clamped, sizeof key);
+      Bits4 row;
+      std::memcpy(&row, pass.row_base.data() + 4 * g, sizeof row);
+      row += ((key >> 49) - (key_base - 1)) * blocks;
+      std::memcpy(offset + 4 * g, &row, sizeof row);
+    }
+    const std::size_t block_j = pass.window_block[e - pass.window_begin];
+    // Beyond the cut in one dimension: beyond it in every higher one (counted as uncounted).
+    // Dimension index 0 is counted by the sorted pass.
+    const auto within = std::size_t((closer[0] + closer[1]) + (closer[2] + closer[3]));
+    const std::size_t end = std::min(within, pass.dims);
+    for (std::size_t d = 1; d < end; ++d) {
+      std::uint32_t* row = pass.compact + offset[d];
+      ++row[block_i];
+      ++row[block_j];
+    }
+  }
+}
 }  // namespace
 
 double CorrelationSums::edge(std::size_t bin) {
@@ -117,6 +211,10 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
 
 CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
                                         int delay, std::size_t theiler, double cut) {
+  if (max_dimension < 1 || std::size_t(max_dimension) > max_pair_dimensions || !(cut > 0))
+    throw PointFailure(fmt::format("correlation_sums_within: needs 1 <= dimensions <= {} and a "
+                                   "positive cut (got {} and {})",
+                                   max_pair_dimensions, max_dimension, cut));
   CorrelationSums out = empty_sums(x, max_dimension);
   out.cut = cut;
   std::vector<double> y = normalised(x);
@@ -124,7 +222,11 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   const std::size_t dims = std::size_t(max_dimension);
   const std::size_t bins = CorrelationSums::bins, blocks = CorrelationSums::blocks;
   const std::size_t tau = std::size_t(delay);
-  auto block_of = [&](std::size_t i) { return i * blocks / n; };
+  // Bootstrap block of each vector, looked up (a division per pair cost as much as the count).
+  std::vector<std::uint8_t> block_of_vector(n);
+  for (std::size_t i = 0; i < n; ++i) block_of_vector[i] = std::uint8_t(i * blocks / n);
+  auto block_of = [&](std::size_t i) { return std::size_t(block_of_vector[i]); };
+  static_assert(CorrelationSums::blocks <= 256);
   // Dimension 1 from the values in sorted order (a pair close in the first coordinate may be far
   // in the second, so the 2-d grid below would miss it); dimensions >= 2 from a box grid on the
   // first two coordinates. Pairs closer in time than the Theiler window are skipped in both.
@@ -136,59 +238,123 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   const std::optional<nonlinear::BoxGrid> grid =
       max_dimension >= 2 ? std::optional<nonlinear::BoxGrid>(std::in_place, y, delay, 2, n, cut)
                          : std::nullopt;
+  const std::vector<std::size_t> row_order =
+      grid ? grid->rows_most_work_first() : std::vector<std::size_t>{};
 #pragma omp parallel
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
     std::vector<double> local_pairs(blocks, 0.0);
-    auto count_pair = [&](std::size_t i, std::size_t j, std::size_t d, double dist) {  // both ways
-      const std::size_t bin = bin_of(dist);
-      ++local[(block_of(i) * dims + d) * bins + bin];
-      ++local[(block_of(j) * dims + d) * bins + bin];
+    // Dimensions >= 2 count into a compact table first: 32-bit counts, only the bins below the
+    // cut, the blocks of one (dimension, bin) side by side. Its busy part (the top octaves below
+    // the cut) then stays in L1, where the full 64-bit [block][dimension][bin] rows did not.
+    const std::size_t kept_bins = bin_of(cut) + 1;
+    std::vector<std::uint32_t> compact(dims * kept_bins * blocks, 0);
+    std::uint64_t updates = 0;  // since the last flush: no compact count can exceed it
+    auto flush = [&] {
+      for (std::size_t d = 1; d < dims; ++d)
+        for (std::size_t bin = 0; bin < kept_bins; ++bin)
+          for (std::size_t b = 0; b < blocks; ++b) {
+            std::uint32_t& c = compact[(d * kept_bins + bin) * blocks + b];
+            local[(b * dims + d) * bins + bin] += c;
+            c = 0;
+          }
+      updates = 0;
     };
-#pragma omp for schedule(dynamic, 256) nowait
-    for (std::size_t p = 0; p < n; ++p) {
-      const std::size_t i = sorted[p].second;
-      const double yi = sorted[p].first;
-      local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
-                                         (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
-      // Vectors closer than each bin edge (capped at the cut), on both sides of yi in sorted
-      // order: two pointers move outward edge by edge, one comparison per pair within the cut
-      // and one histogram update per bin.
-      std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
-      std::size_t right = p + 1, left = p, previous = 0;
-      for (std::size_t k = 0; k < bins && (k == 0 || edges[k - 1] < cut); ++k) {
-        const double e = std::min(edges[k], cut);
-        while (right < n && sorted[right].first - yi < e) ++right;
-        while (left > 0 && yi - sorted[left - 1].first < e) --left;
-        const std::size_t within = (right - p - 1) + (p - left);
-        h[k] += within - previous;
-        previous = within;
+    // Dimension 1: the vectors closer than each bin edge e_k (capped at the cut) on either side
+    // of yi in sorted order form a stretch [left_k, right_k) around p; as p moves up, yi grows
+    // and both ends only move up, so one pointer per edge slides along (O(bins) per vector, not
+    // O(pairs within the cut)). Chunks of consecutive p: pointers found by bisection per chunk.
+    std::size_t edge_count = 0;
+    while (edge_count < bins && (edge_count == 0 || edges[edge_count - 1] < cut)) ++edge_count;
+    std::vector<double> capped(edge_count);
+    for (std::size_t k = 0; k < edge_count; ++k) capped[k] = std::min(edges[k], cut);
+    std::vector<std::size_t> left(edge_count), right(edge_count);
+    constexpr std::size_t chunk = 512;
+#pragma omp for schedule(dynamic, 1) nowait
+    for (std::size_t c = 0; c < (n + chunk - 1) / chunk; ++c) {
+      const std::size_t p0 = c * chunk, p1 = std::min(n, p0 + chunk);
+      for (std::size_t k = 0; k < edge_count; ++k) {
+        const double y0 = sorted[p0].first, e = capped[k];
+        left[k] = std::size_t(std::partition_point(sorted.begin(), sorted.begin() + std::ptrdiff_t(p0),
+                                                   [&](const auto& v) { return !(y0 - v.first < e); }) -
+                              sorted.begin());
+        right[k] = std::size_t(std::partition_point(sorted.begin() + std::ptrdiff_t(p0 + 1), sorted.end(),
+                                                    [&](const auto& v) { return v.first - y0 < e; }) -
+                               sorted.begin());
       }
-      // Minus the pairs inside the Theiler window (counted above, in their bins).
-      for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
-        const double dist = std::abs(y[j] - y[i]);
-        if (j != i && dist < cut) --h[bin_of(dist)];
+      for (std::size_t p = p0; p < p1; ++p) {
+        const std::size_t i = sorted[p].second;
+        const double yi = sorted[p].first;
+        local_pairs[block_of(i)] += double((i > theiler ? i - theiler : 0) +
+                                           (i + theiler + 1 < n ? n - i - theiler - 1 : 0));
+        std::uint64_t* h = local.data() + block_of(i) * dims * bins;  // dimension 1
+        // Bins below the gap to the nearest value on either side hold nothing: start above.
+        // (Pointers of skipped edges lag behind and catch up when next used.)
+        double gap = cut;
+        if (p + 1 < n) gap = std::min(gap, sorted[p + 1].first - yi);
+        if (p > 0) gap = std::min(gap, yi - sorted[p - 1].first);
+        std::size_t previous = 0;
+        for (std::size_t k = std::min(bin_of(gap), edge_count); k < edge_count; ++k) {
+          const double e = capped[k];
+          std::size_t r = std::max(right[k], p + 1), l = left[k];
+          while (r < n && sorted[r].first - yi < e) ++r;
+          while (l < p && !(yi - sorted[l].first < e)) ++l;
+          right[k] = r;
+          left[k] = l;
+          const std::size_t within = (r - p - 1) + (p - l);
+          h[k] += within - previous;
+          previous = within;
+        }
+        // Minus the pairs inside the Theiler window (counted above, in their bins).
+        for (std::size_t j = i > theiler ? i - theiler : 0; j <= std::min(i + theiler, n - 1); ++j) {
+          const double dist = std::abs(y[j] - y[i]);
+          if (j != i && dist < cut) --h[bin_of(dist)];
+        }
       }
     }
     if (grid) {
       const nonlinear::BoxGrid::Entry* entries = grid->entries();
-      // Vectors in grid order: consecutive ones share their candidate boxes (cache).
-#pragma omp for schedule(dynamic, 64)
-      for (std::size_t q = 0; q < n; ++q) {
-        const std::size_t i = entries[q].index;
-        std::size_t first[2], last[2];
-        const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
-        for (std::size_t run = 0; run < runs; ++run)
-          for (std::size_t e = first[run]; e < last[run]; ++e) {
-            const std::size_t j = entries[e].index;
-            if ((j > i ? j - i : i - j) <= theiler) continue;
-            double dist = std::abs(y[i] - y[j]);
-            for (std::size_t d = 1; d < dims && dist < cut; ++d) {
-              dist = std::max(dist, std::abs(y[i + d * tau] - y[j + d * tau]));
-              if (dist < cut) count_pair(i, j, d, dist);  // beyond: so in every higher dimension
-            }
-          }
+      // Row by row of the grid (each pair once: a vector's forward runs lie in its own row and
+      // the next), with the coordinates and blocks of those two rows copied in grid order.
+      nonlinear::CopiedCoordinates coordinates;
+      std::vector<std::uint8_t> window_block;
+      std::vector<std::size_t> kept;
+      PairPass pass;
+      pass.grid = &*grid;
+      pass.coordinates = &coordinates;
+      pass.dims = dims;
+      pass.theiler = theiler;
+      pass.kept_bins = kept_bins;
+      pass.cut = cut;
+      pass.compact = compact.data();
+      pass.row_base.resize(4 * ((dims + 3) / 4));
+      for (std::size_t d = 0; d < pass.row_base.size(); ++d)
+        pass.row_base[d] = d * kept_bins * blocks;
+      pass.kept = &kept;
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
+        const std::size_t row = row_order[rank];
+        const std::size_t row_first = grid->row_begin(row), row_end = grid->row_begin(row + 1);
+        const std::size_t window_end = grid->row_begin(std::min(row + 2, grid->rows()));
+        coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, 4 * ((dims + 3) / 4));
+        window_block.resize(window_end - row_first);
+        for (std::size_t e = row_first; e < window_end; ++e)
+          window_block[e - row_first] = block_of_vector[entries[e].index];
+        pass.window_begin = row_first;
+        pass.window_block = window_block.data();
+        for (std::size_t q = row_first; q < row_end; ++q) {
+          std::size_t first[2], last[2];
+          const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
+          // At most 2 (dims - 1) updates per candidate pair.
+          std::uint64_t bound = 0;
+          for (std::size_t run = 0; run < runs; ++run)
+            bound += 2 * (dims - 1) * (last[run] - first[run]);
+          if (updates + bound > std::numeric_limits<std::uint32_t>::max()) flush();
+          updates += bound;
+          count_forward_pairs(pass, q, first, last, runs);
+        }
       }
+      flush();
     }
 #pragma omp critical
     {

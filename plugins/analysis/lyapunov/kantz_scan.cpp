@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "analysis/nonlinear_common/box_grid.hpp"
@@ -37,86 +38,272 @@ std::vector<double> KantzScan::curve(std::size_t r, int m) const {
 namespace {
 
 // What one reference's neighbour pass needs to know about the scan.
+using Vector4 = double __attribute__((vector_size(32)));  // four doubles (AVX2; SSE2: two halves)
+
 struct ScanShape {
   int min_dimension = 1, axes = 1;
   std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
+  double digit_scale = 1;          // 1 / (radii + 1)
+  // Profile codes: place value (radii + 1)^d of dimension index d = 4 g + lane (0 beyond dims),
+  // and which lanes add a coordinate (all but lane 0 of the first group).
+  // (Plain doubles, loaded with memcpy: heap storage of 32-byte vectors is not reliably
+  // 32-byte aligned.)
+  std::vector<double> places;  // 4 per group
+  double increment_mask[2][4] = {{0, 1, 1, 1}, {1, 1, 1, 1}};
 };
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
 // dimensions form a "profile" (r_d per dimension d, nondecreasing, `radii` = beyond the largest);
-// neighbours with the same profile are summed into one slot, so each neighbour costs one vector
-// add whatever the number of dimensions.
+// neighbours with the same profile are summed into one slot, so each neighbour costs one history
+// sum whatever the number of dimensions.
 struct NeighbourSums {
   std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
   std::vector<std::uint32_t> profiles;   // code of each used slot
-  std::vector<float> slots;              // slot * padded + t
-  std::vector<double> slot_count;
-  std::vector<float> separation;         // padded
+  std::vector<double*> targets;          // the bins a slot adds to
+  std::vector<std::uint32_t> near;       // candidates within the largest radius on the grid axes
+  std::vector<double> near_distance2;    // their squared distance on those axes
+  std::vector<std::int32_t> near_slot;   // their slot (-1: not a neighbour)
+  std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
+  std::vector<std::uint32_t> member_end; // slot boundaries in members (used + 1)
+  std::vector<std::uint32_t> member_position;  // counting-sort positions
 };
 
-// The neighbours of reference i within the largest radius: each one's squared coordinate
-// differences along the whole separation history are added to the slot of its profile. The
-// distance in any dimension at any step is a sum of these differences. Single precision: a slot
-// sums at most a few thousand positive terms. Compiled for AVX2 as well (chosen at run time),
-// which does eight of these adds at once.
+// The separation histories of the points of three adjacent grid rows (boxes of the first axis),
+// copied in grid order: the candidates of a reference in the middle row then lie in three
+// contiguous stretches of this copy, read in order, instead of at random places in the series.
+// The delay coordinates again, densely: the profile pass reads only these, so the candidates of
+// a box stay in L1. Rows are the unit of work of a thread.
+struct RowWindow {
+  nonlinear::CopiedCoordinates history;     // x_{j + t}, t < history, padded
+  nonlinear::CopiedCoordinates coordinate;  // x_{j + l delay}, up to the last group of four
+  void fill(const ScanShape& s, const nonlinear::BoxGrid& grid, const double* x,
+            std::size_t first_entry, std::size_t end_entry) {
+    history.fill(grid, x, 1, first_entry, end_entry, s.history, s.padded);
+    coordinate.fill(grid, x, s.step, first_entry, end_entry,
+                    std::size_t(s.min_dimension) + s.dims - 1,
+                    std::size_t(s.min_dimension) + 4 * ((s.dims + 3) / 4));
+  }
+};
+
+// (Out parameter: returning a 32-byte vector by value changes the ABI of the non-AVX clone.)
+inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
+
+// sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
+// samples t: the partial sums stay in registers while the members stream by.
+template <std::size_t Vectors>
+inline void add_separations(const double* xi, const double* histories, std::size_t padded,
+                            const std::uint32_t* member, const std::uint32_t* member_end,
+                            std::size_t offset, double* const* targets, std::size_t target_count) {
+  Vector4 acc[Vectors] = {};
+  Vector4 reference[Vectors];
+  for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
+  for (; member < member_end; ++member) {
+    const double* xj = histories + std::size_t(*member) * padded + offset;
+    for (std::size_t v = 0; v < Vectors; ++v) {
+      Vector4 other;
+      load4(other, xj + 4 * v);
+      const Vector4 d = reference[v] - other;
+      acc[v] += d * d;
+    }
+  }
+  for (std::size_t target = 0; target < target_count; ++target)
+    for (std::size_t v = 0; v < Vectors; ++v) {
+      double* sum = targets[target] + offset + 4 * v;
+      Vector4 total;
+      load4(total, sum);
+      total += acc[v];
+      std::memcpy(sum, &total, sizeof total);
+    }
+}
+
+// The neighbours of the reference at grid entry q within the largest radius, their profiles, and
+// for each profile the summed squared coordinate differences along the whole separation history
+// (the distance in any dimension at any step is a sum of these differences). Three passes:
+// candidates within the largest radius on the grid axes (branch-free compaction), the profile
+// of each (radius bins of up to four dimensions compared at once), and the history sums profile
+// by profile with the sums held in registers (one load per history sample and neighbour, no
+// stores). Compiled for AVX2 as well (chosen at run time).
 [[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
                                                                  const nonlinear::BoxGrid& grid,
-                                                                 const double* x, std::size_t i,
-                                                                 NeighbourSums& sums) {
-  const double* xi = x + i;
-  const double eps2 = s.radii2[s.radii - 1];
-  float* __restrict separation = sums.separation.data();
-  std::size_t first[3], last[3];
-  const std::size_t runs = grid.runs_near(xi[0], s.axes == 2 ? xi[s.step] : 0.0, first, last);
+                                                                 const RowWindow& window,
+                                                                 std::size_t q,
+                                                                 NeighbourSums& sums,
+                                                                 double* bins, double* bin_count) {
   const nonlinear::BoxGrid::Entry* entries = grid.entries();
+  const std::size_t i = entries[q].index;
+  const std::size_t window_begin = window.history.begin();
+  const double* histories = window.history.of(window_begin);
+  const double* xi = window.history.of(q);
+  const double eps2 = s.radii2[s.radii - 1];
+  std::size_t first[3], last[3];
+  const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
+  std::size_t candidates = 0;
+  for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
+  if (sums.near.size() < candidates) {
+    sums.near.resize(candidates);
+    sums.near_distance2.resize(candidates);
+    sums.near_slot.resize(candidates);
+    sums.members.resize(candidates);
+  }
+  // Pass 1: compact the candidates within the largest radius on the grid axes (an entry's b is 0
+  // on a one-axis grid).
+  const double a = entries[q].a, b = entries[q].b;
+  std::uint32_t* __restrict near = sums.near.data();
+  double* __restrict near_distance2 = sums.near_distance2.data();
+  std::size_t kept = 0;
   for (std::size_t run = 0; run < runs; ++run)
-    for (std::size_t q = first[run]; q < last[run]; ++q) {
-      const nonlinear::BoxGrid::Entry& e = entries[q];
-      const std::size_t j = e.index;
-      if ((j > i ? j - i : i - j) <= s.theiler) continue;
-      double d0 = (e.a - xi[0]) * (e.a - xi[0]);
-      if (s.axes == 2) d0 += (e.b - xi[s.step]) * (e.b - xi[s.step]);
-      if (d0 > eps2) continue;
-      const double* xj = x + j;
-      for (int l = s.axes; l < s.min_dimension; ++l) {
-        const double dl = xi[std::size_t(l) * s.step] - xj[std::size_t(l) * s.step];
-        d0 += dl * dl;
-      }
-      if (d0 > eps2 || d0 <= s.floor2) continue;
-      // Profile: the radius bin in each dimension (distances only grow with the dimension).
-      std::uint32_t code = 0, scale = 1;
-      std::size_t r = 0;
-      for (std::size_t d = 0; d < s.dims; ++d) {
-        if (d > 0) {
-          const std::size_t extra = (std::size_t(s.min_dimension) + d - 1) * s.step;
-          d0 += (xi[extra] - xj[extra]) * (xi[extra] - xj[extra]);
-        }
-        while (r < s.radii && d0 > s.radii2[r]) ++r;
-        code += std::uint32_t(r) * scale;
-        scale *= std::uint32_t(s.radii + 1);
-      }
-      std::int32_t slot = sums.slot_of[code];
-      if (slot < 0) {
-        slot = std::int32_t(sums.profiles.size());
-        sums.slot_of[code] = slot;
-        sums.profiles.push_back(code);
-        if (sums.slots.size() < sums.profiles.size() * s.padded)
-          sums.slots.resize(sums.profiles.size() * s.padded);  // grows to its peak once per thread
-        std::fill_n(sums.slots.begin() + std::ptrdiff_t(std::size_t(slot) * s.padded), s.padded,
-                    0.0f);
-        if (sums.slot_count.size() < sums.profiles.size()) sums.slot_count.resize(sums.profiles.size());
-        sums.slot_count[std::size_t(slot)] = 0;
-      }
-      for (std::size_t t = 0; t < s.history; ++t) {
-        const double dt = xi[t] - xj[t];
-        separation[t] = float(dt * dt);
-      }
-      float* __restrict bin = sums.slots.data() + std::size_t(slot) * s.padded;
-      for (std::size_t t = 0; t < s.padded; ++t) bin[t] += separation[t];
-      sums.slot_count[std::size_t(slot)] += 1;
+    for (std::size_t c = first[run]; c < last[run]; ++c) {
+      const nonlinear::BoxGrid::Entry& e = entries[c];
+      const double d0 = (e.a - a) * (e.a - a) + (e.b - b) * (e.b - b);
+      near[kept] = std::uint32_t(c - window_begin);
+      near_distance2[kept] = d0;
+      kept += d0 <= eps2 ? 1 : 0;
     }
+  // Pass 2: the remaining coordinates and the profile of each kept candidate. Lane d of group g
+  // holds the squared distance in dimension min_dimension + 4 g + d (a running sum over the
+  // lanes of the squared coordinate differences), compared with every radius at once; the code
+  // is the dot product of the bin numbers with the place values (radii + 1)^(4 g + d).
+  const std::size_t groups = (s.dims + 3) / 4;
+  const double* ci = window.coordinate.of(q);
+  const std::size_t m0 = std::size_t(s.min_dimension);
+  std::int32_t* __restrict near_slot = sums.near_slot.data();
+  for (std::size_t p = 0; p < kept; ++p) {
+    near_slot[p] = -1;
+    const std::size_t j = entries[window_begin + near[p]].index;
+    if ((j > i ? j - i : i - j) <= s.theiler) continue;
+    const double* cj = window.coordinate.of(window_begin + near[p]);
+    double d0 = near_distance2[p];
+    for (std::size_t l = std::size_t(s.axes); l < m0; ++l) d0 += (ci[l] - cj[l]) * (ci[l] - cj[l]);
+    if (d0 > eps2 || d0 <= s.floor2) continue;
+    double code = 0;
+    for (std::size_t g = 0; g < groups; ++g) {
+      // Coordinates m0 - 1 + 4 g + d: lane 0 of the first group is already in d0.
+      Vector4 own, other;
+      load4(own, ci + m0 - 1 + 4 * g);
+      load4(other, cj + m0 - 1 + 4 * g);
+      const Vector4 difference = own - other;
+      Vector4 mask, places;
+      std::memcpy(&mask, s.increment_mask[g > 0 ? 1 : 0], sizeof mask);
+      std::memcpy(&places, s.places.data() + 4 * g, sizeof places);
+      Vector4 distance = difference * difference * mask;
+      distance += Vector4{0, distance[0], distance[1], distance[2]};
+      distance += Vector4{0, 0, distance[0], distance[1]};
+      distance += d0;
+      d0 = distance[3];
+      // Place value for every radius below the distance (two sums: shorter dependency chains).
+      const Vector4 zero = {};
+      Vector4 even = {}, odd = {};
+      std::size_t k = 0;
+#pragma GCC unroll 4
+      for (; k + 1 < s.radii; k += 2) {
+        even += distance > s.radii2[k] ? places : zero;
+        odd += distance > s.radii2[k + 1] ? places : zero;
+      }
+      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
+      const Vector4 total = even + odd;
+      code += (total[0] + total[1]) + (total[2] + total[3]);
+    }
+    const auto profile = std::uint32_t(code);
+    std::int32_t slot = sums.slot_of[profile];
+    if (slot < 0) {
+      slot = std::int32_t(sums.profiles.size());
+      sums.slot_of[profile] = slot;
+      sums.profiles.push_back(profile);
+    }
+    near_slot[p] = slot;
+  }
+  // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums.
+  const std::size_t used = sums.profiles.size();
+  // Four interleaved counters per slot (by p mod 4): consecutive neighbours of one profile
+  // would otherwise wait on each other's increment of the same counter.
+  constexpr std::size_t interleave = 4;
+  std::uint32_t* __restrict position = sums.member_position.data();
+  sums.member_position.assign(used * interleave + 1, 0);
+  position = sums.member_position.data();
+  for (std::size_t p = 0; p < kept; ++p)
+    if (near_slot[p] >= 0) ++position[std::size_t(near_slot[p]) * interleave + (p % interleave) + 1];
+  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
+  sums.member_end.resize(used + 1);
+  for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
+  std::uint32_t* __restrict members = sums.members.data();
+  for (std::size_t p = 0; p < kept; ++p)
+    if (near_slot[p] >= 0)
+      members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
+  // Each profile's sums go straight to the bin of its radius in every dimension where it is
+  // within the largest radius.
+  const std::size_t vectors = s.padded / 4;  // even: padded is a multiple of 8
+  std::vector<double*>& targets = sums.targets;
+  targets.resize(s.dims);
+  for (std::size_t slot = 0; slot < used; ++slot) {
+    std::uint32_t code = sums.profiles[slot];
+    sums.slot_of[code] = -1;
+    const std::uint32_t* begin = members + sums.member_end[slot];
+    const std::uint32_t* end = members + sums.member_end[slot + 1];
+    std::size_t target_count = 0;
+    for (std::size_t d = 0; d < s.dims; ++d) {
+      // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per digit
+      // was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away from an
+      // integer).
+      const auto quotient = std::uint32_t((double(code) + 0.5) * s.digit_scale);
+      const std::size_t ri = code - quotient * std::uint32_t(s.radii + 1);
+      code = quotient;
+      if (ri == s.radii) break;
+      targets[target_count++] = bins + (ri * s.dims + d) * s.padded;
+      bin_count[ri * s.dims + d] += double(end - begin);
+    }
+    std::size_t v = 0;
+    for (; v + 8 <= vectors; v += 8)
+      add_separations<8>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+    switch (vectors - v) {
+      case 6: add_separations<6>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 4: add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      default: break;
+    }
+  }
+  sums.profiles.clear();
+}
+
+// One reference's table: the summed histories of its neighbours binned by radius and dimension
+// (bins[(r * dims + d) * padded + t], counts[r * dims + d]) turned into mean square distances
+// within each radius, multiplied into `product` (row `row` of the per-block table) and counted in
+// `factors`. Returns whether a product approaches under/overflow.
+[[gnu::target_clones("avx2", "default")]] bool multiply_mean_squares(
+    const ScanShape& s, std::size_t steps, const double* bins, const double* counts,
+    double* running, double* mean_square, double* product, double* factors) {
+  bool extreme = false;
+  for (std::size_t d = 0; d < s.dims; ++d) {
+    const std::size_t m = std::size_t(s.min_dimension) + d;
+    std::fill_n(running, s.padded, 0.0);
+    double n = 0;
+    for (std::size_t ri = 0; ri < s.radii; ++ri) {
+      // Neighbours within radius r are those of bins 0..r: running sums over the radii.
+      const double* bin = bins + (ri * s.dims + d) * s.padded;
+      for (std::size_t t = 0; t < s.padded; ++t) running[t] += bin[t];
+      n += counts[ri * s.dims + d];
+      if (n == 0) continue;
+      // < |X_{i+k} - X_{j+k}|^2 >_j in m dimensions
+      std::copy_n(running, steps, mean_square);
+      for (std::size_t l = 1; l < m; ++l)
+        for (std::size_t k = 0; k < steps; ++k) mean_square[k] += running[k + l * s.step];
+      const double inverse = 1.0 / n;
+      double* p = product + (ri * s.dims + d) * steps;
+      double* f = factors + (ri * s.dims + d) * steps;
+      double low = 1, high = 1;
+      for (std::size_t k = 0; k < steps; ++k) {
+        const double v = mean_square[k] * inverse;
+        const bool positive = v > 0;
+        p[k] *= positive ? v : 1.0;
+        f[k] += positive ? 1.0 : 0.0;
+        low = std::min(low, p[k]);
+        high = std::max(high, p[k]);
+      }
+      extreme = extreme || low < 1e-200 || high > 1e200;
+    }
+  }
+  return extreme;
 }
 
 }  // namespace
@@ -161,6 +348,10 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
+  shape.digit_scale = 1.0 / double(nr + 1);
+  shape.places.assign(4 * ((dims + 3) / 4), 0.0);
+  double place = 1;
+  for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
   const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back());
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
@@ -169,37 +360,33 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
                                    "(radii + 1)^dimensions = 2^24 combinations)",
                                    nr, dims));
 
-  // References are visited box by box, so that consecutive ones share their neighbours (which
-  // then stay in cache); each keeps the bootstrap block of its time index.
-  std::vector<std::uint32_t> order(references);
-  std::vector<std::uint64_t> keyed(references);
-  for (std::size_t r = 0; r < references; ++r) {
-    const std::size_t i =
-        references == limit ? r : std::size_t(double(r) * double(limit) / double(references));
-    const std::size_t box = grid.cell(x[i], shape.axes == 2 ? x[i + shape.step] : 0.0);
-    keyed[r] = (std::uint64_t(box) << 32) | std::uint64_t(i);
-  }
-  std::sort(keyed.begin(), keyed.end());
-  for (std::size_t r = 0; r < references; ++r) order[r] = std::uint32_t(keyed[r] & 0xffffffffu);
+  // References are visited row by row of the grid and box by box within a row, so that
+  // consecutive ones share their neighbours; each keeps the bootstrap block of its time index.
+  std::vector<std::uint8_t> is_reference(limit, references == limit ? 1 : 0);
+  if (references < limit)
+    for (std::size_t r = 0; r < references; ++r)
+      is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
 
+  const std::vector<std::size_t> row_order = grid.rows_most_work_first();
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
   // every `flush` references of the block (a log per reference and entry would cost as much as
-  // the neighbours) or when they approach under/overflow.
-  constexpr std::size_t flush = 8;
+  // the neighbours) or when they approach under/overflow: every product is checked against
+  // 1e-200 / 1e200 after each factor, whatever the interval.
+  constexpr std::size_t flush = 32;
 #pragma omp parallel
   {
     // Per-thread accumulators, merged once at the end: no shared writes in the loop.
     std::vector<double> sum(out.sum.size(), 0.0), count(out.count.size(), 0.0);
     std::vector<double> product(out.sum.size(), 1.0), factors(out.sum.size(), 0.0);
     std::vector<std::size_t> pending(kantz_blocks, 0);
-    std::vector<float> bins(nr * dims * shape.padded);
-    std::vector<double> bin_count(nr * dims), running(shape.padded);
+    std::vector<double> bins(nr * dims * shape.padded);
+    std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
     NeighbourSums sums;
+    RowWindow window;
     sums.slot_of.assign(profile_codes, -1);
-    sums.separation.assign(shape.padded, 0.0f);
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
@@ -210,52 +397,23 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       }
       pending[block] = 0;
     };
-#pragma omp for schedule(dynamic, 32)
-    for (std::size_t r = 0; r < references; ++r) {
-      const std::size_t i = order[r];
-      const std::size_t block = block_of(i);
-      std::fill(bins.begin(), bins.end(), 0.0f);
-      std::fill(bin_count.begin(), bin_count.end(), 0.0);
-      gather_neighbours(shape, grid, x.data(), i, sums);
-      // Each profile's sums go to the bin of its radius in every dimension where it is within the
-      // largest radius.
-      for (std::size_t slot = 0; slot < sums.profiles.size(); ++slot) {
-        std::uint32_t code = sums.profiles[slot];
-        sums.slot_of[code] = -1;
-        const float* from = sums.slots.data() + slot * shape.padded;
-        for (std::size_t d = 0; d < dims; ++d, code /= std::uint32_t(nr + 1)) {
-          const std::size_t ri = code % (nr + 1);
-          if (ri == nr) break;
-          float* to = bins.data() + (ri * dims + d) * shape.padded;
-          for (std::size_t t = 0; t < shape.padded; ++t) to[t] += from[t];
-          bin_count[ri * dims + d] += sums.slot_count[slot];
-        }
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
+      const std::size_t row = row_order[rank];
+      window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
+                  grid.row_begin(std::min(row + 2, grid.rows())));
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q) {
+        const std::size_t i = grid.entries()[q].index;
+        if (!is_reference[i]) continue;
+        const std::size_t block = block_of(i);
+        std::fill(bins.begin(), bins.end(), 0.0);
+        std::fill(bin_count.begin(), bin_count.end(), 0.0);
+        gather_neighbours(shape, grid, window, q, sums, bins.data(), bin_count.data());
+        const bool extreme = multiply_mean_squares(
+            shape, steps, bins.data(), bin_count.data(), running.data(), mean_square.data(),
+            product.data() + block * row_size, factors.data() + block * row_size);
+        if (extreme || ++pending[block] == flush) log_products(block);
       }
-      sums.profiles.clear();
-      // Neighbours within radius r are those of bins 0..r: running sums over the radii.
-      bool extreme = false;
-      for (std::size_t d = 0; d < dims; ++d) {
-        const std::size_t m = std::size_t(min_dimension) + d;
-        std::fill(running.begin(), running.end(), 0.0);
-        double n = 0;
-        for (std::size_t ri = 0; ri < nr; ++ri) {
-          const float* bin = bins.data() + (ri * dims + d) * shape.padded;
-          for (std::size_t t = 0; t < history; ++t) running[t] += double(bin[t]);
-          n += bin_count[ri * dims + d];
-          if (n == 0) continue;
-          const std::size_t row = block * row_size + (ri * dims + d) * steps;
-          for (std::size_t k = 0; k < steps; ++k) {
-            double mean_square = 0;  // < |X_{i+k} - X_{j+k}|^2 >_j in m dimensions
-            for (std::size_t l = 0; l < m; ++l) mean_square += running[k + l * shape.step];
-            mean_square /= n;
-            if (!(mean_square > 0)) continue;
-            product[row + k] *= mean_square;
-            factors[row + k] += 1;
-            extreme = extreme || product[row + k] < 1e-200 || product[row + k] > 1e200;
-          }
-        }
-      }
-      if (extreme || ++pending[block] == flush) log_products(block);
     }
     for (std::size_t b = 0; b < kantz_blocks; ++b) log_products(b);
 #pragma omp critical

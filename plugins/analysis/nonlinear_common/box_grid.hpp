@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace chatterlab::nonlinear {
@@ -84,6 +85,27 @@ class BoxGrid {
     return 2;
   }
   const Entry* entries() const { return entries_.data(); }
+  // Rows: the boxes of the first axis. Row u's points are entries [row_begin(u), row_begin(u + 1))
+  // (stored box by box along the second axis), so adjacent rows are adjacent in storage.
+  std::size_t rows() const { return per_axis_; }
+  std::size_t row_begin(std::size_t u) const { return start_[axes_ == 2 ? u * per_axis_ : u]; }
+  // The non-empty rows, the most work first: a row's pair work grows with its points times the
+  // points of it and its neighbour rows. Handed out in this order (dynamic scheduling), the big
+  // rows start early and the threads finish together.
+  std::vector<std::size_t> rows_most_work_first() const {
+    auto points = [&](std::size_t u) { return row_begin(u + 1) - row_begin(u); };
+    std::vector<std::pair<double, std::size_t>> work;
+    for (std::size_t u = 0; u < per_axis_; ++u) {
+      if (points(u) == 0) continue;
+      const std::size_t around =
+          points(u) + (u > 0 ? points(u - 1) : 0) + (u + 1 < per_axis_ ? points(u + 1) : 0);
+      work.emplace_back(-double(points(u)) * double(around), u);
+    }
+    std::sort(work.begin(), work.end());
+    std::vector<std::size_t> order;
+    for (const auto& w : work) order.push_back(w.second);
+    return order;
+  }
 
  private:
   std::size_t axis_box(double v) const {
@@ -94,6 +116,34 @@ class BoxGrid {
   double low_ = 0, width_ = 1;
   std::vector<std::size_t> start_;
   std::vector<Entry> entries_;
+};
+
+// The delay coordinates x_{j + l delay}, l < used, of the points of a range of grid entries (a
+// few adjacent rows), copied densely in grid order with `stride` values per point (zeros from
+// `used` on): the candidates of a box then lie in contiguous memory instead of at random places
+// of the series, which is what the pair loops were waiting on.
+class CopiedCoordinates {
+ public:
+  void fill(const BoxGrid& grid, const double* x, std::size_t delay, std::size_t first_entry,
+            std::size_t end_entry, std::size_t used, std::size_t stride) {
+    begin_ = first_entry;
+    stride_ = stride;
+    values_.resize((end_entry - first_entry) * stride);
+    const BoxGrid::Entry* entries = grid.entries();
+    for (std::size_t q = first_entry; q < end_entry; ++q) {
+      const double* from = x + entries[q].index;
+      double* to = values_.data() + (q - first_entry) * stride;
+      for (std::size_t l = 0; l < stride; ++l) to[l] = l < used ? from[l * delay] : 0.0;
+    }
+  }
+  // The copied coordinates of grid entry q (within the filled range).
+  const double* of(std::size_t q) const { return values_.data() + (q - begin_) * stride_; }
+  std::size_t begin() const { return begin_; }
+  std::size_t stride() const { return stride_; }
+
+ private:
+  std::size_t begin_ = 0, stride_ = 0;
+  std::vector<double> values_;
 };
 
 }  // namespace chatterlab::nonlinear
