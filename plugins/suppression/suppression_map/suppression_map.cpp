@@ -241,6 +241,8 @@ SimulationSettings base_settings(const Json& document) {
   s.duration_s = run_duration(document);
   s.sample_rate_hz = t.at("sample_rate_hz").get<double>();
   s.disturbance.displacement_m = t.at("initial_displacement_m").get<double>();
+  s.initial_waviness_m = t.at("initial_waviness_m").get<double>();
+  s.seed = t.at("seed").get<std::uint64_t>();
   s.infeed_rate_m_per_s = t.at("infeed_rate_m_per_s").get<double>();
   s.one_sided_contact = t.at("one_sided_contact").get<bool>();
   s.relative_tolerance = t.at("relative_tolerance").get<double>();
@@ -402,10 +404,17 @@ PluginInfo SuppressionMap::info() {
                                  "eps of k = k0 (1 - eps/2 da/a) for kc and kg (5-29); eps = 2 (1 - beta) "
                                  "with F ~ a^beta (5-43); used by feed modulation", 0.6, 0.0, false);
   exponent.max = 4.0;
+  ParamSpec seed = param_spec("seed", ValueKind::integer, "1", "seed of the initial waviness");
+  seed.default_value = 1;
+  seed.min = 0;
   info.params = {
       revolutions,
       real_spec("sample_rate_hz", "Hz", "output sample rate of the simulations", 10000.0, 0.0, true),
-      real_spec("initial_displacement_m", "m", "initial structural displacement (the disturbance)", 1e-6, 0.0, true),
+      real_spec("initial_displacement_m", "m", "initial structural displacement (the disturbance)", 1e-6, 0.0, false),
+      real_spec("initial_waviness_m", "m",
+                "random initial waviness of wheel and work surfaces (+/-, uniform, seeded): starts the "
+                "regeneration of a chain from its first revolution", 0.0, 0.0, false),
+      seed,
       real_spec("infeed_rate_m_per_s", "m/s", "mean plunge infeed rate (> 0 for feed modulation)", 0.0, 0.0, false),
       one_sided,
       tolerance,
@@ -603,15 +612,17 @@ void SuppressionMap::write_artifacts(const Study& study, const ResultTable& resu
     const char* z_label;
   };
   const MapSpec maps[] = {
-      {col_ratio, "simulated log10(A_n modulated / A_n constant)", "log10 amplitude ratio"},
-      {col_s2, "S2 prediction, growth-rate averaging (5-37)", "predicted log10 amplitude ratio"},
-      {col_s3, "S3 energy per cycle change (5-45)", "mean sin(phi) - constant [pi C' X^2]"},
+      {col_ratio, "simulated log10(A_n mod / A_n const)", "log10 amplitude ratio"},
+      {col_s2, "S2 growth-rate averaging (5-37)", "predicted log10 amplitude ratio"},
+      {col_s3, "S3 energy per cycle (5-45)", "change of mean sin(phi) [pi C' X^2]"},
   };
   for (const Json& group : groups) {
     for (const MapSpec& spec : maps) {
       plot::Heatmap h;
       const std::string group_name = group.is_string() ? group.get<std::string>() : group.dump();
-      h.title = fmt::format("{}: {}{}", title, spec.what, group.is_null() ? "" : ", " + group_name);
+      // Short enough for the figure width: which modulation, then what is drawn.
+      h.title = group.is_null() ? fmt::format("{}: {}", title, spec.what)
+                                : fmt::format("{} {}: {}", group_name, target, spec.what);
       h.x_label = axis_label(x_axis.key);
       h.y_label = axis_label(y_axis.key);
       h.z_label = spec.z_label;
