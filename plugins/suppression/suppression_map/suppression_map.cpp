@@ -463,6 +463,13 @@ void SuppressionMap::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format("{}: suppression_map.infeed_rate_m_per_s = {}: feed modulation needs a "
                                  "mean infeed rate > 0 (suppression.target = \"feed\")",
                                  sources.locate("suppression_map.infeed_rate_m_per_s").str(), rate));
+  if (target == SuppressionTarget::feed && table["thickness_exponent"].get<double>() > 0.0 &&
+      type != PlungeRegenerative::info().name)
+    throw InputError(fmt::format("{}: suppression_map.thickness_exponent = {}: the feed-dependent stiffness "
+                                 "of 5-29 rescales the G1 force law and needs model.type = \"{}\" (got \"{}\"); "
+                                 "set thickness_exponent = 0 for other models",
+                                 sources.locate("suppression_map.thickness_exponent").str(),
+                                 table["thickness_exponent"].dump(), PlungeRegenerative::info().name, type));
   if (target == SuppressionTarget::feed && table["thickness_exponent"].get<double>() > 0.0) {
     const double a = suppression.value("amplitude_ratio", 0.0), eps = table["thickness_exponent"].get<double>();
     if (!(1.0 - 0.5 * eps * a > 0.0))
@@ -486,7 +493,7 @@ std::vector<std::string> SuppressionMap::output_columns(const Json&) const {
   return {col_ratio, col_s2, col_drift, col_s3, col_s3_fraction, col_s1, col_outcome};
 }
 
-std::vector<Json> SuppressionMap::run_point(const Json& document, const PointContext& context) const {
+std::vector<Json> SuppressionMap::run_point(const Json& document, const PointContext& /*context*/) const {
   auto plugin = build_suppression(document.at("suppression"));
   const SuppressionTarget target = plugin->target();
   auto table = growth_table(document, target);
@@ -544,7 +551,11 @@ std::vector<Json> SuppressionMap::run_point(const Json& document, const PointCon
   const double nominal = on_wheel ? ref.wheel_rpm : ref.work_rpm;
   const bool speed_target = target != SuppressionTarget::feed;
   auto speed = [&](double t) { return speed_target ? nominal * law->level(t) : nominal; };
-  const sm::EnergyBalance modulated = sm::energy_balance(ref.chatter_frequency_hz, speed, 0.0, duration);
+  // Averaged over the whole modulation periods inside the run (one period's balance for a periodic
+  // law), or over the run when a period is longer than it.
+  const double period = plugin->modulation_period_s();
+  const double window = period > 0.0 && period <= duration ? std::floor(duration / period) * period : duration;
+  const sm::EnergyBalance modulated = sm::energy_balance(ref.chatter_frequency_hz, speed, 0.0, window);
   const double constant_energy = std::sin(sm::phase_lag_rad(ref.chatter_frequency_hz, nominal));
 
   // S1: range of the corrected 5-29 frequency over the run.
@@ -561,7 +572,6 @@ std::vector<Json> SuppressionMap::run_point(const Json& document, const PointCon
     }
     s1 = hi - lo;
   }
-  (void)context;
   return {ratio, s2, drift, modulated.mean_normalised_energy - constant_energy, modulated.exciting_fraction,
           s1, r.diverged ? std::string("diverged") : std::string("completed")};
 }

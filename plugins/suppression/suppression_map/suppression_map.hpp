@@ -8,9 +8,10 @@
 //   s2_predicted_log10_ratio    the same from growth-rate averaging, 5-37 vs 5-38, with the
 //                               rightmost root at the frozen conditions of each wheel revolution
 //   s2_phase_drift_rad          the approximation's small parameter (<< 1: 5-37 applies)
-//   s3_energy_change            mean sin(phi) over the run minus its constant-speed value: the
-//                               energy per cycle of 5-45 in units of pi C' X^2 (< 0 helps)
-//   s3_exciting_fraction        fraction of the run in the exciting zone 0 < phi < pi (5-40)
+//   s3_energy_change            mean sin(phi) over the modulation periods in the run minus its
+//                               constant-speed value: the energy per cycle of 5-45 in units of
+//                               pi C' X^2 (< 0 helps)
+//   s3_exciting_fraction        fraction of that time in the exciting zone 0 < phi < pi (5-40)
 //   s1_frequency_swing_hz       range of the critical chatter frequency of 5-29 (corrected) as
 //                               the modulation changes the relative thickness da/a
 //   simulation_outcome          "completed" or "diverged"

@@ -155,6 +155,15 @@ TEST(SuppressionMap, BadInputNamesFileLineKeyValueAndLimit) {
   e = error_of("target = \"feed\"\namplitude_ratio = 0.1");
   EXPECT_NE(e.find("suppression_map.infeed_rate_m_per_s = 0: feed modulation needs a mean infeed rate > 0"),
             std::string::npos) << e;
+  // A model the kind cannot simulate.
+  e = testing::input_error_of([&] {
+    load_study(dir.write("dde.toml", "[study]\nkind = \"suppression_map\"\n[model]\ntype = \"linear_dde\"\n"
+                                     "a0 = [[0.0, 1.0], [-1.3, -0.1]]\n"
+                                     "delayed = [{ delay_s = 10.0, matrix = [[0.0, 0.0], [0.3, 0.0]] }]\n"
+                                     "[suppression]\ntype = \"variable_speed\"\n"));
+  });
+  EXPECT_NE(e.find("dde.toml:"), std::string::npos) << e;
+  EXPECT_NE(e.find("model.type = \"linear_dde\": the suppression_map study needs a model with a time-domain form"), std::string::npos) << e;
   // A grid value is checked like a written one.
   e = testing::input_error_of([&] {
     load_study(dir.write("grid.toml", study_text(wheel_model, "", "revolutions = 5") +
