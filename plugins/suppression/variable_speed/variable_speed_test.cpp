@@ -168,6 +168,24 @@ TEST(VariableSpeed, InstallsItsLawOnTheTargetOnly) {
   EXPECT_THROW(apply_modulation(feed.target(), feed.law(1.0), model, no_feed), std::invalid_argument);
 }
 
+TEST(VariableSpeed, TheEngineFollowsAnInfeedLaw) {
+  // SimulationSettings::infeed: the model sees u(t) and du/dt of the law (recorded infeed_m).
+  TwoRotors model;
+  VariableSpeed feed(parameters(ModulationShape::square, 0.4, 5.0, SuppressionTarget::feed));
+  SimulationSettings s;
+  s.duration_s = 0.5;
+  s.sample_rate_hz = 1000.0;
+  s.infeed_rate_m_per_s = 20e-6;
+  apply_modulation(feed.target(), feed.law(s.duration_s), model, s);
+  const SimulationResult r = simulate(model, s);
+  ASSERT_EQ(r.infeed_m.size(), r.t_s.size());
+  ASSERT_GT(r.t_s.size(), 400u);
+  for (std::size_t i = 0; i < r.t_s.size(); ++i) EXPECT_EQ(r.infeed_m[i], s.infeed->infeed_m(r.t_s[i])) << i;
+  // Square wave: 28 um/s for the first 0.1 s, then 12 um/s; over whole periods the mean rate.
+  EXPECT_NEAR(s.infeed->infeed_m(0.1), 2.8e-6, 1e-15);
+  EXPECT_NEAR(s.infeed->infeed_m(0.4), 8.0e-6, 1e-15);
+}
+
 TEST(VariableSpeed, TargetNamesRoundTrip) {
   for (SuppressionTarget t : {SuppressionTarget::wheel_speed, SuppressionTarget::work_speed, SuppressionTarget::feed})
     EXPECT_EQ(parse_suppression_target(to_string(t)), t);
