@@ -32,6 +32,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 constexpr const char* col_ratio = "log10_amplitude_ratio";
 constexpr const char* col_s2 = "s2_predicted_log10_ratio";
+constexpr const char* col_s2_locked = "s2_locked_lobe_log10_ratio";
 constexpr const char* col_drift = "s2_phase_drift_rad";
 constexpr const char* col_s3 = "s3_energy_change";
 constexpr const char* col_s3_fraction = "s3_exciting_fraction";
@@ -183,14 +184,8 @@ class GrowthTable {
     return {a.first + u * (b.first - a.first), a.second + u * (b.second - a.second)};
   }
 
- private:
-  std::pair<double, double> node(long index) {
-    {
-      std::lock_guard lock(mutex_);
-      auto it = nodes_.find(index);
-      if (it != nodes_.end()) return it->second;
-    }
-    const double level = 1.0 + static_cast<double>(index) * level_step;
+  // The [model] table at modulation level q/q_mean: the frozen conditions of that level.
+  Json conditions(double level) const {
     Json m = model_;
     switch (target_) {
       case SuppressionTarget::wheel_speed: m["wheel_speed_rpm"] = level * m["wheel_speed_rpm"].get<double>(); break;
@@ -202,7 +197,18 @@ class GrowthTable {
         break;
       }
     }
-    auto fn = build_model(m)->characteristic();
+    return m;
+  }
+
+ private:
+  std::pair<double, double> node(long index) {
+    {
+      std::lock_guard lock(mutex_);
+      auto it = nodes_.find(index);
+      if (it != nodes_.end()) return it->second;
+    }
+    const double level = 1.0 + static_cast<double>(index) * level_step;
+    auto fn = build_model(conditions(level))->characteristic();
     RootSearchOptions options;
     options.max_frequency_hz = 4.0 * fn->natural_frequency_scale_hz();
     const RightmostRoot r = find_rightmost_root(*fn, options);
@@ -211,6 +217,8 @@ class GrowthTable {
     nodes_.emplace(index, value);
     return value;
   }
+
+ private:
   Json model_;
   SuppressionTarget target_;
   double exponent_;
@@ -490,7 +498,7 @@ void SuppressionMap::validate(Json& document, const SourceMap& sources) const {
 }
 
 std::vector<std::string> SuppressionMap::output_columns(const Json&) const {
-  return {col_ratio, col_s2, col_drift, col_s3, col_s3_fraction, col_s1, col_outcome};
+  return {col_ratio, col_s2, col_s2_locked, col_drift, col_s3, col_s3_fraction, col_s1, col_outcome};
 }
 
 std::vector<Json> SuppressionMap::run_point(const Json& document, const PointContext& /*context*/) const {
@@ -524,6 +532,22 @@ std::vector<Json> SuppressionMap::run_point(const Json& document, const PointCon
   const double log_modulated = sm::growth_averaging_log_amplification(*law, boundaries, sigma);
   const double log_constant = sm::growth_averaging_log_amplification(*constant, boundaries, sigma);
   const double s2 = (log_modulated - log_constant) / std::numbers::ln10;
+
+  // S2 with the nominal chatter root continued through the revolutions (wave count kept) instead
+  // of the rightmost root.
+  Json s2_locked;
+  {
+    auto at_level = [&](double level) { return build_model(table->conditions(level))->characteristic(); };
+    const Complex start{ref.growth_rate_per_s, kTwoPi * ref.chatter_frequency_hz};
+    const bool wheel = target == SuppressionTarget::wheel_speed;
+    try {
+      s2_locked = (sm::continued_root_log_amplification(at_level, *law, boundaries, start, wheel) -
+                   sm::continued_root_log_amplification(at_level, *constant, boundaries, start, wheel)) /
+                  std::numbers::ln10;
+    } catch (const std::runtime_error&) {
+      // left empty: the continued root was lost (reported as a blank cell)
+    }
+  }
 
   // The approximation's phase drift per revolution: the speed change from one revolution to the
   // next (speed targets) or, for feed, the chatter-frequency change of the frozen roots.
@@ -572,7 +596,7 @@ std::vector<Json> SuppressionMap::run_point(const Json& document, const PointCon
     }
     s1 = hi - lo;
   }
-  return {ratio, s2, drift, modulated.mean_normalised_energy - constant_energy, modulated.exciting_fraction,
+  return {ratio, s2, s2_locked, drift, modulated.mean_normalised_energy - constant_energy, modulated.exciting_fraction,
           s1, r.diverged ? std::string("diverged") : std::string("completed")};
 }
 
@@ -624,6 +648,7 @@ void SuppressionMap::write_artifacts(const Study& study, const ResultTable& resu
   const MapSpec maps[] = {
       {col_ratio, "simulated log10(A_n mod / A_n const)", "log10 amplitude ratio"},
       {col_s2, "S2 growth-rate averaging (5-37)", "predicted log10 amplitude ratio"},
+      {col_s2_locked, "S2 continued root (5-37)", "predicted log10 amplitude ratio"},
       {col_s3, "S3 energy per cycle (5-45)", "change of mean sin(phi) [pi C' X^2]"},
   };
   for (const Json& group : groups) {
@@ -642,6 +667,8 @@ void SuppressionMap::write_artifacts(const Study& study, const ResultTable& resu
       h.log_y = log_axis(study, y_axis);
       h.z.assign(h.x.size() * h.y.size(), std::numeric_limits<double>::quiet_NaN());
       const std::size_t c = column_index(results, spec.column);
+      if (std::none_of(results.rows.begin(), results.rows.end(), [&](const auto& row) { return row[c].is_number(); }))
+        continue;  // a prediction that does not apply to this model (e.g. the locked lobe)
       for (std::size_t r = 0; r < results.rows.size(); ++r) {
         const auto& row = results.rows[r];
         if (!labels.empty() && row[labels[0]] != group) continue;

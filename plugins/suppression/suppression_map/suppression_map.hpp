@@ -7,6 +7,8 @@
 //   log10_amplitude_ratio       log10(A_n modulated / A_n constant), simulated (S2's measure)
 //   s2_predicted_log10_ratio    the same from growth-rate averaging, 5-37 vs 5-38, with the
 //                               rightmost root at the frozen conditions of each wheel revolution
+//   s2_locked_lobe_log10_ratio  the same with the chatter pattern locked to its wave count (G3
+//                               closed forms; wheel speed on a wheel-regenerative G1 only)
 //   s2_phase_drift_rad          the approximation's small parameter (<< 1: 5-37 applies)
 //   s3_energy_change            mean sin(phi) over the modulation periods in the run minus its
 //                               constant-speed value: the energy per cycle of 5-45 in units of

@@ -51,6 +51,37 @@ double growth_averaging_log_amplification(const ModulationLaw& law, const std::v
   return wheel_growth::log_amplification(rho);
 }
 
+double continued_root_log_amplification(
+    const std::function<std::unique_ptr<CharacteristicFunction>(double)>& characteristic_at,
+    const ModulationLaw& law, const std::vector<double>& b, Complex root, bool wave_count_follows_wheel) {
+  std::vector<double> rho;
+  double previous_level = 1.0;
+  for (std::size_t i = 0; i + 1 < b.size(); ++i) {
+    const double duration = b[i + 1] - b[i];
+    if (!(duration > 0.0)) continue;
+    const double level = (law.level_integral(b[i + 1]) - law.level_integral(b[i])) / duration;
+    // Wheel period Tg ~ 1/level: keeping w Tg keeps the wave count (a lattice root moves with it).
+    Complex s = root;
+    if (wave_count_follows_wheel) s = {root.real(), root.imag() * level / previous_level};
+    auto fn = characteristic_at(level);
+    bool converged = false;
+    for (int k = 0; k < 50 && !converged; ++k) {
+      const CharacteristicValue e = fn->evaluate(s);
+      if (!(std::abs(e.derivative) > 0.0)) break;
+      const Complex step = e.value / e.derivative;
+      s -= step;
+      converged = std::abs(step) <= 1e-12 * std::abs(s);
+    }
+    if (!converged || !std::isfinite(s.real()))
+      throw std::runtime_error("continued_root_log_amplification: Newton did not converge at level " +
+                               std::to_string(level));
+    root = s;
+    previous_level = level;
+    rho.push_back(duration * root.real() / kTwoPi);
+  }
+  return wheel_growth::log_amplification(rho);
+}
+
 double quasi_static_phase_drift_rad(double chatter_frequency_hz, double mean_rpm,
                                     double relative_change_per_revolution) {
   return kTwoPi * chatter_frequency_hz * 60.0 / mean_rpm * relative_change_per_revolution;

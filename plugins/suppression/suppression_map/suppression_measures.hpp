@@ -3,8 +3,10 @@
 // Each is a plain function; the `suppression_map` study kind compares them with simulations.
 // Docs: docs/suppression.md (derivations and the corrections to the printed equations).
 #include <functional>
+#include <memory>
 #include <vector>
 
+#include "chatterlab/characteristic.hpp"
 #include "chatterlab/suppression.hpp"
 
 namespace chatterlab::suppression_measures {
@@ -33,6 +35,18 @@ double growth_averaging_log_amplification(const ModulationLaw& law, const std::v
 // rightmost root to another lobe inside the speed range; docs/suppression.md).
 double quasi_static_phase_drift_rad(double chatter_frequency_hz, double mean_rpm,
                                     double relative_change_per_revolution);
+
+// The same sum with the chatter pattern locked to its wave count (the book's reading of 5-39:
+// "the chatter frequency follows the wheel speed") instead of the rightmost root: the root of the
+// nominal chatter is continued revolution by revolution by Newton's method on the characteristic
+// function at that revolution's frozen conditions, from the previous root with w Tg kept (the
+// wave count on the wheel) when `wave_count_follows_wheel`, else from the previous root itself.
+// `characteristic_at(level)` gives E(s) at modulation level q/q_mean. Returns ln(A_n/A_0);
+// throws std::runtime_error if Newton fails to converge.
+double continued_root_log_amplification(
+    const std::function<std::unique_ptr<CharacteristicFunction>(double level)>& characteristic_at,
+    const ModulationLaw& law, const std::vector<double>& boundaries, Complex start_root,
+    bool wave_count_follows_wheel);
 
 // ------------------------------------------------------------------ S3 (eqs 5-40..5-45)
 
