@@ -48,6 +48,15 @@ std::unique_ptr<SpeedLaw> make_modulated_speed(double mean_rpm, SpeedModulation 
 std::unique_ptr<SpeedLaw> make_scheduled_speed(std::vector<double> times_s, std::vector<double> rpm);
 SpeedModulation parse_speed_modulation(const std::string& name);  // std::invalid_argument
 
+// Commanded infeed u(t) [m] and its rate (a variable feed, MODELS.md S1). Null in the settings:
+// the constant rate infeed_rate_m_per_s.
+class InfeedLaw {
+ public:
+  virtual ~InfeedLaw() = default;
+  virtual double infeed_m(double t_s) const = 0;
+  virtual double rate_m_per_s(double t_s) const = 0;
+};
+
 // ------------------------------------------------------------------ model interface
 
 enum class Rotor { wheel = 0, work = 1 };
@@ -136,7 +145,8 @@ struct SimulationSettings {
   Disturbance disturbance{1e-6, 0.0};
   double initial_waviness_m = 0.0;  // random initial work and wheel surfaces (uniform +/-), seed
   std::uint64_t seed = 1;
-  double infeed_rate_m_per_s = 0.0;  // u(t) = rate * t
+  double infeed_rate_m_per_s = 0.0;  // u(t) = rate * t (the mean rate when `infeed` is set)
+  std::shared_ptr<const InfeedLaw> infeed;  // a time-varying infeed; null: u = rate * t
   bool one_sided_contact = true;     // false: bilateral (linear) contact
   // Geometric filtering (G4 option): the previous surface is averaged over this arc [deg] around
   // the contact point; 0 = point contact.

@@ -180,8 +180,13 @@ class Engine {
                         bool settle = true) const {
     in.t_s = t;
     in.state = x;
-    in.infeed_m = settings_.infeed_rate_m_per_s * t;
-    in.infeed_rate_m_per_s = settings_.infeed_rate_m_per_s;
+    if (settings_.infeed) {
+      in.infeed_m = settings_.infeed->infeed_m(t);
+      in.infeed_rate_m_per_s = settings_.infeed->rate_m_per_s(t);
+    } else {
+      in.infeed_m = settings_.infeed_rate_m_per_s * t;
+      in.infeed_rate_m_per_s = settings_.infeed_rate_m_per_s;
+    }
     for (std::size_t r = 0; r < rotor_count; ++r) {
       in.speed_rpm[r] = rotor_rpm(r, t, x);
       in.angle_rad[r] = rotor_angle(r, t, x);
