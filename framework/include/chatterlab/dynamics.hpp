@@ -121,6 +121,10 @@ class TimeDomainModel {
 
 // ------------------------------------------------------------------ simulation
 
+// Time integrator of the dynamics engine (docs/dynamics.md, settings): SUNDIALS CVODE Adams
+// (fixed-point iteration) or ARKODE ERKStep, an explicit Runge-Kutta pair with dense output.
+enum class TimeIntegrator { adams, explicit_runge_kutta };
+
 struct SimulationSettings {
   double duration_s = 1.0;
   double sample_rate_hz = 20000.0;  // output samples (t = i / rate)
@@ -136,8 +140,9 @@ struct SimulationSettings {
   std::shared_ptr<const SpeedLaw> speed[rotor_count];
   std::vector<double> snapshot_times_s;  // surfaces recorded at these times (<= duration)
   double relative_tolerance = 1e-6;  // growth rate to ~1e-5 relative (docs/dynamics.md)
+  TimeIntegrator integrator = TimeIntegrator::explicit_runge_kutta;
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz
-  double max_steps_per_wave = 8.0;  // largest step <= 1/(this * highest_frequency_hz)
+  double max_steps_per_wave = 4.0;  // largest step <= 1/(this * highest_frequency_hz)
   double divergence_limit_m = 1.0;  // |displacement| beyond this ends the run as "diverged"
 };
 

@@ -23,8 +23,11 @@ SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> in
   if (n_ < 16) throw std::logic_error("SurfaceMemory: fewer than 16 samples per revolution");
   if (initial_.empty()) initial_.assign(n_, 0.0);
   if (initial_.size() != n_) throw std::logic_error("SurfaceMemory: initial profile size");
-  initial_integral_.assign(2 * n_, 0.0);  // k = -2n .. -1
   const auto n = static_cast<std::int64_t>(n_);
+  initial_unrolled_.resize(2 * n_);
+  for (std::int64_t k = -2 * n; k < 0; ++k)
+    initial_unrolled_[static_cast<std::size_t>(k + 2 * n)] = initial_[static_cast<std::size_t>(((k % n) + n) % n)];
+  initial_integral_.assign(2 * n_, 0.0);  // k = -2n .. -1
   for (std::int64_t k = -2 * n + 1; k < 0; ++k) {
     const auto i = static_cast<std::size_t>(k + 2 * n);
     initial_integral_[i] = initial_integral_[i - 1] + 0.5 * spacing_ * (value(k - 1) + value(k));
@@ -36,11 +39,10 @@ std::size_t SurfaceMemory::slot(std::int64_t k) const {
 }
 
 double SurfaceMemory::value(std::int64_t k) const {
-  if (k < 0) {
-    const auto n = static_cast<std::int64_t>(n_);
-    return initial_[static_cast<std::size_t>(((k % n) + n) % n)];
-  }
-  return ring_[slot(k)];
+  if (k >= 0) return ring_[slot(k)];
+  const auto n = static_cast<std::int64_t>(n_);
+  if (k >= -2 * n) return initial_unrolled_[static_cast<std::size_t>(k + 2 * n)];
+  return initial_[static_cast<std::size_t>(((k % n) + n) % n)];
 }
 
 double SurfaceMemory::integral(std::int64_t k) const {
@@ -62,21 +64,37 @@ double SurfaceMemory::interpolate(double theta, bool of_integral) const {
   const double u = x - fl;
   auto i = static_cast<std::int64_t>(fl);
   const std::int64_t last = next_ - 1;  // newest written index (initial profile if none)
+  // Cubic Lagrange weights through i-1..i+2 at offset v from i.
+  auto weights = [](double v, double w[4]) {
+    w[0] = -v * (v - 1.0) * (v - 2.0) / 6.0;
+    w[1] = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0;
+    w[2] = -(v + 1.0) * v * (v - 2.0) / 2.0;
+    w[3] = (v + 1.0) * v * (v - 1.0) / 6.0;
+  };
+  double w[4];
+  // Fast paths (every right-hand side reads here): the stencil inside the written ring, or
+  // inside the unrolled initial profile, without per-sample branches.
+  if (i >= 1 && i + 2 <= last) {
+    weights(u, w);
+    const std::vector<double>& ring = of_integral ? ring_integral_ : ring_;
+    const std::size_t mask = capacity_ - 1;
+    const auto k = static_cast<std::size_t>(i);
+    return w[0] * ring[(k - 1) & mask] + w[1] * ring[k & mask] + w[2] * ring[(k + 1) & mask] +
+           w[3] * ring[(k + 2) & mask];
+  }
+  const auto n = static_cast<std::int64_t>(n_);
+  if (!of_integral && i + 2 < 0 && i - 1 >= -2 * n) {
+    weights(u, w);
+    const double* p = initial_unrolled_.data() + (i - 1 + 2 * n);
+    return w[0] * p[0] + w[1] * p[1] + w[2] * p[2] + w[3] * p[3];
+  }
   // Never read past the newest sample: the stencil is shifted back (an extrapolation of at most
   // a sample or two, which only a step longer than a revolution could ask for).
   const std::int64_t shift = std::max<std::int64_t>(0, i + 2 - std::max<std::int64_t>(last, -1));
   auto sample = [&](std::int64_t k) { return of_integral ? integral(k) : value(k); };
-  if (shift > 0) {
-    const std::int64_t j = i - shift;
-    const double v = u + static_cast<double>(shift);
-    // cubic through j-1..j+2 evaluated at offset v from j
-    const double w0 = -v * (v - 1.0) * (v - 2.0) / 6.0, w1 = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0,
-                 w2 = -(v + 1.0) * v * (v - 2.0) / 2.0, w3 = (v + 1.0) * v * (v - 1.0) / 6.0;
-    return w0 * sample(j - 1) + w1 * sample(j) + w2 * sample(j + 1) + w3 * sample(j + 2);
-  }
-  const double w0 = -u * (u - 1.0) * (u - 2.0) / 6.0, w1 = (u + 1.0) * (u - 1.0) * (u - 2.0) / 2.0,
-               w2 = -(u + 1.0) * u * (u - 2.0) / 2.0, w3 = (u + 1.0) * u * (u - 1.0) / 6.0;
-  return w0 * sample(i - 1) + w1 * sample(i) + w2 * sample(i + 1) + w3 * sample(i + 2);
+  const std::int64_t j = i - shift;
+  weights(u + static_cast<double>(shift), w);
+  return w[0] * sample(j - 1) + w[1] * sample(j) + w[2] * sample(j + 1) + w[3] * sample(j + 2);
 }
 
 double SurfaceMemory::at(double theta) const { return interpolate(theta, false); }

@@ -44,6 +44,7 @@ class SurfaceMemory {
   double spacing_;
   std::int64_t next_ = 0;
   std::vector<double> initial_;           // n samples, body angle order
+  std::vector<double> initial_unrolled_;  // the initial profile at k = -2n .. -1 (no modulo per read)
   std::vector<double> initial_integral_;  // integral at k = -2n .. 0
   std::vector<double> ring_, ring_integral_;
 };

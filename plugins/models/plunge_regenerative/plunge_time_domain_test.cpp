@@ -68,12 +68,21 @@ TEST(PlungeTimeDomainAccuracy, SimulationAgreesWithTheRightmostRoot) {
   ASSERT_TRUE(root.certified);
   EXPECT_NEAR(root.root.real(), 4.790137, 1e-5);  // pinned reference
   EXPECT_NEAR(root.root.imag() / kTwoPi, 361.7148, 1e-3);
-  // The default tolerance and the benchmark's (tests/bench/dynamics_bench.cpp: rtol 1e-4, the
-  // accuracy this growing response needs for the 1 % agreement).
-  for (double relative_tolerance : {SimulationSettings{}.relative_tolerance, 1e-4}) {
+  // The default tolerance and the benchmark's (tests/bench/dynamics_bench.cpp: rtol 1e-3 with the
+  // default explicit Runge-Kutta integrator, the accuracy this growing response needs for the
+  // 1 % agreement: 4.782 /s, 0.16 % off), and CVODE Adams at 1e-4 (4.779 /s).
+  struct Case {
+    TimeIntegrator integrator;
+    double relative_tolerance;
+  };
+  for (const Case c : {Case{TimeIntegrator::explicit_runge_kutta, SimulationSettings{}.relative_tolerance},
+                       Case{TimeIntegrator::explicit_runge_kutta, 1e-3}, Case{TimeIntegrator::adams, 1e-4}}) {
+    const double relative_tolerance = c.relative_tolerance;
+    SCOPED_TRACE(c.integrator == TimeIntegrator::adams ? "CVODE Adams" : "ARKODE ERK");
     SCOPED_TRACE(relative_tolerance);
     SimulationSettings s = linear_settings(4.0);
     s.relative_tolerance = relative_tolerance;
+    s.integrator = c.integrator;
     const SimulationResult r = simulate(model_of(p), s);
     ASSERT_EQ(r.status, "completed");
     const EnvelopeFit fit = fit_envelope(r.t_s, r.displacement_m, 2.0, 4.0);
