@@ -1,9 +1,9 @@
 #pragma once
 // The grinding dynamics engine (MODELS.md G1, G5..G7 in the time domain): a model's structural
-// dynamics integrated by SUNDIALS CVODE, with the wheel and work surfaces stored by rotation
-// angle. The regenerative term reads a surface "one revolution ago" by angle, so any speed law
-// n(t) is exact (constant, modulated, scheduled, or a state of the model as in G5), not a
-// constant-delay approximation. docs/dynamics.md describes the method and its settings.
+// dynamics integrated by SUNDIALS (ARKODE ERKStep, or CVODE Adams), with the wheel and work
+// surfaces stored by rotation angle. The regenerative term reads a surface "one revolution ago"
+// by angle, so any speed law n(t) is exact (constant, modulated, scheduled, or a state of the
+// model as in G5), not a constant-delay approximation. docs/dynamics.md describes the method and its settings.
 //
 // A model supplies physics only (TimeDomainModel): its state size, the contact law (penetration,
 // force and removal per surface from the state and the surfaces one revolution ago) and the

@@ -1,8 +1,9 @@
-// The dynamics engine: CVODE (Adams, fixed-point iteration: the structural dynamics are not
-// stiff) in one-step mode; after every step the regenerated surfaces are written at the angle
-// grid points the contact passed, from CVODE's dense output, and the output samples are taken
-// the same way. One SUNContext + integrator per call, so concurrent calls are independent.
-// docs/dynamics.md explains the method and the settings.
+// The dynamics engine: ARKODE ERKStep (Dormand-Prince 5(4); the structural dynamics are
+// oscillatory, not stiff) or CVODE Adams (fixed-point iteration), in one-step mode; after every
+// step the regenerated surfaces are written at the angle grid points the contact passed, from
+// the step's dense output, and the output samples are taken the same way. One SUNContext +
+// integrator per call, so concurrent calls are independent. docs/dynamics.md explains the method
+// and the settings.
 #include <arkode/arkode_erkstep.h>
 #include <cvode/cvode.h>
 #include <fmt/format.h>
@@ -139,9 +140,9 @@ class Integrator {
   }
   // Restart at (t, y) (a kink in the right-hand side: contact switch).
   void restart(double t) {
+    restarts_steps_ += steps_since_restart();  // re-initialising zeroes the integrator's count
     if (cvode_) CVodeReInit(cvode_, t, y);
     else ERKStepReInit(erk_, rhs_, t, y);
-    restarts_steps_ += steps_since_restart();
     if (erk_) start_interpolant(t);
   }
   long steps() { return restarts_steps_ + steps_since_restart(); }
