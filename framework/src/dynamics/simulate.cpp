@@ -254,7 +254,16 @@ class Engine {
     ContactInput in;
     ContactOutput out;
     e.evaluate_contact(t, x, in, out);
-    e.model_.derivatives(in, out, std::span<double>(N_VGetArrayPointer(ydot), e.n_));
+    std::span<double> dx(N_VGetArrayPointer(ydot), e.n_);
+    e.model_.derivatives(in, out, dx);
+    // A derivative that is not a number would make ARKODE's error test fail without bound (the
+    // step adaptation then loops for ever): stop the integrator with an unrecoverable failure
+    // (its flag, and the run a PointFailure naming the time).
+    if (!std::all_of(dx.begin(), dx.end(), [](double v) { return std::isfinite(v); })) {
+      if (e.nonfinite_rhs_.empty())
+        e.nonfinite_rhs_ = fmt::format("right-hand side not finite at t = {:.6g} s", t);
+      return -1;
+    }
     return 0;
   }
   static int root(sunrealtype t, N_Vector y, sunrealtype* g, void* self) {
@@ -496,6 +505,7 @@ class Engine {
     sun_.current(h, t_current);
     std::string what = fmt::format("integrator failed at t = {:.6g} s (step size h = {:.3g} s", t_current, h);
     if (Integrator::step_size_collapse(flag)) what += ", step-size collapse";
+    if (!nonfinite_rhs_.empty()) what += ", " + nonfinite_rhs_;
     what += fmt::format("; {}{}{})", sun_.flag_name(flag), last_error_.empty() ? "" : ": ", last_error_);
     throw PointFailure(what);
   }
@@ -510,6 +520,7 @@ class Engine {
   bool stepped_ = false;
   long rhs_evaluations_ = 0;
   std::string last_error_;
+  std::string nonfinite_rhs_;  // the first right-hand side that was not finite
   std::vector<std::string> diagnostics_;
   SimulationResult result_;
 };
