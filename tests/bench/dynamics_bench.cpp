@@ -1,12 +1,15 @@
-// Simulated time per wall time of the dynamics engine (chatterlab/dynamics.hpp) on one core, on
+// Simulated time per CPU time of the dynamics engine (chatterlab/dynamics.hpp) on one core, on
 // the path the `simulate` study kind takes: MODELS.md G1 with both regenerative surfaces and one
-// structural mode, at rtol 1e-4, which still gives the 1 % root agreement for the growing G1
-// response (PlungeTimeDomainAccuracy.SimulationAgreesWithTheRightmostRoot checks it at 1e-4; the
-// engine default stays 1e-6 because decaying responses need it, docs/dynamics.md). Counter speedup = simulated seconds / wall seconds.
-// Numbers: docs/performance.md.
+// structural mode, with the default integrator (ARKODE ERKStep, Dormand-Prince 5(4)) at rtol
+// 1e-3, which still gives the 1 % root agreement for the growing G1 response (0.16 % off:
+// PlungeTimeDomainAccuracy.SimulationAgreesWithTheRightmostRoot checks it at 1e-3; the engine
+// default stays 1e-6 for decaying responses, docs/dynamics.md). Counter speedup = simulated
+// seconds / CPU seconds of the benchmark thread. Numbers: docs/performance.md.
 //
 //   build/ci/tests/bench/dynamics_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
+
+#include <cmath>
 
 #include "chatterlab/dynamics.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
@@ -29,7 +32,7 @@ PlungeRegenerativeParameters one_mode(double frequency_hz) {
 }
 
 // The G1 cases' tolerance (see the header comment).
-constexpr double kG1RelativeTolerance = 1e-4;
+constexpr double kG1RelativeTolerance = 1e-3;
 
 void run(benchmark::State& state, const TimeDomainModel& model, SimulationSettings settings) {
   double simulated = 0.0, steps = 0.0;
@@ -86,7 +89,9 @@ void G1OneChain(benchmark::State& state) {
 }
 BENCHMARK(G1OneChain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// G5 at its example parameters (speeds as states, one-sided contact, infeed 15 um/s).
+// G5 at its example parameters (speeds as states, one-sided contact, infeed 15 um/s, 1 um random
+// initial waviness); arg = -log10(rtol): 6 (the engine default) and 4 (the force rms and the end
+// state agree with 1e-6 to 1e-4 relative: docs/performance.md).
 void G5Torsional(benchmark::State& state) {
   Json params = TorsionalCoupling::info().example_params;
   TorsionalCoupling plugin{ParamValues(params)};
@@ -96,9 +101,10 @@ void G5Torsional(benchmark::State& state) {
   s.sample_rate_hz = 10000.0;
   s.infeed_rate_m_per_s = 15e-6;
   s.initial_waviness_m = 1e-6;
+  s.relative_tolerance = std::pow(10.0, -static_cast<double>(state.range(0)));
   run(state, *model, s);
 }
-BENCHMARK(G5Torsional)->Unit(benchmark::kMillisecond);
+BENCHMARK(G5Torsional)->Arg(6)->Arg(4)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 BENCHMARK_MAIN();

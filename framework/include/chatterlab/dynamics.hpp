@@ -1,9 +1,9 @@
 #pragma once
 // The grinding dynamics engine (MODELS.md G1, G5..G7 in the time domain): a model's structural
-// dynamics integrated by SUNDIALS CVODE, with the wheel and work surfaces stored by rotation
-// angle. The regenerative term reads a surface "one revolution ago" by angle, so any speed law
-// n(t) is exact (constant, modulated, scheduled, or a state of the model as in G5), not a
-// constant-delay approximation. docs/dynamics.md describes the method and its settings.
+// dynamics integrated by SUNDIALS (ARKODE ERKStep, or CVODE Adams), with the wheel and work
+// surfaces stored by rotation angle. The regenerative term reads a surface "one revolution ago"
+// by angle, so any speed law n(t) is exact (constant, modulated, scheduled, or a state of the
+// model as in G5), not a constant-delay approximation. docs/dynamics.md describes the method and its settings.
 //
 // A model supplies physics only (TimeDomainModel): its state size, the contact law (penetration,
 // force and removal per surface from the state and the surfaces one revolution ago) and the
@@ -139,6 +139,10 @@ struct OutputSample {
   bool in_contact = true;
 };
 
+// Time integrator of the dynamics engine (docs/dynamics.md, settings): SUNDIALS CVODE Adams
+// (fixed-point iteration) or ARKODE ERKStep, an explicit Runge-Kutta pair with dense output.
+enum class TimeIntegrator { adams, explicit_runge_kutta };
+
 struct SimulationSettings {
   double duration_s = 1.0;
   double sample_rate_hz = 20000.0;  // output samples (t = i / rate)
@@ -155,8 +159,9 @@ struct SimulationSettings {
   std::shared_ptr<const SpeedLaw> speed[rotor_count];
   std::vector<double> snapshot_times_s;  // surfaces recorded at these times (<= duration)
   double relative_tolerance = 1e-6;  // growth rate to ~1e-5 relative (docs/dynamics.md)
+  TimeIntegrator integrator = TimeIntegrator::explicit_runge_kutta;
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz
-  double max_steps_per_wave = 8.0;  // largest step <= 1/(this * highest_frequency_hz)
+  double max_steps_per_wave = 4.0;  // largest step <= 1/(this * highest_frequency_hz)
   double divergence_limit_m = 1.0;  // |displacement| beyond this ends the run as "diverged"
   // Streaming (long runs, e.g. a 3000 s feed plan): on_sample, when set, is called with every
   // output sample in time order; with store_samples = false the series of SimulationResult stay

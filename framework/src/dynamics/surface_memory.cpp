@@ -12,19 +12,28 @@ namespace {
 constexpr std::size_t kMargin = 16;  // samples kept beyond one revolution (stencil + arc slack)
 }
 
-SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile)
+SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile,
+                             bool with_integral)
     : n_(samples_per_rev),
       // A power of two: the ring index is a mask, not an integer division (four per read).
       capacity_(std::bit_ceil(samples_per_rev + kMargin)),
       spacing_(2.0 * std::numbers::pi / static_cast<double>(samples_per_rev)),
+      samples_per_rad_(static_cast<double>(samples_per_rev) / (2.0 * std::numbers::pi)),
+      flat_(initial_profile.empty()),
+      with_integral_(with_integral),
       initial_(std::move(initial_profile)),
-      ring_(capacity_, 0.0),
-      ring_integral_(capacity_, 0.0) {
+      ring_(capacity_, 0.0) {
   if (n_ < 16) throw std::logic_error("SurfaceMemory: fewer than 16 samples per revolution");
-  if (initial_.empty()) initial_.assign(n_, 0.0);
+  if (with_integral_) ring_integral_.assign(capacity_, 0.0);
+  // A flat initial surface (the usual start) needs no arrays for k < 0: value and integral are 0.
+  if (flat_) return;
   if (initial_.size() != n_) throw std::logic_error("SurfaceMemory: initial profile size");
-  initial_integral_.assign(2 * n_, 0.0);  // k = -2n .. -1
   const auto n = static_cast<std::int64_t>(n_);
+  initial_unrolled_.resize(2 * n_);
+  for (std::int64_t k = -2 * n; k < 0; ++k)
+    initial_unrolled_[static_cast<std::size_t>(k + 2 * n)] = initial_[static_cast<std::size_t>(((k % n) + n) % n)];
+  if (!with_integral_) return;
+  initial_integral_.assign(2 * n_, 0.0);  // k = -2n .. -1
   for (std::int64_t k = -2 * n + 1; k < 0; ++k) {
     const auto i = static_cast<std::size_t>(k + 2 * n);
     initial_integral_[i] = initial_integral_[i - 1] + 0.5 * spacing_ * (value(k - 1) + value(k));
@@ -36,53 +45,72 @@ std::size_t SurfaceMemory::slot(std::int64_t k) const {
 }
 
 double SurfaceMemory::value(std::int64_t k) const {
-  if (k < 0) {
-    const auto n = static_cast<std::int64_t>(n_);
-    return initial_[static_cast<std::size_t>(((k % n) + n) % n)];
-  }
-  return ring_[slot(k)];
+  if (k >= 0) return ring_[slot(k)];
+  if (flat_) return 0.0;
+  const auto n = static_cast<std::int64_t>(n_);
+  if (k >= -2 * n) return initial_unrolled_[static_cast<std::size_t>(k + 2 * n)];
+  return initial_[static_cast<std::size_t>(((k % n) + n) % n)];
 }
 
 double SurfaceMemory::integral(std::int64_t k) const {
+  if (!with_integral_) throw std::logic_error("SurfaceMemory: no running integral kept");
   const auto n = static_cast<std::int64_t>(n_);
+  if (k < 0 && flat_) return 0.0;
   if (k < 0) return initial_integral_[static_cast<std::size_t>(std::max<std::int64_t>(k + 2 * n, 0))];
   return ring_integral_[slot(k)];
 }
 
 void SurfaceMemory::push(double v) {
-  const double integral_new = integral(next_ - 1) + 0.5 * spacing_ * (value(next_ - 1) + v);
+  if (with_integral_) ring_integral_[slot(next_)] = integral(next_ - 1) + 0.5 * spacing_ * (value(next_ - 1) + v);
   ring_[slot(next_)] = v;
-  ring_integral_[slot(next_)] = integral_new;
   ++next_;
 }
 
 double SurfaceMemory::interpolate(double theta, bool of_integral) const {
-  const double x = theta / spacing_;
+  const double x = theta * samples_per_rad_;
   const double fl = std::floor(x);
   const double u = x - fl;
   auto i = static_cast<std::int64_t>(fl);
   const std::int64_t last = next_ - 1;  // newest written index (initial profile if none)
+  // Cubic Lagrange weights through i-1..i+2 at offset v from i.
+  auto weights = [](double v, double w[4]) {
+    w[0] = -v * (v - 1.0) * (v - 2.0) / 6.0;
+    w[1] = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0;
+    w[2] = -(v + 1.0) * v * (v - 2.0) / 2.0;
+    w[3] = (v + 1.0) * v * (v - 1.0) / 6.0;
+  };
+  double w[4];
+  // Fast paths (every right-hand side reads here): the stencil inside the written ring, or
+  // inside the unrolled initial profile, without per-sample branches.
+  if (i >= 1 && i + 2 <= last) {
+    weights(u, w);
+    const std::vector<double>& ring = of_integral ? ring_integral_ : ring_;
+    const std::size_t mask = capacity_ - 1;
+    const auto k = static_cast<std::size_t>(i);
+    return w[0] * ring[(k - 1) & mask] + w[1] * ring[k & mask] + w[2] * ring[(k + 1) & mask] +
+           w[3] * ring[(k + 2) & mask];
+  }
+  const auto n = static_cast<std::int64_t>(n_);
+  if (!of_integral && i + 2 < 0 && i - 1 >= -2 * n) {
+    if (flat_) return 0.0;
+    weights(u, w);
+    const double* p = initial_unrolled_.data() + (i - 1 + 2 * n);
+    return w[0] * p[0] + w[1] * p[1] + w[2] * p[2] + w[3] * p[3];
+  }
   // Never read past the newest sample: the stencil is shifted back (an extrapolation of at most
   // a sample or two, which only a step longer than a revolution could ask for).
   const std::int64_t shift = std::max<std::int64_t>(0, i + 2 - std::max<std::int64_t>(last, -1));
   auto sample = [&](std::int64_t k) { return of_integral ? integral(k) : value(k); };
-  if (shift > 0) {
-    const std::int64_t j = i - shift;
-    const double v = u + static_cast<double>(shift);
-    // cubic through j-1..j+2 evaluated at offset v from j
-    const double w0 = -v * (v - 1.0) * (v - 2.0) / 6.0, w1 = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0,
-                 w2 = -(v + 1.0) * v * (v - 2.0) / 2.0, w3 = (v + 1.0) * v * (v - 1.0) / 6.0;
-    return w0 * sample(j - 1) + w1 * sample(j) + w2 * sample(j + 1) + w3 * sample(j + 2);
-  }
-  const double w0 = -u * (u - 1.0) * (u - 2.0) / 6.0, w1 = (u + 1.0) * (u - 1.0) * (u - 2.0) / 2.0,
-               w2 = -(u + 1.0) * u * (u - 2.0) / 2.0, w3 = (u + 1.0) * u * (u - 1.0) / 6.0;
-  return w0 * sample(i - 1) + w1 * sample(i) + w2 * sample(i + 1) + w3 * sample(i + 2);
+  const std::int64_t j = i - shift;
+  weights(u + static_cast<double>(shift), w);
+  return w[0] * sample(j - 1) + w[1] * sample(j) + w[2] * sample(j + 1) + w[3] * sample(j + 2);
 }
 
 double SurfaceMemory::at(double theta) const { return interpolate(theta, false); }
 
 double SurfaceMemory::mean(double theta, double arc) const {
   if (arc <= 0.0) return at(theta);
+  if (!with_integral_) throw std::logic_error("SurfaceMemory: mean over an arc without the running integral");
   return (interpolate(theta + 0.5 * arc, true) - interpolate(theta - 0.5 * arc, true)) / arc;
 }
 

@@ -13,7 +13,9 @@ namespace chatterlab::dynamics_detail {
 class SurfaceMemory {
  public:
   // samples_per_rev >= 16; initial_profile empty (a flat surface) or of size samples_per_rev.
-  SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile);
+  // with_integral: keep the running integral that mean() over an arc needs (geometric
+  // filtering); without it mean() takes arc 0 only (half the memory and work per sample).
+  SurfaceMemory(std::size_t samples_per_rev, std::vector<double> initial_profile, bool with_integral = true);
 
   std::size_t samples_per_rev() const { return n_; }
   double spacing_rad() const { return spacing_; }
@@ -42,8 +44,12 @@ class SurfaceMemory {
 
   std::size_t n_, capacity_;
   double spacing_;
+  double samples_per_rad_;  // 1 / spacing_ (a multiply per read instead of a division)
   std::int64_t next_ = 0;
+  bool flat_;           // initial profile empty: zero before the run
+  bool with_integral_;  // ring_integral_ kept
   std::vector<double> initial_;           // n samples, body angle order
+  std::vector<double> initial_unrolled_;  // the initial profile at k = -2n .. -1 (no modulo per read)
   std::vector<double> initial_integral_;  // integral at k = -2n .. 0
   std::vector<double> ring_, ring_integral_;
 };

@@ -422,7 +422,7 @@ PluginInfo Simulate::info() {
                                    "times at which wheel and work surfaces are written (default: the end)");
   snapshots.optional = true;
   snapshots.min = 0.0;
-  ParamSpec tolerance = real_spec("relative_tolerance", "1", "CVODE relative tolerance", 1e-6, 0.0, true);
+  ParamSpec tolerance = real_spec("relative_tolerance", "1", "integrator relative tolerance", 1e-6, 0.0, true);
   tolerance.max = 1e-3;
   ParamSpec files = param_spec("write_point_files", ValueKind::boolean, "1",
                                "in a grid, also write each point's files into points/<i>/");
