@@ -46,12 +46,8 @@ struct ScanShape {
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
   double digit_scale = 1;          // 1 / (radii + 1)
-  // Profile codes: place value (radii + 1)^d of dimension index d = 4 g + lane (0 beyond dims),
-  // and which lanes add a coordinate (all but lane 0 of the first group).
-  // (Plain doubles, loaded with memcpy: heap storage of 32-byte vectors is not reliably
-  // 32-byte aligned.)
-  std::vector<double> places;  // 4 per group
-  double increment_mask[2][4] = {{0, 1, 1, 1}, {1, 1, 1, 1}};
+  // Profile codes: place value (radii + 1)^d of dimension index d.
+  std::vector<double> places;
 };
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
@@ -62,9 +58,10 @@ struct NeighbourSums {
   std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
   std::vector<std::uint32_t> profiles;   // code of each used slot
   std::vector<double*> targets;          // the bins a slot adds to
-  std::vector<std::uint32_t> near;       // candidates within the largest radius on the grid axes
-  std::vector<double> near_distance2;    // their squared distance on those axes
-  std::vector<std::int32_t> near_slot;   // their slot (-1: not a neighbour)
+  std::vector<double> own;               // the reference's delay coordinates
+  std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
+  std::vector<std::uint32_t> near_code;  // their profile code
+  std::vector<std::int32_t> near_slot;   // their slot
   std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
   std::vector<std::uint32_t> member_end; // slot boundaries in members (used + 1)
   std::vector<std::uint32_t> member_position;  // counting-sort positions
@@ -73,17 +70,28 @@ struct NeighbourSums {
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
 // copied in grid order: the candidates of a reference in the middle row then lie in three
 // contiguous stretches of this copy, read in order, instead of at random places in the series.
-// The delay coordinates again, densely: the profile pass reads only these, so the candidates of
-// a box stay in L1. Rows are the unit of work of a thread.
+// The delay coordinates and time indices again, one column per coordinate (structure of arrays):
+// the profile pass takes four consecutive candidates per vector. Rows are the unit of work of a
+// thread.
 struct RowWindow {
-  nonlinear::CopiedCoordinates history;     // x_{j + t}, t < history, padded
-  nonlinear::CopiedCoordinates coordinate;  // x_{j + l delay}, up to the last group of four
+  nonlinear::CopiedCoordinates history;  // x_{j + t}, t < history, padded
+  std::vector<double> columns;           // x_{j + l delay} at [l * stride + entry - begin]
+  std::vector<std::uint32_t> index;      // j at [entry - begin]
+  std::size_t stride = 0;                // entries + 4 (zero slack for the last vector)
   void fill(const ScanShape& s, const nonlinear::BoxGrid& grid, const double* x,
             std::size_t first_entry, std::size_t end_entry) {
     history.fill(grid, x, 1, first_entry, end_entry, s.history, s.padded);
-    coordinate.fill(grid, x, s.step, first_entry, end_entry,
-                    std::size_t(s.min_dimension) + s.dims - 1,
-                    std::size_t(s.min_dimension) + 4 * ((s.dims + 3) / 4));
+    const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
+    stride = end_entry - first_entry + 4;
+    columns.assign(coordinates * stride, 0.0);
+    index.assign(stride, 0);
+    const nonlinear::BoxGrid::Entry* entries = grid.entries();
+    for (std::size_t q = first_entry; q < end_entry; ++q) {
+      const std::size_t j = entries[q].index;
+      index[q - first_entry] = std::uint32_t(j);
+      for (std::size_t l = 0; l < coordinates; ++l)
+        columns[l * stride + q - first_entry] = x[j + l * s.step];
+    }
   }
 };
 
@@ -120,11 +128,10 @@ inline void add_separations(const double* xi, const double* histories, std::size
 
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
 // for each profile the summed squared coordinate differences along the whole separation history
-// (the distance in any dimension at any step is a sum of these differences). Three passes:
-// candidates within the largest radius on the grid axes (branch-free compaction), the profile
-// of each (radius bins of up to four dimensions compared at once), and the history sums profile
-// by profile with the sums held in registers (one load per history sample and neighbour, no
-// stores). Compiled for AVX2 as well (chosen at run time).
+// (the distance in any dimension at any step is a sum of these differences). Two passes: the
+// distances and profile codes of four candidates at a time with a branch-free compaction of the
+// neighbours, and the history sums profile by profile with the sums held in registers (one load
+// per history sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
 [[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
                                                                  const nonlinear::BoxGrid& grid,
                                                                  const RowWindow& window,
@@ -143,97 +150,103 @@ inline void add_separations(const double* xi, const double* histories, std::size
   for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
   if (sums.near.size() < candidates) {
     sums.near.resize(candidates);
-    sums.near_distance2.resize(candidates);
+    sums.near_code.resize(candidates);
     sums.near_slot.resize(candidates);
     sums.members.resize(candidates);
   }
-  // Pass 1: compact the candidates within the largest radius on the grid axes (an entry's b is 0
-  // on a one-axis grid).
-  const double a = entries[q].a, b = entries[q].b;
-  std::uint32_t* __restrict near = sums.near.data();
-  double* __restrict near_distance2 = sums.near_distance2.data();
-  std::size_t kept = 0;
-  for (std::size_t run = 0; run < runs; ++run)
-    for (std::size_t c = first[run]; c < last[run]; ++c) {
-      const nonlinear::BoxGrid::Entry& e = entries[c];
-      const double d0 = (e.a - a) * (e.a - a) + (e.b - b) * (e.b - b);
-      near[kept] = std::uint32_t(c - window_begin);
-      near_distance2[kept] = d0;
-      kept += d0 <= eps2 ? 1 : 0;
-    }
-  // Pass 2: the remaining coordinates and the profile of each kept candidate. Lane d of group g
-  // holds the squared distance in dimension min_dimension + 4 g + d (a running sum over the
-  // lanes of the squared coordinate differences), compared with every radius at once; the code
-  // is the dot product of the bin numbers with the place values (radii + 1)^(4 g + d).
-  const std::size_t groups = (s.dims + 3) / 4;
-  const double* ci = window.coordinate.of(q);
+  // Passes 1 and 2, four consecutive candidates per vector: the squared distance in each
+  // dimension (coordinates summed in order, as in the definition), the radius bins of the
+  // scanned dimensions as a code (the sum of the place values (radii + 1)^d for every radius
+  // below the distance in dimension min_dimension + d), and a branch-free compaction of the
+  // neighbours: within the largest radius in min_dimension, not coincident, outside the Theiler
+  // window.
   const std::size_t m0 = std::size_t(s.min_dimension);
+  const std::size_t coordinates = m0 + s.dims - 1;
+  const std::size_t stride = window.stride;
+  const double* columns = window.columns.data();
+  const std::uint32_t* index = window.index.data();
+  const std::size_t own = q - window_begin;
+  sums.own.resize(coordinates);
+  double* ci = sums.own.data();
+  for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
+  std::uint32_t* __restrict near = sums.near.data();
+  std::uint32_t* __restrict near_code = sums.near_code.data();
+  std::size_t kept = 0;
+  for (std::size_t run = 0; run < runs; ++run) {
+    const std::size_t run_end = last[run] - window_begin;
+    for (std::size_t c = first[run] - window_begin; c < run_end; c += 4) {
+      Vector4 distance = {}, code = {};
+      std::size_t l = 0;
+      for (; l + 1 < m0; ++l) {
+        Vector4 other;
+        load4(other, columns + l * stride + c);
+        const Vector4 difference = ci[l] - other;
+        distance += difference * difference;
+      }
+      // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
+      // runs along the grid order: skip blocks of four with none within it.
+      Vector4 inner;
+      {
+        Vector4 other;
+        load4(other, columns + l * stride + c);
+        const Vector4 difference = ci[l] - other;
+        inner = distance + difference * difference;
+      }
+      const auto within = inner <= eps2;
+      if (!(within[0] | within[1] | within[2] | within[3])) continue;
+      distance = inner;
+      for (;;) {
+        const double place = s.places[l + 1 - m0];
+        const Vector4 zero = {}, places = {place, place, place, place};
+        for (std::size_t k = 0; k < s.radii; ++k) code += distance > s.radii2[k] ? places : zero;
+        if (++l == coordinates) break;
+        Vector4 other;
+        load4(other, columns + l * stride + c);
+        const Vector4 difference = ci[l] - other;
+        distance += difference * difference;
+      }
+      const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
+      for (std::size_t lane = 0; lane < lanes; ++lane) {
+        const std::size_t j = index[c + lane];
+        const bool neighbour = inner[lane] <= eps2 && inner[lane] > s.floor2 &&
+                               (j > i ? j - i : i - j) > s.theiler;
+        near[kept] = std::uint32_t(c + lane);
+        near_code[kept] = std::uint32_t(code[lane]);
+        kept += neighbour ? 1 : 0;
+      }
+    }
+  }
+  // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums. Four
+  // interleaved counters per slot (by p mod 4): consecutive neighbours of one profile would
+  // otherwise wait on each other's increment of the same counter.
+  constexpr std::size_t interleave = 4;
+  if (sums.member_position.size() < kept * interleave + 1)
+    sums.member_position.resize(kept * interleave + 1);
+  std::uint32_t* __restrict position = sums.member_position.data();
+  position[0] = 0;
   std::int32_t* __restrict near_slot = sums.near_slot.data();
   for (std::size_t p = 0; p < kept; ++p) {
-    near_slot[p] = -1;
-    const std::size_t j = entries[window_begin + near[p]].index;
-    if ((j > i ? j - i : i - j) <= s.theiler) continue;
-    const double* cj = window.coordinate.of(window_begin + near[p]);
-    double d0 = near_distance2[p];
-    for (std::size_t l = std::size_t(s.axes); l < m0; ++l) d0 += (ci[l] - cj[l]) * (ci[l] - cj[l]);
-    if (d0 > eps2 || d0 <= s.floor2) continue;
-    double code = 0;
-    for (std::size_t g = 0; g < groups; ++g) {
-      // Coordinates m0 - 1 + 4 g + d: lane 0 of the first group is already in d0.
-      Vector4 own, other;
-      load4(own, ci + m0 - 1 + 4 * g);
-      load4(other, cj + m0 - 1 + 4 * g);
-      const Vector4 difference = own - other;
-      Vector4 mask, places;
-      std::memcpy(&mask, s.increment_mask[g > 0 ? 1 : 0], sizeof mask);
-      std::memcpy(&places, s.places.data() + 4 * g, sizeof places);
-      Vector4 distance = difference * difference * mask;
-      distance += Vector4{0, distance[0], distance[1], distance[2]};
-      distance += Vector4{0, 0, distance[0], distance[1]};
-      distance += d0;
-      d0 = distance[3];
-      // Place value for every radius below the distance (two sums: shorter dependency chains).
-      const Vector4 zero = {};
-      Vector4 even = {}, odd = {};
-      std::size_t k = 0;
-#pragma GCC unroll 4
-      for (; k + 1 < s.radii; k += 2) {
-        even += distance > s.radii2[k] ? places : zero;
-        odd += distance > s.radii2[k + 1] ? places : zero;
-      }
-      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
-      const Vector4 total = even + odd;
-      code += (total[0] + total[1]) + (total[2] + total[3]);
-    }
-    const auto profile = std::uint32_t(code);
+    const std::uint32_t profile = near_code[p];
     std::int32_t slot = sums.slot_of[profile];
     if (slot < 0) {
       slot = std::int32_t(sums.profiles.size());
       sums.slot_of[profile] = slot;
       sums.profiles.push_back(profile);
+      std::fill_n(position + std::size_t(slot) * interleave + 1, interleave, 0u);
     }
     near_slot[p] = slot;
+    ++position[std::size_t(slot) * interleave + (p % interleave) + 1];
   }
-  // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums.
   const std::size_t used = sums.profiles.size();
-  // Four interleaved counters per slot (by p mod 4): consecutive neighbours of one profile
-  // would otherwise wait on each other's increment of the same counter.
-  constexpr std::size_t interleave = 4;
-  std::uint32_t* __restrict position = sums.member_position.data();
-  sums.member_position.assign(used * interleave + 1, 0);
-  position = sums.member_position.data();
-  for (std::size_t p = 0; p < kept; ++p)
-    if (near_slot[p] >= 0) ++position[std::size_t(near_slot[p]) * interleave + (p % interleave) + 1];
   for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
   sums.member_end.resize(used + 1);
   for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
   std::uint32_t* __restrict members = sums.members.data();
   for (std::size_t p = 0; p < kept; ++p)
-    if (near_slot[p] >= 0)
-      members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
+    members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
   // Each profile's sums go straight to the bin of its radius in every dimension where it is
   // within the largest radius.
-  const std::size_t vectors = s.padded / 4;  // even: padded is a multiple of 8
+  const std::size_t vectors = s.padded / 4;
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
   for (std::size_t slot = 0; slot < used; ++slot) {
@@ -253,13 +266,18 @@ inline void add_separations(const double* xi, const double* histories, std::size
       targets[target_count++] = bins + (ri * s.dims + d) * s.padded;
       bin_count[ri * s.dims + d] += double(end - begin);
     }
+    // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
-    for (; v + 8 <= vectors; v += 8)
-      add_separations<8>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+    for (; v + 7 <= vectors; v += 7)
+      add_separations<7>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+    if (v + 4 <= vectors) {
+      add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+      v += 4;
+    }
     switch (vectors - v) {
-      case 6: add_separations<6>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
-      case 4: add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
       case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
@@ -349,7 +367,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
   shape.digit_scale = 1.0 / double(nr + 1);
-  shape.places.assign(4 * ((dims + 3) / 4), 0.0);
+  shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
   const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back());
