@@ -6,8 +6,9 @@
 #   rotation frequency 1450/60 = 24.17 Hz within 0.1 Hz;
 # - studies/simulate_regeneration_dominance.toml: growth and frequency with both chains and with
 #   the wheel chain alone equal the rightmost roots of eq 2-16 (1 % / 0.5 %);
-# - bad input exits 2 with the limit named and nothing written: a run too long for its output
-#   rate, a model without a time-domain form.
+# - the same with integrator = "adams" (CVODE instead of the default ARKODE ERK): the same roots;
+# - bad input exits 2 with the limit named and nothing written: an unknown integrator, a run too
+#   long for its output rate, a model without a time-domain form.
 # Usage: simulate.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
 source "$(dirname "$0")/lib.sh"
 bin=$1 work=$2 src=$3
@@ -50,7 +51,26 @@ close_to "${freq[0]}" 361.7148 1.8 || fail "dominance: both chains frequency ${f
 close_to "${growth[1]}" 9.1746 0.092 || fail "dominance: wheel only growth ${growth[1]}"
 close_to "${freq[1]}" 409.281 2.0 || fail "dominance: wheel only frequency ${freq[1]}"
 
+# ---- the same study with CVODE Adams instead of the default ERK integrator: an independent
+# integrator must reach the same roots (1 % / 0.5 %)
+adams=$work/dominance_adams.toml
+sed 's/^fit_start_s = 1.5/fit_start_s = 1.5\nintegrator = "adams"\nrelative_tolerance = 1e-5/' \
+  "$src/studies/simulate_regeneration_dominance.toml" > "$adams"
+out=$work/dominance_adams
+expect_exit 0 "$work/dominance_adams" "$bin" run "$adams" --out "$out"
+growth=($(csv_column "$out/results.csv" fitted_growth_rate_per_s))
+freq=($(csv_column "$out/results.csv" dominant_frequency_hz))
+close_to "${growth[0]:-x}" 4.790137 0.048 || fail "adams: both chains growth ${growth[0]:-none}"
+close_to "${freq[0]:-x}" 361.7148 1.8 || fail "adams: both chains frequency ${freq[0]:-none}"
+
 # ---- bad input
+bad=$work/bad_integrator.toml
+sed 's/^fit_start_s = 1.5/fit_start_s = 1.5\nintegrator = "rk4"/' \
+  "$src/studies/simulate_regeneration_dominance.toml" > "$bad"
+expect_exit 2 "$work/bad_integrator" "$bin" run "$bad" --out "$work/bad_integrator_out"
+grep -q 'simulation.integrator = "rk4"' "$work/bad_integrator.err" && grep -q 'explicit_runge_kutta' "$work/bad_integrator.err" ||
+  fail "bad integrator: message $(cat "$work/bad_integrator.err")"
+[ ! -e "$work/bad_integrator_out/results.csv" ] || fail "bad integrator: results written"
 bad=$work/too_long.toml
 sed 's/^duration_s = 6.0/duration_s = 6000.0/' "$src/studies/simulate_g8_chatter.toml" > "$bad"
 expect_exit 2 "$work/too_long" "$bin" run "$bad" --out "$work/too_long_out"

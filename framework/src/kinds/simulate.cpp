@@ -424,6 +424,11 @@ PluginInfo Simulate::info() {
   snapshots.min = 0.0;
   ParamSpec tolerance = real_spec("relative_tolerance", "1", "integrator relative tolerance", 1e-6, 0.0, true);
   tolerance.max = 1e-3;
+  ParamSpec integrator = param_spec("integrator", ValueKind::string, "",
+                                    "time integrator (docs/dynamics.md): explicit_runge_kutta "
+                                    "(ARKODE Dormand-Prince 5(4)) or adams (CVODE Adams)");
+  integrator.choices = {"explicit_runge_kutta", "adams"};
+  integrator.default_value = "explicit_runge_kutta";
   ParamSpec files = param_spec("write_point_files", ValueKind::boolean, "1",
                                "in a grid, also write each point's files into points/<i>/");
   files.default_value = false;
@@ -446,6 +451,7 @@ PluginInfo Simulate::info() {
       optional_real("fit_start_s", "s", "start of the envelope-fit window (default: duration/2)"),
       optional_real("fit_end_s", "s", "end of the envelope-fit window (default: the end)"),
       tolerance,
+      integrator,
       real_spec("min_frequency_hz", "Hz",
                 "spectral peaks below this are not the dominant (chatter) frequency: the infeed "
                 "transient and work-revolution waviness live there", 10.0, 0.0, false),
@@ -580,6 +586,8 @@ SimulationSettings Simulate::settings(const Json& document, const TimeDomainMode
   s.contact_arc_deg[static_cast<std::size_t>(Rotor::work)] = sim.at("work_contact_arc_deg").get<double>();
   for (const Json& t : sim.at("snapshot_times_s")) s.snapshot_times_s.push_back(t.get<double>());
   s.relative_tolerance = sim.at("relative_tolerance").get<double>();
+  s.integrator = sim.at("integrator").get<std::string>() == "adams" ? TimeIntegrator::adams
+                                                                    : TimeIntegrator::explicit_runge_kutta;
   s.divergence_limit_m = sim.at("divergence_limit_m").get<double>();
   for (Rotor r : {Rotor::wheel, Rotor::work})
     if (!model.angle_state(r))
