@@ -82,6 +82,10 @@ class StudyKind {
 
 Registry<StudyKind>& study_kind_registry();  // kind name "study kind"
 
+// True when the model plugin named by model_table["type"] declares itself serial: what a kind
+// that builds the study's [model] returns from requires_serial.
+bool model_is_serial(const Json& model_table);
+
 namespace detail {
 Json validate_component(const Json& document, const std::string& table,
                         const std::string& registry_kind, const std::vector<const PluginInfo*>& plugins,

@@ -665,8 +665,7 @@ void Simulate::write_artifacts(const Study& study, const ResultTable& results, c
 }
 
 bool Simulate::requires_serial(const Json& document) const {
-  const auto& entry = model_registry().at(document.at("model").at("type").get<std::string>());
-  return entry.info.thread_safety == ThreadSafety::serial;
+  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

@@ -416,8 +416,7 @@ void StabilityMap::write_artifacts(const Study& study, const ResultTable& result
 }
 
 bool StabilityMap::requires_serial(const Json& document) const {
-  const auto& entry = model_registry().at(document.at("model").at("type").get<std::string>());
-  return entry.info.thread_safety == ThreadSafety::serial;
+  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

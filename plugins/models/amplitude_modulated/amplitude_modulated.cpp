@@ -7,6 +7,7 @@
 
 namespace chatterlab {
 
+using model_params::fraction;
 using model_params::positive;
 
 AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalParameters& p) {
@@ -88,20 +89,10 @@ AmplitudeModulatedModalParameters read(const ParamValues& v) {
 AmplitudeModulated::AmplitudeModulated(const ParamValues& values) : p_(read(values)) {}
 
 PluginInfo AmplitudeModulated::info() {
-  ParamSpec damping = param_spec("damping_ratio", ValueKind::real, "1", "structural damping ratio zeta");
-  damping.min = 0.0;
-  damping.max = 1.0;
-  damping.max_exclusive = true;
-  ParamSpec overlap = param_spec("overlap_factor", ValueKind::real, "1",
-                                 "overlap factor mu: share of the previous wheel surface seen again");
+  ParamSpec damping = fraction("damping_ratio", "structural damping ratio zeta", true);
+  ParamSpec overlap = fraction("overlap_factor", "overlap factor mu: share of the previous wheel surface seen again", false);
   overlap.default_value = 1.0;
-  overlap.min = 0.0;
-  overlap.max = 1.0;
-  ParamSpec depth = param_spec("modulation_depth", ValueKind::real, "1",
-                               "modulation depth Q of the grinding stiffness per wheel revolution");
-  depth.min = 0.0;
-  depth.max = 1.0;
-  depth.max_exclusive = true;
+  ParamSpec depth = fraction("modulation_depth", "modulation depth Q of the grinding stiffness per wheel revolution", true);
   ParamSpec work = positive("work_speed_rpm", "rpm", "workpiece speed (reported; not regenerated here)");
   work.default_value = 55.0;
   PluginInfo info;

@@ -218,10 +218,7 @@ PlungeRegenerative::PlungeRegenerative(PlungeRegenerativeParameters parameters)
     : parameters_(std::move(parameters)) {}
 
 PluginInfo PlungeRegenerative::info() {
-  ParamSpec damping = param_spec("damping_ratio", ValueKind::real, "1", "modal damping ratio zeta");
-  damping.min = 0.0;
-  damping.max = 1.0;
-  damping.max_exclusive = true;
+  ParamSpec damping = model_params::fraction("damping_ratio", "modal damping ratio zeta", true);
   ParamSpec modes = param_spec(
       "modes", ValueKind::table_list, "",
       "machine structural modes; their compliances (1/k)/(s^2/w^2 + 2 zeta s/w + 1) are summed");

@@ -8,6 +8,7 @@
 
 namespace chatterlab {
 
+using model_params::non_negative;
 using model_params::positive;
 
 void UnbalanceTwoDofTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
@@ -77,12 +78,6 @@ UnbalanceTwoDofParameters read(const ParamValues& v) {
   p.wheel_speed_rpm = v.real("wheel_speed_rpm");
   p.work_speed_rpm = v.real("work_speed_rpm");
   return p;
-}
-
-ParamSpec non_negative(std::string key, std::string unit, std::string description) {
-  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
-  spec.min = 0.0;
-  return spec;
 }
 }  // namespace
 

@@ -694,8 +694,7 @@ void SuppressionMap::write_artifacts(const Study& study, const ResultTable& resu
 }
 
 bool SuppressionMap::requires_serial(const Json& document) const {
-  const auto& entry = model_registry().at(document.at("model").at("type").get<std::string>());
-  return entry.info.thread_safety == ThreadSafety::serial;
+  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab
