@@ -11,7 +11,6 @@
 #include <utility>
 
 #include "analysis/embedding/embedding.hpp"
-#include "analysis/nonlinear_common/box_grid.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
@@ -65,63 +64,132 @@ std::vector<double> normalised(const std::vector<double>& x) {
   return y;
 }
 
-using Vector4 = double __attribute__((vector_size(32)));          // AVX2; SSE2: two halves
-constexpr std::size_t max_pair_dimensions = 32;  // of correlation_sums_within (the parameter: 30)
+using Vector4 = double __attribute__((vector_size(32)));  // AVX2; SSE2: two halves
 using Bits4 = std::uint64_t __attribute__((vector_size(32)));
+constexpr std::size_t max_pair_dimensions = 32;  // of correlation_sums_within (the parameter: 30)
 
-// What the pair pass of correlation_sums_within shares between its vectors: the grid, the
-// coordinates and bootstrap blocks of the rows in hand (copied in grid order), and the compact
-// per-thread counts, indexed [(dimension index d * kept_bins + bin) * blocks + block].
-struct PairPass {
-  const nonlinear::BoxGrid* grid = nullptr;
-  const nonlinear::CopiedCoordinates* coordinates = nullptr;  // stride: dimensions rounded to 4
-  const std::uint8_t* window_block = nullptr;                 // from window_begin on
-  std::size_t window_begin = 0, dims = 0, theiler = 0, kept_bins = 0;
-  double cut = 0;
-  std::uint32_t* compact = nullptr;
-  // d * kept_bins * blocks for each dimension index d (padded to groups of four; plain integers
-  // loaded with memcpy: heap storage of 32-byte vectors is not reliably 32-byte aligned).
-  std::vector<std::uint64_t> row_base;
-  std::vector<std::size_t>* kept = nullptr;  // scratch
+// The vectors of correlation_sums_within for the pair pass (dimensions >= 2), grouped by
+// bootstrap block and, within a block, on strips of the first coordinate at least cut / 2 wide,
+// sorted by the second coordinate within a strip. The partners of a vector closer than the cut
+// in the first two coordinates then lie in the 5 strips around its own, each time in one
+// contiguous band of the second coordinate (found by pointers sliding with the sorted vectors):
+// the candidates cover 2.5 x 2 cuts around it, of which the 2 x 2 square holds the pairs (80 %,
+// where 3 x 3 boxes of width cut kept 44 %). Grouped by block so that all pairs of two blocks
+// are counted together into one small table (below). Coordinates are copied in this order
+// (the first two separately; the others padded to groups of four) so the candidates stream
+// through contiguous memory.
+struct BlockStrips {
+  static constexpr double strips_per_cut = 2;
+  static constexpr std::size_t max_strips = 4096;
+  std::size_t strips = 1, reach = 1, others = 0;  // others: stride of coordinates 3, 4, ...
+  std::vector<std::size_t> start;                 // first entry of (block, strip); one more at the end
+  std::vector<double> a, b;                       // first two coordinates of each entry
+  std::vector<std::uint32_t> index;               // time index of each entry's vector
+  std::vector<double> rest;                       // coordinates 3..dims, `others` per entry
+
+  BlockStrips(const std::vector<double>& y, std::size_t n, std::size_t tau, std::size_t dims,
+              double cut, const std::vector<std::uint8_t>& block_of_vector) {
+    const std::size_t blocks = CorrelationSums::blocks;
+    // Strip count chosen so cut x strips stays off an integer (rounding of a x strips cannot add
+    // a strip to the reach below).
+    strips = std::size_t(std::clamp(std::floor(strips_per_cut / cut - 0.5), 1.0,
+                                    double(max_strips)));
+    // |a_i - a_j| < cut => the strips differ by at most ceil(cut x strips).
+    reach = std::size_t(std::ceil(cut * double(strips) * (1 + 1e-9) + 1e-9));
+    others = 4 * ((dims - 2 + 3) / 4);
+    auto strip_of = [&](double v) { return std::min(strips - 1, std::size_t(v * double(strips))); };
+    start.assign(blocks * strips + 1, 0);
+    std::vector<std::size_t> cell_of(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      cell_of[i] = block_of_vector[i] * strips + strip_of(y[i]);
+      ++start[cell_of[i] + 1];
+    }
+    for (std::size_t c = 0; c < blocks * strips; ++c) start[c + 1] += start[c];
+    std::vector<std::uint32_t> order(n);
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) order[fill[cell_of[i]]++] = std::uint32_t(i);
+    for (std::size_t c = 0; c < blocks * strips; ++c)
+      std::sort(order.begin() + std::ptrdiff_t(start[c]), order.begin() + std::ptrdiff_t(start[c + 1]),
+                [&](std::uint32_t u, std::uint32_t v) { return y[u + tau] < y[v + tau]; });
+    a.resize(n);
+    b.resize(n);
+    index = order;
+    rest.assign(n * others, 0.0);
+    for (std::size_t e = 0; e < n; ++e) {
+      const double* from = y.data() + order[e];
+      a[e] = from[0];
+      b[e] = from[tau];
+      for (std::size_t l = 2; l < dims; ++l) rest[e * others + l - 2] = from[l * tau];
+    }
+  }
+  std::size_t cell(std::size_t block, std::size_t strip) const { return block * strips + strip; }
 };
 
-// Every pair (vector of grid entry q, a vector in its forward runs) closer than the cut in the
-// maximum norm, counted in every dimension 2..dims where it stays closer (for both of its
-// vectors' blocks). First the candidates closer than the cut in the first two coordinates (the
-// grid's), compacted without branches (about half of them are not); then, per kept pair, the
-// coordinate differences four dimensions at a time, their running maximum across the lanes
-// and the bins from the exponent bits, before the scalar count updates.
-[[gnu::target_clones("avx2", "default")]] void count_forward_pairs(const PairPass& pass,
-                                                                   std::size_t q,
-                                                                   const std::size_t* first,
-                                                                   const std::size_t* last,
-                                                                   std::size_t runs) {
-  const nonlinear::BoxGrid::Entry* entries = pass.grid->entries();
-  const std::size_t i = entries[q].index;
-  const double a = entries[q].a, b = entries[q].b;
+// What the pair pass shares between its vectors. Counts go to a per-thread table of 32-bit counts
+// [(dimension - 2) x row_length + bin], one row per dimension 2..dims, each with one extra bin
+// that takes the pairs beyond the cut; it holds the pairs of one pair of blocks and is added to
+// both blocks' histograms when they are done (flush), so one increment per pair and dimension
+// serves both of its vectors, and the table (~8 KB) stays in L1.
+struct PairPass {
+  const BlockStrips* strips = nullptr;
+  std::size_t dims = 0, theiler = 0, row_length = 0;
+  double cut = 0;
+  std::uint32_t* table = nullptr;
+  // Per coordinate lane l >= 3 (dimension index 1 + l ... padded to groups of four): the row of
+  // dimension 3 + l, minus the key of bin 0, and that row's overflow bin (plain integers loaded
+  // with memcpy: heap storage of 32-byte vectors is not reliably 32-byte aligned).
+  std::vector<std::uint64_t> row_base, overflow;
+  std::vector<std::uint32_t>* kept = nullptr;  // scratch
+  std::vector<double>* kept_distance = nullptr;
+};
+
+// Every pair (vector of entry q, a vector in the runs [first, last)) closer than the cut in the
+// maximum norm, counted in every dimension 2..dims. First the candidates closer than the cut in
+// the first two coordinates, compacted without branches (about a fifth are not); then, per kept
+// pair, the differences of the other coordinates four at a time, their running maximum across
+// the lanes and the bins from the exponent bits (dimensions beyond the cut: the overflow bin),
+// and one increment per dimension -- a fixed count, so no branch depends on the pair.
+[[gnu::target_clones("avx2", "default")]] void count_pairs(const PairPass& pass, std::size_t q,
+                                                           const std::size_t* first,
+                                                           const std::size_t* last,
+                                                           std::size_t runs) {
+  const BlockStrips& s = *pass.strips;
+  const double a = s.a[q], b = s.b[q];
+  const std::size_t i = s.index[q];
   std::size_t candidates = 0;
   for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
-  if (pass.kept->size() < candidates) pass.kept->resize(candidates);
-  std::size_t* __restrict kept = pass.kept->data();
+  if (pass.kept->size() < candidates) {
+    pass.kept->resize(candidates);
+    pass.kept_distance->resize(candidates);
+  }
+  std::uint32_t* __restrict kept = pass.kept->data();
+  double* __restrict kept_distance = pass.kept_distance->data();
+  const double* sa = s.a.data();
+  const double* sb = s.b.data();
+  const std::uint32_t* sindex = s.index.data();
   std::size_t count = 0;
   for (std::size_t run = 0; run < runs; ++run)
     for (std::size_t e = first[run]; e < last[run]; ++e) {
-      const std::size_t j = entries[e].index;
-      const double d01 = std::max(std::abs(entries[e].a - a), std::abs(entries[e].b - b));
-      kept[count] = e;
+      const std::size_t j = sindex[e];
+      const double d01 = std::max(std::abs(sa[e] - a), std::abs(sb[e] - b));
+      kept[count] = std::uint32_t(e);
+      kept_distance[count] = d01;
       count += (d01 < pass.cut) & ((j > i ? j - i : i - j) > pass.theiler) ? 1 : 0;
     }
-  const std::size_t groups = pass.coordinates->stride() / 4, blocks = CorrelationSums::blocks;
-  const std::size_t block_i = pass.window_block[q - pass.window_begin];
-  const double* yi = pass.coordinates->of(q);
+  const std::size_t groups = s.others / 4, rows = pass.dims - 1;
+  const double* yi = s.rest.data() + q * s.others;
   // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
   const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
-  std::uint64_t offset[max_pair_dimensions];  // of each dimension's count row
+  const Vector4 floor4 = {floor, floor, floor, floor};
+  const Vector4 cut4 = {pass.cut, pass.cut, pass.cut, pass.cut};
+  std::uint32_t* __restrict table = pass.table;
+  std::uint64_t offset[max_pair_dimensions];  // of each dimension's count
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t e = kept[k];
-    const double* yj = pass.coordinates->of(e);
-    Vector4 carry = {};
-    Vector4 closer = {};  // per lane: dimensions closer than the cut (a prefix of them)
+    const double d01 = kept_distance[k];
+    offset[0] = bin_of(d01);  // dimension 2
+    const double* yj = s.rest.data() + e * s.others;
+    Vector4 carry = {d01, d01, d01, d01};
     for (std::size_t g = 0; g < groups; ++g) {
       Vector4 own, other;
       std::memcpy(&own, yi + 4 * g, sizeof own);
@@ -136,24 +204,53 @@ struct PairPass {
       v = v > shifted ? v : shifted;
       v = v > carry ? v : carry;
       carry = Vector4{v[3], v[3], v[3], v[3]};
-      closer += v < pass.cut ? Vector4{1, 1, 1, 1} : Vector4{};
-      const Vector4 clamped = v > floor ? v : Vector4{floor, floor, floor, floor};
-      Bits4 key;
+      const Vector4 clamped = v > floor4 ? v : floor4;
+      Bits4 key, base, beyond;
       std::memcpy(&key, &clamped, sizeof key);
-      Bits4 row;
-      std::memcpy(&row, pass.row_base.data() + 4 * g, sizeof row);
-      row += ((key >> 49) - (key_base - 1)) * blocks;
-      std::memcpy(offset + 4 * g, &row, sizeof row);
+      std::memcpy(&base, pass.row_base.data() + 4 * g, sizeof base);
+      std::memcpy(&beyond, pass.overflow.data() + 4 * g, sizeof beyond);
+      const Bits4 row = v < cut4 ? base + (key >> 49) : beyond;
+      std::memcpy(offset + 1 + 4 * g, &row, sizeof row);
     }
-    const std::size_t block_j = pass.window_block[e - pass.window_begin];
-    // Beyond the cut in one dimension: beyond it in every higher one (counted as uncounted).
-    // Dimension index 0 is counted by the sorted pass.
-    const auto within = std::size_t((closer[0] + closer[1]) + (closer[2] + closer[3]));
-    const std::size_t end = std::min(within, pass.dims);
-    for (std::size_t d = 1; d < end; ++d) {
-      std::uint32_t* row = pass.compact + offset[d];
-      ++row[block_i];
-      ++row[block_j];
+    for (std::size_t r = 0; r < rows; ++r) ++table[offset[r]];
+  }
+}
+
+// All pairs of vectors of two blocks (each unordered pair once; the same block twice: the pairs
+// within it) closer than the cut, counted into pass.table.
+template <class BeforeQuery>
+void count_block_pairs(const PairPass& pass, std::size_t block_i, std::size_t block_j,
+                       BeforeQuery&& before_query) {
+  const BlockStrips& s = *pass.strips;
+  const bool same = block_i == block_j;
+  // The band of the second coordinate around a query: a superset of |b - b_q| < cut.
+  const double band = pass.cut + 1e-9;
+  std::vector<std::size_t> low(2 * s.reach + 1), high(low.size()), end(low.size());
+  std::vector<std::size_t> first(low.size()), last(low.size());
+  for (std::size_t u = 0; u < s.strips; ++u) {
+    const std::size_t q0 = s.start[s.cell(block_i, u)], q1 = s.start[s.cell(block_i, u) + 1];
+    if (q0 == q1) continue;
+    // Within one block each pair once: partners in this strip after the query, or in the next
+    // strips; between two blocks every partner strip.
+    const std::size_t s0 = same ? u : (u > s.reach ? u - s.reach : 0);
+    const std::size_t s1 = std::min(s.strips - 1, u + s.reach);
+    const std::size_t runs = s1 - s0 + 1;
+    for (std::size_t r = 0; r < runs; ++r) {
+      low[r] = high[r] = s.start[s.cell(block_j, s0 + r)];
+      end[r] = s.start[s.cell(block_j, s0 + r) + 1];
+    }
+    for (std::size_t q = q0; q < q1; ++q) {
+      const double lower = s.b[q] - band, upper = s.b[q] + band;
+      std::size_t candidates = 0;
+      for (std::size_t r = 0; r < runs; ++r) {
+        while (low[r] < end[r] && s.b[low[r]] < lower) ++low[r];
+        while (high[r] < end[r] && s.b[high[r]] < upper) ++high[r];
+        first[r] = same && s0 + r == u ? q + 1 : low[r];
+        last[r] = std::max(first[r], high[r]);
+        candidates += last[r] - first[r];
+      }
+      before_query(candidates);
+      count_pairs(pass, q, first.data(), last.data(), runs);
     }
   }
 }
@@ -235,31 +332,18 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   std::sort(sorted.begin(), sorted.end());
   std::vector<double> edges(bins);
   for (std::size_t k = 0; k < bins; ++k) edges[k] = CorrelationSums::edge(k);
-  const std::optional<nonlinear::BoxGrid> grid =
-      max_dimension >= 2 ? std::optional<nonlinear::BoxGrid>(std::in_place, y, delay, 2, n, cut)
-                         : std::nullopt;
-  const std::vector<std::size_t> row_order =
-      grid ? grid->rows_most_work_first() : std::vector<std::size_t>{};
+  const std::optional<BlockStrips> strips =
+      max_dimension >= 2
+          ? std::optional<BlockStrips>(std::in_place, y, n, tau, dims, cut, block_of_vector)
+          : std::nullopt;
+  // Tasks: the pairs of blocks (i <= j), handed out dynamically (they all cost about the same).
+  std::vector<std::pair<std::size_t, std::size_t>> block_pairs;
+  for (std::size_t bi = 0; bi < blocks; ++bi)
+    for (std::size_t bj = bi; bj < blocks; ++bj) block_pairs.emplace_back(bi, bj);
 #pragma omp parallel
   {
     std::vector<std::uint64_t> local(out.counts.size(), 0);
     std::vector<double> local_pairs(blocks, 0.0);
-    // Dimensions >= 2 count into a compact table first: 32-bit counts, only the bins below the
-    // cut, the blocks of one (dimension, bin) side by side. Its busy part (the top octaves below
-    // the cut) then stays in L1, where the full 64-bit [block][dimension][bin] rows did not.
-    const std::size_t kept_bins = bin_of(cut) + 1;
-    std::vector<std::uint32_t> compact(dims * kept_bins * blocks, 0);
-    std::uint64_t updates = 0;  // since the last flush: no compact count can exceed it
-    auto flush = [&] {
-      for (std::size_t d = 1; d < dims; ++d)
-        for (std::size_t bin = 0; bin < kept_bins; ++bin)
-          for (std::size_t b = 0; b < blocks; ++b) {
-            std::uint32_t& c = compact[(d * kept_bins + bin) * blocks + b];
-            local[(b * dims + d) * bins + bin] += c;
-            c = 0;
-          }
-      updates = 0;
-    };
     // Dimension 1: the vectors closer than each bin edge e_k (capped at the cut) on either side
     // of yi in sorted order form a stretch [left_k, right_k) around p; as p moves up, yi grows
     // and both ends only move up, so one pointer per edge slides along (O(bins) per vector, not
@@ -312,49 +396,51 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
         }
       }
     }
-    if (grid) {
-      const nonlinear::BoxGrid::Entry* entries = grid->entries();
-      // Row by row of the grid (each pair once: a vector's forward runs lie in its own row and
-      // the next), with the coordinates and blocks of those two rows copied in grid order.
-      nonlinear::CopiedCoordinates coordinates;
-      std::vector<std::uint8_t> window_block;
-      std::vector<std::size_t> kept;
+    if (strips) {
+      // Dimensions >= 2: the pairs of two blocks into one table (PairPass), then added to both.
+      const std::size_t kept_bins = bin_of(cut) + 1, row_length = kept_bins + 1;
+      std::vector<std::uint32_t> table((dims - 1) * row_length, 0);
+      std::vector<std::uint32_t> kept;
+      std::vector<double> kept_distance;
       PairPass pass;
-      pass.grid = &*grid;
-      pass.coordinates = &coordinates;
+      pass.strips = &*strips;
       pass.dims = dims;
       pass.theiler = theiler;
-      pass.kept_bins = kept_bins;
+      pass.row_length = row_length;
       pass.cut = cut;
-      pass.compact = compact.data();
-      pass.row_base.resize(4 * ((dims + 3) / 4));
-      for (std::size_t d = 0; d < pass.row_base.size(); ++d)
-        pass.row_base[d] = d * kept_bins * blocks;
+      pass.table = table.data();
       pass.kept = &kept;
-#pragma omp for schedule(dynamic, 1)
-      for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
-        const std::size_t row = row_order[rank];
-        const std::size_t row_first = grid->row_begin(row), row_end = grid->row_begin(row + 1);
-        const std::size_t window_end = grid->row_begin(std::min(row + 2, grid->rows()));
-        coordinates.fill(*grid, y.data(), tau, row_first, window_end, dims, 4 * ((dims + 3) / 4));
-        window_block.resize(window_end - row_first);
-        for (std::size_t e = row_first; e < window_end; ++e)
-          window_block[e - row_first] = block_of_vector[entries[e].index];
-        pass.window_begin = row_first;
-        pass.window_block = window_block.data();
-        for (std::size_t q = row_first; q < row_end; ++q) {
-          std::size_t first[2], last[2];
-          const std::size_t runs = grid->forward_runs(q, first, last);  // each pair once
-          // At most 2 (dims - 1) updates per candidate pair.
-          std::uint64_t bound = 0;
-          for (std::size_t run = 0; run < runs; ++run)
-            bound += 2 * (dims - 1) * (last[run] - first[run]);
-          if (updates + bound > std::numeric_limits<std::uint32_t>::max()) flush();
-          updates += bound;
-          count_forward_pairs(pass, q, first, last, runs);
-        }
+      pass.kept_distance = &kept_distance;
+      for (std::size_t l = 0; l < strips->others; ++l) {
+        const std::size_t row = std::min(l + 1, dims - 2);  // padding lanes: any valid row
+        pass.row_base.push_back(row * row_length - (key_base - 1));  // modulo 2^64
+        pass.overflow.push_back(row * row_length + kept_bins);
       }
-      flush();
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t task = 0; task < block_pairs.size(); ++task) {
+        const auto [bi, bj] = block_pairs[task];
+        auto flush = [&] {
+          for (std::size_t r = 0; r + 1 < dims; ++r)
+            for (std::size_t bin = 0; bin < row_length; ++bin) {
+              std::uint32_t& c = table[r * row_length + bin];
+              if (bin < kept_bins) {
+                local[(bi * dims + r + 1) * bins + bin] += c;
+                local[(bj * dims + r + 1) * bins + bin] += c;
+              }
+              c = 0;
+            }
+        };
+        // Each pair adds at most one to a count: flush before a count could pass 2^32 - 1.
+        std::uint64_t since_flush = 0;
+        count_block_pairs(pass, bi, bj, [&](std::size_t candidates) {
+          if (since_flush + candidates > std::numeric_limits<std::uint32_t>::max()) {
+            flush();
+            since_flush = 0;
+          }
+          since_flush += candidates;
+        });
+        flush();
+      }
     }
 #pragma omp critical
     {
