@@ -183,11 +183,10 @@ struct PairPass {
   const Vector4 floor4 = {floor, floor, floor, floor};
   const Vector4 cut4 = {pass.cut, pass.cut, pass.cut, pass.cut};
   std::uint32_t* __restrict table = pass.table;
-  std::uint64_t offset[max_pair_dimensions];  // of each dimension's count
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t e = kept[k];
     const double d01 = kept_distance[k];
-    offset[0] = bin_of(d01);  // dimension 2
+    ++table[bin_of(d01)];  // dimension 2
     const double* yj = s.rest.data() + e * s.others;
     Vector4 carry = {d01, d01, d01, d01};
     for (std::size_t g = 0; g < groups; ++g) {
@@ -210,9 +209,19 @@ struct PairPass {
       std::memcpy(&base, pass.row_base.data() + 4 * g, sizeof base);
       std::memcpy(&beyond, pass.overflow.data() + 4 * g, sizeof beyond);
       const Bits4 row = v < cut4 ? base + (key >> 49) : beyond;
-      std::memcpy(offset + 1 + 4 * g, &row, sizeof row);
+      // Straight from the register (through memory the loads waited on the vector store).
+      if (5 + 4 * g <= rows) {
+        ++table[row[0]];
+        ++table[row[1]];
+        ++table[row[2]];
+        ++table[row[3]];
+      } else {
+        for (std::size_t l = 0; 1 + 4 * g + l < rows; ++l) ++table[row[l]];
+      }
+      // Beyond the cut here: beyond it in every higher dimension (the overflow bins are never
+      // read). Taken by most pairs, so the branch is cheaper than the rest of the work.
+      if (!(v[3] < pass.cut)) break;
     }
-    for (std::size_t r = 0; r < rows; ++r) ++table[offset[r]];
   }
 }
 
