@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <type_traits>
 #include <utility>
 
 #include "analysis/embedding/embedding.hpp"
@@ -86,6 +87,7 @@ struct BlockStrips {
   std::vector<double> a, b;                       // first two coordinates of each entry
   std::vector<std::uint32_t> index;               // time index of each entry's vector
   std::vector<double> rest;                       // coordinates 3..dims, `others` per entry
+  std::vector<std::size_t> block_first;           // first time index of each block; then n
 
   BlockStrips(const std::vector<double>& y, std::size_t n, std::size_t tau, std::size_t dims,
               double cut, const std::vector<std::uint8_t>& block_of_vector) {
@@ -105,6 +107,9 @@ struct BlockStrips {
       ++start[cell_of[i] + 1];
     }
     for (std::size_t c = 0; c < blocks * strips; ++c) start[c + 1] += start[c];
+    block_first.assign(blocks + 1, n);
+    for (std::size_t i = n; i-- > 0;) block_first[block_of_vector[i]] = i;
+    for (std::size_t k = blocks; k-- > 0;) block_first[k] = std::min(block_first[k], block_first[k + 1]);
     std::vector<std::uint32_t> order(n);
     std::vector<std::size_t> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < n; ++i) order[fill[cell_of[i]]++] = std::uint32_t(i);
@@ -152,7 +157,8 @@ struct PairPass {
 [[gnu::target_clones("avx2", "default")]] void count_pairs(const PairPass& pass, std::size_t q,
                                                            const std::size_t* first,
                                                            const std::size_t* last,
-                                                           std::size_t runs) {
+                                                           std::size_t runs,
+                                                           bool near_in_time) {
   const BlockStrips& s = *pass.strips;
   const double a = s.a[q], b = s.b[q];
   const std::size_t i = s.index[q];
@@ -167,21 +173,33 @@ struct PairPass {
   const double* sa = s.a.data();
   const double* sb = s.b.data();
   const std::uint32_t* sindex = s.index.data();
+  const double cut = pass.cut;
+  const std::size_t theiler = pass.theiler;
   std::size_t count = 0;
-  for (std::size_t run = 0; run < runs; ++run)
-    for (std::size_t e = first[run]; e < last[run]; ++e) {
-      const std::size_t j = sindex[e];
-      const double d01 = std::max(std::abs(sa[e] - a), std::abs(sb[e] - b));
-      kept[count] = std::uint32_t(e);
-      kept_distance[count] = d01;
-      count += (d01 < pass.cut) & ((j > i ? j - i : i - j) > pass.theiler) ? 1 : 0;
-    }
+  auto filter = [&](auto check_theiler) {
+    for (std::size_t run = 0; run < runs; ++run)
+      for (std::size_t e = first[run]; e < last[run]; ++e) {
+        const double d01 = std::max(std::abs(sa[e] - a), std::abs(sb[e] - b));
+        kept[count] = std::uint32_t(e);
+        kept_distance[count] = d01;
+        bool keep = d01 < cut;
+        if constexpr (decltype(check_theiler)::value) {
+          const std::size_t j = sindex[e];
+          keep = keep & ((j > i ? j - i : i - j) > theiler);
+        }
+        count += keep ? 1 : 0;
+      }
+  };
+  if (near_in_time)
+    filter(std::true_type{});
+  else
+    filter(std::false_type{});
   const std::size_t groups = s.others / 4, rows = pass.dims - 1;
   const double* yi = s.rest.data() + q * s.others;
   // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
   const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
   const Vector4 floor4 = {floor, floor, floor, floor};
-  const Vector4 cut4 = {pass.cut, pass.cut, pass.cut, pass.cut};
+  const Vector4 cut4 = {cut, cut, cut, cut};
   std::uint32_t* __restrict table = pass.table;
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t e = kept[k];
@@ -220,7 +238,7 @@ struct PairPass {
       }
       // Beyond the cut here: beyond it in every higher dimension (the overflow bins are never
       // read). Taken by most pairs, so the branch is cheaper than the rest of the work.
-      if (!(v[3] < pass.cut)) break;
+      if (!(v[3] < cut)) break;
     }
   }
 }
@@ -232,6 +250,10 @@ void count_block_pairs(const PairPass& pass, std::size_t block_i, std::size_t bl
                        BeforeQuery&& before_query) {
   const BlockStrips& s = *pass.strips;
   const bool same = block_i == block_j;
+  // Blocks further apart than the Theiler window need no check per pair.
+  // (The closest pair: the first vector of block_j and the last of block_i.)
+  const bool near_in_time =
+      same || s.block_first[block_j] + 1 <= s.block_first[block_i + 1] + pass.theiler;
   // The band of the second coordinate around a query: a superset of |b - b_q| < cut.
   const double band = pass.cut + 1e-9;
   std::vector<std::size_t> low(2 * s.reach + 1), high(low.size()), end(low.size());
@@ -259,7 +281,7 @@ void count_block_pairs(const PairPass& pass, std::size_t block_i, std::size_t bl
         candidates += last[r] - first[r];
       }
       before_query(candidates);
-      count_pairs(pass, q, first.data(), last.data(), runs);
+      count_pairs(pass, q, first.data(), last.data(), runs, near_in_time);
     }
   }
 }
