@@ -211,8 +211,13 @@ struct PairPass {
       Vector4 own, other;
       std::memcpy(&own, yi + 4 * g, sizeof own);
       std::memcpy(&other, yj + 4 * g, sizeof other);
-      Vector4 v = own - other;
-      v = v < 0 ? -v : v;
+      // |own - other| by clearing the sign bits (one AND, where v < 0 ? -v : v took three).
+      Bits4 magnitude;
+      const Vector4 difference = own - other;
+      std::memcpy(&magnitude, &difference, sizeof magnitude);
+      magnitude &= ~(Bits4{} + (std::uint64_t(1) << 63));
+      Vector4 v;
+      std::memcpy(&v, &magnitude, sizeof v);
       // Running maximum over the dimensions: the maximum-norm distance in each.
       const Vector4 zero = {};
       Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
