@@ -366,6 +366,10 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
   std::vector<std::pair<double, std::uint32_t>> sorted(n);
   for (std::size_t i = 0; i < n; ++i) sorted[i] = {y[i], std::uint32_t(i)};
   std::sort(sorted.begin(), sorted.end());
+  // The sorted values alone (dense for the pointers below), with +infinity after the last: the
+  // right pointers stop there without a bounds check.
+  std::vector<double> sorted_value(n + 1, std::numeric_limits<double>::infinity());
+  for (std::size_t p = 0; p < n; ++p) sorted_value[p] = sorted[p].first;
   std::vector<double> edges(bins);
   for (std::size_t k = 0; k < bins; ++k) edges[k] = CorrelationSums::edge(k);
   const std::optional<BlockStrips> strips =
@@ -417,8 +421,15 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
         for (std::size_t k = std::min(bin_of(gap), edge_count); k < edge_count; ++k) {
           const double e = capped[k];
           std::size_t r = std::max(right[k], p + 1), l = left[k];
-          while (r < n && sorted[r].first - yi < e) ++r;
-          while (l < p && !(yi - sorted[l].first < e)) ++l;
+          // The pointers mostly move by 0, 1 or 2: two steps without branches (the loops that
+          // follow rarely run; a left pointer stops at p at the latest, where the gap is 0).
+          const double* v = sorted_value.data();
+          r += v[r] - yi < e ? 1 : 0;
+          l += yi - v[l] < e ? 0 : 1;
+          r += v[r] - yi < e ? 1 : 0;
+          l += yi - v[l] < e ? 0 : 1;
+          while (v[r] - yi < e) ++r;
+          while (!(yi - v[l] < e)) ++l;
           right[k] = r;
           left[k] = l;
           const std::size_t within = (r - p - 1) + (p - l);
