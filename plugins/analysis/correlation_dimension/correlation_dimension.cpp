@@ -131,19 +131,19 @@ struct BlockStrips {
 };
 
 // What the pair pass shares between its vectors. Counts go to a per-thread table of 32-bit counts
-// [(dimension - 2) x row_length + bin], one row per dimension 2..dims, each with one extra bin
-// that takes the pairs beyond the cut; it holds the pairs of one pair of blocks and is added to
-// both blocks' histograms when they are done (flush), so one increment per pair and dimension
-// serves both of its vectors, and the table (~8 KB) stays in L1.
+// [(dimension - 2) x row_length + bin], one row per dimension 2..dims; it holds the pairs of one
+// pair of bootstrap blocks and is added to both blocks' histograms when they are done (flush).
+// So one increment per pair and dimension serves both of its vectors (the old per-block table
+// took two, one per block, into rows spread over 20 blocks), and the table (~9 KB) stays in L1.
 struct PairPass {
   const BlockStrips* strips = nullptr;
   std::size_t dims = 0, theiler = 0, row_length = 0;
   double cut = 0;
   std::uint32_t* table = nullptr;
-  // Per coordinate lane l >= 3 (dimension index 1 + l ... padded to groups of four): the row of
-  // dimension 3 + l, minus the key of bin 0, and that row's overflow bin (plain integers loaded
-  // with memcpy: heap storage of 32-byte vectors is not reliably 32-byte aligned).
-  std::vector<std::uint64_t> row_base, overflow;
+  // Per lane l of the coordinates 3, 4, ... (padded to groups of four): the start of the row of
+  // dimension 3 + l minus the key of bin 0 (plain integers loaded with memcpy: heap storage of
+  // 32-byte vectors is not reliably 32-byte aligned).
+  std::vector<std::uint64_t> row_base;
   std::vector<std::uint32_t>* kept = nullptr;  // scratch
   std::vector<double>* kept_distance = nullptr;
 };
@@ -152,8 +152,10 @@ struct PairPass {
 // maximum norm, counted in every dimension 2..dims. First the candidates closer than the cut in
 // the first two coordinates, compacted without branches (about a fifth are not); then, per kept
 // pair, the differences of the other coordinates four at a time, their running maximum across
-// the lanes and the bins from the exponent bits (dimensions beyond the cut: the overflow bin),
-// and one increment per dimension -- a fixed count, so no branch depends on the pair.
+// the lanes and the bins from the exponent bits, and one increment per dimension of the group
+// (a fixed count: no branch on how many of the four are within the cut; the ones beyond land in
+// bins above the cut that are never read). After a group whose last dimension is beyond the cut
+// the pair stops (most pairs do after the first group).
 [[gnu::target_clones("avx2", "default")]] void count_pairs(const PairPass& pass, std::size_t q,
                                                            const std::size_t* first,
                                                            const std::size_t* last,
@@ -199,7 +201,6 @@ struct PairPass {
   // Below the smallest bin edge 2^-octaves every distance maps to key_base - 1, i.e. bin 0.
   const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
   const Vector4 floor4 = {floor, floor, floor, floor};
-  const Vector4 cut4 = {cut, cut, cut, cut};
   std::uint32_t* __restrict table = pass.table;
   for (std::size_t k = 0; k < count; ++k) {
     const std::size_t e = kept[k];
@@ -227,11 +228,10 @@ struct PairPass {
       v = v > carry ? v : carry;
       carry = Vector4{v[3], v[3], v[3], v[3]};
       const Vector4 clamped = v > floor4 ? v : floor4;
-      Bits4 key, base, beyond;
+      Bits4 key, base;
       std::memcpy(&key, &clamped, sizeof key);
       std::memcpy(&base, pass.row_base.data() + 4 * g, sizeof base);
-      std::memcpy(&beyond, pass.overflow.data() + 4 * g, sizeof beyond);
-      const Bits4 row = v < cut4 ? base + (key >> 49) : beyond;
+      const Bits4 row = base + (key >> 49);
       // Straight from the register (through memory the loads waited on the vector store).
       if (5 + 4 * g <= rows) {
         ++table[row[0]];
@@ -241,8 +241,8 @@ struct PairPass {
       } else {
         for (std::size_t l = 0; 1 + 4 * g + l < rows; ++l) ++table[row[l]];
       }
-      // Beyond the cut here: beyond it in every higher dimension (the overflow bins are never
-      // read). Taken by most pairs, so the branch is cheaper than the rest of the work.
+      // Beyond the cut here: beyond it in every higher dimension (whose bins above the cut are
+      // never read). Taken by most pairs, so the branch costs less than the work it skips.
       if (!(v[3] < cut)) break;
     }
   }
@@ -445,7 +445,11 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
     }
     if (strips) {
       // Dimensions >= 2: the pairs of two blocks into one table (PairPass), then added to both.
-      const std::size_t kept_bins = bin_of(cut) + 1, row_length = kept_bins + 1;
+      // Rows cover every bin a distance can reach (normalised distances are at most 1 + 2^-52,
+      // bin bins - 1; up to 2 for safety): the pairs beyond the cut land in bins above kept_bins
+      // that are never read, spread out, instead of in one overflow count per row that every
+      // pair would update in turn.
+      const std::size_t kept_bins = bin_of(cut) + 1, row_length = bins + CorrelationSums::bins_per_octave;
       std::vector<std::uint32_t> table((dims - 1) * row_length, 0);
       std::vector<std::uint32_t> kept;
       std::vector<double> kept_distance;
@@ -461,7 +465,6 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
       for (std::size_t l = 0; l < strips->others; ++l) {
         const std::size_t row = std::min(l + 1, dims - 2);  // padding lanes: any valid row
         pass.row_base.push_back(row * row_length - (key_base - 1));  // modulo 2^64
-        pass.overflow.push_back(row * row_length + kept_bins);
       }
 #pragma omp for schedule(dynamic, 1)
       for (std::size_t task = 0; task < block_pairs.size(); ++task) {
