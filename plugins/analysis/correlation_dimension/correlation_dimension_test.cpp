@@ -78,25 +78,40 @@ TEST(CorrelationDimension, WhiteNoiseDoesNotSaturate) {
 }
 
 
-// All pairs below the cut through the box grid == every vector a reference of the sampled scheme,
-// bin by bin below the cut (the two count each pair from both of its vectors).
-TEST(CorrelationDimension, AllPairsWithinMatchesEveryReference) {
-  const auto x = test_signals::henon(3000);
-  const double cut = 0.05;
-  const auto all = correlation_sums_within(x, 4, 2, 5, cut);
-  const auto every = correlation_sums(x, 4, 2, 5, 1000000);
-  ASSERT_EQ(all.counts.size(), every.counts.size());
+// All pairs below the cut (sorted strips, pairs of blocks) == every vector a reference of the
+// sampled scheme, bin by bin below the cut and block by block (the two count each pair from both
+// of its vectors). Returns the number of nonzero compared counts.
+std::size_t expect_all_pairs_match(const std::vector<double>& x, int dims, int delay,
+                                   std::size_t theiler, double cut) {
+  const auto all = correlation_sums_within(x, dims, delay, theiler, cut);
+  const auto every = correlation_sums(x, dims, delay, theiler, 1000000);
+  EXPECT_EQ(all.counts.size(), every.counts.size());
   EXPECT_EQ(all.pairs, every.pairs);
-  std::size_t compared = 0, nonzero = 0;
+  std::size_t nonzero = 0;
+  const auto d_count = std::size_t(dims);
   for (std::size_t b = 0; b < CorrelationSums::blocks; ++b)
-    for (std::size_t d = 0; d < 4; ++d)
+    for (std::size_t d = 0; d < d_count; ++d)
       for (std::size_t k = 0; CorrelationSums::edge(k) <= cut; ++k) {
-        const std::size_t q = (b * 4 + d) * CorrelationSums::bins + k;
-        EXPECT_EQ(all.counts[q], every.counts[q]) << "block " << b << " d " << d + 1 << " bin " << k;
-        ++compared;
+        const std::size_t q = (b * d_count + d) * CorrelationSums::bins + k;
+        EXPECT_EQ(all.counts[q], every.counts[q])
+            << "dims " << dims << " cut " << cut << ": block " << b << " d " << d + 1 << " bin " << k;
         nonzero += all.counts[q] > 0;
       }
-  EXPECT_GT(nonzero, 200u) << compared;
+  return nonzero;
+}
+
+TEST(CorrelationDimension, AllPairsWithinMatchesEveryReference) {
+  const auto x = test_signals::henon(3000);
+  EXPECT_GT(expect_all_pairs_match(x, 4, 2, 5, 0.05), 200u);
+  // Dimension counts that leave padding lanes (3, 7) or none beyond the first two (2); a cut near
+  // the largest allowed (few strips); no Theiler window (neighbouring blocks unchecked).
+  EXPECT_GT(expect_all_pairs_match(x, 7, 1, 0, 0.3), 1000u);
+  EXPECT_GT(expect_all_pairs_match(x, 3, 1, 12, 0.01), 100u);
+  EXPECT_GT(expect_all_pairs_match(x, 2, 3, 0, 0.5), 100u);
+  // Fewer vectors than bootstrap blocks (empty blocks) and a Theiler window longer than a block.
+  const auto tiny = test_signals::henon(30);
+  EXPECT_GT(expect_all_pairs_match(tiny, 5, 1, 0, 0.5), 10u);
+  EXPECT_GT(expect_all_pairs_match(tiny, 3, 1, 4, 0.2), 5u);
 }
 
 TEST(CorrelationDimensionAccuracy, HenonAllPairsWithin) {
