@@ -83,7 +83,7 @@ struct BlockStrips {
   static constexpr double strips_per_cut = 2;
   static constexpr std::size_t max_strips = 4096;
   std::size_t strips = 1, reach = 1, others = 0;  // others: stride of coordinates 3, 4, ...
-  std::vector<std::size_t> start;                 // first entry of (block, strip); one more at the end
+  std::vector<std::size_t> start;                 // first entry of (block, strip), then n
   std::vector<double> a, b;                       // first two coordinates of each entry
   std::vector<std::uint32_t> index;               // time index of each entry's vector
   std::vector<double> rest;                       // coordinates 3..dims, `others` per entry
@@ -109,12 +109,14 @@ struct BlockStrips {
     for (std::size_t c = 0; c < blocks * strips; ++c) start[c + 1] += start[c];
     block_first.assign(blocks + 1, n);
     for (std::size_t i = n; i-- > 0;) block_first[block_of_vector[i]] = i;
-    for (std::size_t k = blocks; k-- > 0;) block_first[k] = std::min(block_first[k], block_first[k + 1]);
+    for (std::size_t k = blocks; k-- > 0;)  // empty blocks: the next one's first
+      block_first[k] = std::min(block_first[k], block_first[k + 1]);
     std::vector<std::uint32_t> order(n);
     std::vector<std::size_t> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < n; ++i) order[fill[cell_of[i]]++] = std::uint32_t(i);
     for (std::size_t c = 0; c < blocks * strips; ++c)
-      std::sort(order.begin() + std::ptrdiff_t(start[c]), order.begin() + std::ptrdiff_t(start[c + 1]),
+      std::sort(order.begin() + std::ptrdiff_t(start[c]),
+                order.begin() + std::ptrdiff_t(start[c + 1]),
                 [&](std::uint32_t u, std::uint32_t v) { return y[u + tau] < y[v + tau]; });
     a.resize(n);
     b.resize(n);
@@ -202,50 +204,61 @@ struct PairPass {
   const double floor = std::nextafter(std::ldexp(1.0, -CorrelationSums::octaves), 0.0);
   const Vector4 floor4 = {floor, floor, floor, floor};
   std::uint32_t* __restrict table = pass.table;
-  for (std::size_t k = 0; k < count; ++k) {
-    const std::size_t e = kept[k];
-    const double d01 = kept_distance[k];
-    ++table[bin_of(d01)];  // dimension 2
-    const double* yj = s.rest.data() + e * s.others;
-    Vector4 carry = {d01, d01, d01, d01};
-    for (std::size_t g = 0; g < groups; ++g) {
-      Vector4 own, other;
-      std::memcpy(&own, yi + 4 * g, sizeof own);
-      std::memcpy(&other, yj + 4 * g, sizeof other);
-      // |own - other| by clearing the sign bits (one AND, where v < 0 ? -v : v took three).
-      Bits4 magnitude;
-      const Vector4 difference = own - other;
-      std::memcpy(&magnitude, &difference, sizeof magnitude);
-      magnitude &= ~(Bits4{} + (std::uint64_t(1) << 63));
-      Vector4 v;
-      std::memcpy(&v, &magnitude, sizeof v);
-      // Running maximum over the dimensions: the maximum-norm distance in each.
-      const Vector4 zero = {};
-      Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
-      v = v > shifted ? v : shifted;
-      shifted = __builtin_shuffle(v, zero, Bits4{4, 4, 0, 1});
-      v = v > shifted ? v : shifted;
-      v = v > carry ? v : carry;
-      carry = Vector4{v[3], v[3], v[3], v[3]};
-      const Vector4 clamped = v > floor4 ? v : floor4;
-      Bits4 key, base;
-      std::memcpy(&key, &clamped, sizeof key);
-      std::memcpy(&base, pass.row_base.data() + 4 * g, sizeof base);
-      const Bits4 row = base + (key >> 49);
-      // Straight from the register (through memory the loads waited on the vector store).
-      if (5 + 4 * g <= rows) {
-        ++table[row[0]];
-        ++table[row[1]];
-        ++table[row[2]];
-        ++table[row[3]];
-      } else {
-        for (std::size_t l = 0; 1 + 4 * g + l < rows; ++l) ++table[row[l]];
+  // Known group counts (dimensions 3..6, 7..10) compiled apart: the loop over the groups unrolls
+  // and the query's coordinates stay in registers.
+  auto count_kept = [&](auto fixed_groups) {
+    const std::size_t group_count = fixed_groups() > 0 ? fixed_groups() : groups;
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t e = kept[k];
+      const double d01 = kept_distance[k];
+      ++table[bin_of(d01)];  // dimension 2
+      const double* yj = s.rest.data() + e * s.others;
+      Vector4 carry = {d01, d01, d01, d01};
+      for (std::size_t g = 0; g < group_count; ++g) {
+        Vector4 own, other;
+        std::memcpy(&own, yi + 4 * g, sizeof own);
+        std::memcpy(&other, yj + 4 * g, sizeof other);
+        // |own - other| by clearing the sign bits (one AND, where v < 0 ? -v : v took three).
+        Bits4 magnitude;
+        const Vector4 difference = own - other;
+        std::memcpy(&magnitude, &difference, sizeof magnitude);
+        magnitude &= ~(Bits4{} + (std::uint64_t(1) << 63));
+        Vector4 v;
+        std::memcpy(&v, &magnitude, sizeof v);
+        // Running maximum over the dimensions: the maximum-norm distance in each.
+        const Vector4 zero = {};
+        Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
+        v = v > shifted ? v : shifted;
+        shifted = __builtin_shuffle(v, zero, Bits4{4, 4, 0, 1});
+        v = v > shifted ? v : shifted;
+        v = v > carry ? v : carry;
+        carry = Vector4{v[3], v[3], v[3], v[3]};
+        const Vector4 clamped = v > floor4 ? v : floor4;
+        Bits4 key, base;
+        std::memcpy(&key, &clamped, sizeof key);
+        std::memcpy(&base, pass.row_base.data() + 4 * g, sizeof base);
+        const Bits4 row = base + (key >> 49);
+        // Straight from the register (through memory the loads waited on the vector store).
+        if (5 + 4 * g <= rows) {
+          ++table[row[0]];
+          ++table[row[1]];
+          ++table[row[2]];
+          ++table[row[3]];
+        } else {
+          for (std::size_t l = 0; 1 + 4 * g + l < rows; ++l) ++table[row[l]];
+        }
+        // Beyond the cut here: beyond it in every higher dimension (whose bins above the cut are
+        // never read). Taken by most pairs, so the branch costs less than the work it skips.
+        if (!(v[3] < cut)) break;
       }
-      // Beyond the cut here: beyond it in every higher dimension (whose bins above the cut are
-      // never read). Taken by most pairs, so the branch costs less than the work it skips.
-      if (!(v[3] < cut)) break;
     }
-  }
+  };
+  if (groups == 1)
+    count_kept(std::integral_constant<std::size_t, 1>{});
+  else if (groups == 2)
+    count_kept(std::integral_constant<std::size_t, 2>{});
+  else
+    count_kept(std::integral_constant<std::size_t, 0>{});
 }
 
 // All pairs of vectors of two blocks (each unordered pair once; the same block twice: the pairs
@@ -449,7 +462,8 @@ CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_di
       // bin bins - 1; up to 2 for safety): the pairs beyond the cut land in bins above kept_bins
       // that are never read, spread out, instead of in one overflow count per row that every
       // pair would update in turn.
-      const std::size_t kept_bins = bin_of(cut) + 1, row_length = bins + CorrelationSums::bins_per_octave;
+      const std::size_t kept_bins = bin_of(cut) + 1;
+      const std::size_t row_length = bins + CorrelationSums::bins_per_octave;
       std::vector<std::uint32_t> table((dims - 1) * row_length, 0);
       std::vector<std::uint32_t> kept;
       std::vector<double> kept_distance;

@@ -94,7 +94,8 @@ std::size_t expect_all_pairs_match(const std::vector<double>& x, int dims, int d
       for (std::size_t k = 0; CorrelationSums::edge(k) <= cut; ++k) {
         const std::size_t q = (b * d_count + d) * CorrelationSums::bins + k;
         EXPECT_EQ(all.counts[q], every.counts[q])
-            << "dims " << dims << " cut " << cut << ": block " << b << " d " << d + 1 << " bin " << k;
+            << "dims " << dims << " cut " << cut << ": block " << b << " d " << d + 1
+            << " bin " << k;
         nonzero += all.counts[q] > 0;
       }
   return nonzero;
