@@ -109,6 +109,8 @@ TEST(CorrelationDimension, AllPairsWithinMatchesEveryReference) {
   EXPECT_GT(expect_all_pairs_match(x, 7, 1, 0, 0.3), 1000u);
   EXPECT_GT(expect_all_pairs_match(x, 3, 1, 12, 0.01), 100u);
   EXPECT_GT(expect_all_pairs_match(x, 2, 3, 0, 0.5), 100u);
+  // More than two groups of four further coordinates (the general kernel).
+  EXPECT_GT(expect_all_pairs_match(x, 13, 1, 3, 0.2), 2000u);
   // Fewer vectors than bootstrap blocks (empty blocks) and a Theiler window longer than a block.
   const auto tiny = test_signals::henon(30);
   EXPECT_GT(expect_all_pairs_match(tiny, 5, 1, 0, 0.5), 10u);
