@@ -69,6 +69,15 @@ using Vector4 = double __attribute__((vector_size(32)));  // AVX2; SSE2: two hal
 using Bits4 = std::uint64_t __attribute__((vector_size(32)));
 constexpr std::size_t max_pair_dimensions = 32;  // of correlation_sums_within (the parameter: 30)
 
+// |v| by clearing the sign bits (one AND, where v < 0 ? -v : v takes three instructions). By
+// reference: a 32-byte vector by value would change the ABI between the target clones.
+inline void make_absolute(Vector4& v) {
+  Bits4 bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits &= ~(Bits4{} + (std::uint64_t(1) << 63));
+  std::memcpy(&v, &bits, sizeof v);
+}
+
 // The vectors of correlation_sums_within for the pair pass (dimensions >= 2), grouped by
 // bootstrap block and, within a block, on strips of the first coordinate at least cut / 2 wide,
 // sorted by the second coordinate within a strip. The partners of a vector closer than the cut
@@ -180,9 +189,29 @@ struct PairPass {
   const double cut = pass.cut;
   const std::size_t theiler = pass.theiler;
   std::size_t count = 0;
-  auto filter = [&](auto check_theiler) {
-    for (std::size_t run = 0; run < runs; ++run)
-      for (std::size_t e = first[run]; e < last[run]; ++e) {
+  auto filter = [&](auto check_theiler) __attribute__((always_inline)) {
+    for (std::size_t run = 0; run < runs; ++run) {
+      std::size_t e = first[run];
+      if constexpr (!decltype(check_theiler)::value) {
+        // Four candidates at a time (contiguous coordinates), then their scalar compaction.
+        const Vector4 a4 = {a, a, a, a}, b4 = {b, b, b, b}, cut4 = {cut, cut, cut, cut};
+        for (; e + 4 <= last[run]; e += 4) {
+          Vector4 va, vb;
+          std::memcpy(&va, sa + e, sizeof va);
+          std::memcpy(&vb, sb + e, sizeof vb);
+          Vector4 da = va - a4, db = vb - b4;
+          make_absolute(da);
+          make_absolute(db);
+          const Vector4 d = da > db ? da : db;
+          const Bits4 keep = d < cut4;  // all ones or zero per lane
+          for (std::size_t l = 0; l < 4; ++l) {
+            kept[count] = std::uint32_t(e + l);
+            kept_distance[count] = d[l];
+            count += std::size_t(keep[l] & 1);
+          }
+        }
+      }
+      for (; e < last[run]; ++e) {
         const double d01 = std::max(std::abs(sa[e] - a), std::abs(sb[e] - b));
         kept[count] = std::uint32_t(e);
         kept_distance[count] = d01;
@@ -193,6 +222,7 @@ struct PairPass {
         }
         count += keep ? 1 : 0;
       }
+    }
   };
   if (near_in_time)
     filter(std::true_type{});
@@ -206,7 +236,7 @@ struct PairPass {
   std::uint32_t* __restrict table = pass.table;
   // Known group counts (dimensions 3..6, 7..10) compiled apart: the loop over the groups unrolls
   // and the query's coordinates stay in registers.
-  auto count_kept = [&](auto fixed_groups) {
+  auto count_kept = [&](auto fixed_groups) __attribute__((always_inline)) {
     const std::size_t group_count = fixed_groups() > 0 ? fixed_groups() : groups;
     for (std::size_t k = 0; k < count; ++k) {
       const std::size_t e = kept[k];
@@ -218,13 +248,8 @@ struct PairPass {
         Vector4 own, other;
         std::memcpy(&own, yi + 4 * g, sizeof own);
         std::memcpy(&other, yj + 4 * g, sizeof other);
-        // |own - other| by clearing the sign bits (one AND, where v < 0 ? -v : v took three).
-        Bits4 magnitude;
-        const Vector4 difference = own - other;
-        std::memcpy(&magnitude, &difference, sizeof magnitude);
-        magnitude &= ~(Bits4{} + (std::uint64_t(1) << 63));
-        Vector4 v;
-        std::memcpy(&v, &magnitude, sizeof v);
+        Vector4 v = own - other;
+        make_absolute(v);
         // Running maximum over the dimensions: the maximum-norm distance in each.
         const Vector4 zero = {};
         Vector4 shifted = __builtin_shuffle(v, zero, Bits4{4, 0, 1, 2});
