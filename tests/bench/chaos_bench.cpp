@@ -55,7 +55,7 @@ void BM_D2Henon(benchmark::State& state) {
 BENCHMARK(BM_D2Henon)->Arg(2000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // TISEAN d2's work with all pairs (-N 0): dimensions 1..10, every pair closer than 2 % (arg 20) or
-// 20 % (arg 200) of the range, counted exactly (box grid), radii binned 8 per octave.
+// 20 % (arg 200) of the range, counted exactly (sorted strips), radii binned 8 per octave.
 void BM_D2HenonAllPairs(benchmark::State& state) {
   const double cut = double(state.range(0)) / 1000.0;
   for (auto _ : state) {
