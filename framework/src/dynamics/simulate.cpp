@@ -367,20 +367,18 @@ class Engine {
     e.evaluate_contact(t, x, in, out);
     e.model_.derivatives(in, out, dx);
     e.cache_valid_ = std::all_of(dx.begin(), dx.end(), [](double v) { return std::isfinite(v); });
-    if (e.cache_valid_) {
-      e.cache_t_ = t;
-      std::copy(x.begin(), x.end(), e.cache_y_.begin());
-      std::copy(dx.begin(), dx.end(), e.cache_f_.begin());
-      e.cache_settled_ = e.reads_settled(in);
-    }
-    // A derivative that is not a number would make ARKODE's error test fail without bound (the
-    // step adaptation then loops for ever): stop the integrator with an unrecoverable failure
-    // (its flag, and the run a PointFailure naming the time).
-    if (!std::all_of(dx.begin(), dx.end(), [](double v) { return std::isfinite(v); })) {
+    if (!e.cache_valid_) {
+      // A derivative that is not a number would make ARKODE's error test fail without bound
+      // (the step adaptation then loops for ever): stop the integrator with an unrecoverable
+      // failure (its flag, and the run a PointFailure naming the time).
       if (e.nonfinite_rhs_.empty())
         e.nonfinite_rhs_ = fmt::format("right-hand side not finite at t = {:.6g} s", t);
       return -1;
     }
+    e.cache_t_ = t;
+    std::copy(x.begin(), x.end(), e.cache_y_.begin());
+    std::copy(dx.begin(), dx.end(), e.cache_f_.begin());
+    e.cache_settled_ = e.reads_settled(in);
     return 0;
   }
   static int root(sunrealtype t, N_Vector y, sunrealtype* g, void* self) {

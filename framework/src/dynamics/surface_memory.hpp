@@ -35,7 +35,12 @@ class SurfaceMemory {
     const double x = theta_rad * samples_per_rad_;
     const double fl = std::floor(x);
     const auto i = static_cast<std::int64_t>(fl);
-    if (i < 1 || i + 3 > next_) return interpolate(theta_rad, false);
+    if (i < 1 || i + 3 > next_) {
+      // A flat start (the usual one): zero while the whole stencil is before the run, e.g. the
+      // work surface during the whole first work revolution.
+      if (flat_ && i + 2 < 0) return 0.0;
+      return interpolate(theta_rad, false);
+    }
     double w[4];
     cubic_weights(x - fl, w);
     const std::size_t mask = capacity_ - 1;
