@@ -203,7 +203,9 @@ class Integrator {
     std::swap(y0_, y1_);
     std::swap(f0_, f1_);
     set_end(t_new);
-    quintic_ = have_previous_;
+    // Both steps of positive length (a zero-length step, e.g. at a stop time, has no slope
+    // information to add and would divide by zero).
+    quintic_ = have_previous_ && t1_ > t0_ && t0_ > ta_;
     have_previous_ = true;
     if (!quintic_) return;
     // Confluent Newton divided differences on u = (t - t0)/h at the nodes a, a, 0, 0, 1, 1
