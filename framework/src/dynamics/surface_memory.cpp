@@ -72,13 +72,7 @@ double SurfaceMemory::interpolate(double theta, bool of_integral) const {
   const double u = x - fl;
   auto i = static_cast<std::int64_t>(fl);
   const std::int64_t last = next_ - 1;  // newest written index (initial profile if none)
-  // Cubic Lagrange weights through i-1..i+2 at offset v from i.
-  auto weights = [](double v, double w[4]) {
-    w[0] = -v * (v - 1.0) * (v - 2.0) / 6.0;
-    w[1] = (v + 1.0) * (v - 1.0) * (v - 2.0) / 2.0;
-    w[2] = -(v + 1.0) * v * (v - 2.0) / 2.0;
-    w[3] = (v + 1.0) * v * (v - 1.0) / 6.0;
-  };
+  auto weights = cubic_weights;
   double w[4];
   // Fast paths (every right-hand side reads here): the stencil inside the written ring, or
   // inside the unrolled initial profile, without per-sample branches.
@@ -106,10 +100,7 @@ double SurfaceMemory::interpolate(double theta, bool of_integral) const {
   return w[0] * sample(j - 1) + w[1] * sample(j) + w[2] * sample(j + 1) + w[3] * sample(j + 2);
 }
 
-double SurfaceMemory::at(double theta) const { return interpolate(theta, false); }
-
-double SurfaceMemory::mean(double theta, double arc) const {
-  if (arc <= 0.0) return at(theta);
+double SurfaceMemory::arc_mean(double theta, double arc) const {
   if (!with_integral_) throw std::logic_error("SurfaceMemory: mean over an arc without the running integral");
   return (interpolate(theta + 0.5 * arc, true) - interpolate(theta - 0.5 * arc, true)) / arc;
 }

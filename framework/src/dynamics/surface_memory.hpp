@@ -4,6 +4,7 @@
 // "one revolution ago" at any angle by cubic Lagrange interpolation. Indices k < 0 are the
 // surface before the run (the initial profile, periodic). A ring of >= n + margin samples is
 // enough: reads never reach further back than one revolution and a few samples.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -28,16 +29,51 @@ class SurfaceMemory {
 
   // Surface at cumulative angle theta [rad] (theta <= the last written angle; interpolation
   // needs one sample beyond the interval, clamped to the last written one at the front).
-  double at(double theta_rad) const;
+  double at(double theta_rad) const {
+    // Inline fast path (every right-hand side reads here twice): the stencil inside the
+    // written ring; everything else (initial profile, front of the ring) in interpolate().
+    const double x = theta_rad * samples_per_rad_;
+    const double fl = std::floor(x);
+    const auto i = static_cast<std::int64_t>(fl);
+    if (i < 1 || i + 3 > next_) {
+      // A flat start (the usual one): zero while the whole stencil is before the run, e.g. the
+      // work surface during the whole first work revolution.
+      if (flat_ && i + 2 < 0) return 0.0;
+      return interpolate(theta_rad, false);
+    }
+    double w[4];
+    cubic_weights(x - fl, w);
+    const std::size_t mask = capacity_ - 1;
+    const auto k = static_cast<std::size_t>(i);
+    return w[0] * ring_[(k - 1) & mask] + w[1] * ring_[k & mask] + w[2] * ring_[(k + 1) & mask] +
+           w[3] * ring_[(k + 2) & mask];
+  }
+  // Cubic Lagrange weights through i-1..i+2 at offset v from i (products by constants: no
+  // division in the innermost read).
+  static void cubic_weights(double v, double w[4]) {
+    constexpr double sixth = 1.0 / 6.0;
+    const double vp = v + 1.0, vm = v - 1.0, vmm = v - 2.0;
+    w[0] = -sixth * v * vm * vmm;
+    w[1] = 0.5 * vp * vm * vmm;
+    w[2] = -0.5 * vp * v * vmm;
+    w[3] = sixth * vp * v * vm;
+  }
+  // True if at(theta) reads written (or initial-profile) samples only: pushes cannot change it.
+  bool settled(double theta_rad) const {
+    return theta_rad * samples_per_rad_ + 3.0 < static_cast<double>(next_);
+  }
   // Mean of the surface over [theta - arc/2, theta + arc/2] (geometric filtering), from the
   // running integral of the samples; arc = 0 gives at(theta).
-  double mean(double theta_rad, double arc_rad) const;
+  double mean(double theta_rad, double arc_rad) const {
+    return arc_rad <= 0.0 ? at(theta_rad) : arc_mean(theta_rad, arc_rad);
+  }
 
   // The surface over the last revolution: samples k = next - n .. next - 1 by body angle
   // (k mod n) * spacing, returned in body-angle order 0 .. n - 1.
   std::vector<double> last_revolution() const;
 
  private:
+  double arc_mean(double theta_rad, double arc_rad) const;
   double integral(std::int64_t k) const;  // trapezoid integral of the samples from k = -2n
   double interpolate(double theta_rad, bool of_integral) const;
   std::size_t slot(std::int64_t k) const;

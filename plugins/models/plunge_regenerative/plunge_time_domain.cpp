@@ -6,6 +6,12 @@
 
 namespace chatterlab {
 
+void apply_growth_rate_settings(SimulationSettings& settings) {
+  settings.relative_tolerance = 1e-2;
+  settings.max_steps_per_wave = 4.0;
+  settings.samples_per_wave = 8.0;
+}
+
 PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p) {
   total_compliance_ = 0.0;
   for (const StructuralMode& m : p.modes) {
