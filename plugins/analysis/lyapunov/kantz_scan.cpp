@@ -56,10 +56,11 @@ struct ScanShape {
 // sum whatever the number of dimensions.
 struct NeighbourSums {
   std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
-  std::vector<std::uint32_t> profiles;   // code of each used slot
+  std::vector<std::uint32_t> profiles;   // code of each used slot (buffer)
   std::vector<double*> targets;          // the bins a slot adds to
   std::vector<double> own;               // the reference's delay coordinates
   std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
+  std::vector<double> near_distance;     // their squared distance in min_dimension
   std::vector<std::uint32_t> near_code;  // their profile code
   std::vector<std::int32_t> near_slot;   // their slot
   std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
@@ -101,7 +102,7 @@ inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 // sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
 // samples t: the partial sums stay in registers while the members stream by.
 template <std::size_t Vectors>
-inline void add_separations(const double* xi, const double* histories, std::size_t padded,
+[[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories, std::size_t padded,
                             const std::uint32_t* member, const std::uint32_t* member_end,
                             std::size_t offset, double* const* targets, std::size_t target_count) {
   Vector4 acc[Vectors] = {};
@@ -126,6 +127,43 @@ inline void add_separations(const double* xi, const double* histories, std::size
     }
 }
 
+// Counting sort of the neighbours by profile code: the slots (distinct codes in order of first
+// appearance, slot_of[code] set and left for the caller to reset), members = near grouped slot
+// by slot with slot s at [member_end[s], member_end[s + 1]). Returns the slot count. Four
+// interleaved counters per slot (by p mod 4): consecutive neighbours of one profile would
+// otherwise wait on each other's increment of the same counter. Kept out of line: inlined into
+// the vector passes its pointers were spilled to the stack and reloaded every iteration.
+constexpr std::size_t profile_interleave = 4;
+[[gnu::noinline]] std::size_t group_by_profile(const std::uint32_t* __restrict code,
+                                               const std::uint32_t* __restrict near,
+                                               std::size_t kept, std::int32_t* __restrict slot_of,
+                                               std::uint32_t* __restrict profiles,
+                                               std::uint32_t* __restrict position,
+                                               std::int32_t* __restrict near_slot,
+                                               std::uint32_t* __restrict members,
+                                               std::uint32_t* __restrict member_end) {
+  constexpr std::size_t interleave = profile_interleave;
+  std::size_t used = 0;
+  position[0] = 0;
+  for (std::size_t p = 0; p < kept; ++p) {
+    const std::uint32_t profile = code[p];
+    std::int32_t slot = slot_of[profile];
+    if (slot < 0) {
+      slot = std::int32_t(used);
+      slot_of[profile] = slot;
+      profiles[used++] = profile;
+      for (std::size_t c = 1; c <= interleave; ++c) position[std::size_t(slot) * interleave + c] = 0;
+    }
+    near_slot[p] = slot;
+    ++position[std::size_t(slot) * interleave + (p % interleave) + 1];
+  }
+  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
+  for (std::size_t slot = 0; slot <= used; ++slot) member_end[slot] = position[slot * interleave];
+  for (std::size_t p = 0; p < kept; ++p)
+    members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
+  return used;
+}
+
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
 // for each profile the summed squared coordinate differences along the whole separation history
 // (the distance in any dimension at any step is a sum of these differences). Two passes: the
@@ -148,9 +186,10 @@ inline void add_separations(const double* xi, const double* histories, std::size
   const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
   std::size_t candidates = 0;
   for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
-  if (sums.near.size() < candidates) {
-    sums.near.resize(candidates);
-    sums.near_code.resize(candidates);
+  if (sums.near.size() < candidates + 4) {
+    sums.near.resize(candidates + 4);
+    sums.near_distance.resize(candidates + 4);
+    sums.near_code.resize(candidates + 4);
     sums.near_slot.resize(candidates);
     sums.members.resize(candidates);
   }
@@ -170,14 +209,13 @@ inline void add_separations(const double* xi, const double* histories, std::size
   double* ci = sums.own.data();
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
   std::uint32_t* __restrict near = sums.near.data();
-  std::uint32_t* __restrict near_code = sums.near_code.data();
+  double* __restrict near_distance = sums.near_distance.data();
   std::size_t kept = 0;
   for (std::size_t run = 0; run < runs; ++run) {
     const std::size_t run_end = last[run] - window_begin;
     for (std::size_t c = first[run] - window_begin; c < run_end; c += 4) {
-      Vector4 distance = {}, code = {};
-      std::size_t l = 0;
-      for (; l + 1 < m0; ++l) {
+      Vector4 distance = {};
+      for (std::size_t l = 0; l < m0; ++l) {
         Vector4 other;
         load4(other, columns + l * stride + c);
         const Vector4 difference = ci[l] - other;
@@ -185,65 +223,64 @@ inline void add_separations(const double* xi, const double* histories, std::size
       }
       // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
       // runs along the grid order: skip blocks of four with none within it.
-      Vector4 inner;
-      {
-        Vector4 other;
-        load4(other, columns + l * stride + c);
-        const Vector4 difference = ci[l] - other;
-        inner = distance + difference * difference;
-      }
-      const auto within = inner <= eps2;
+      const auto within = distance <= eps2;
       if (!(within[0] | within[1] | within[2] | within[3])) continue;
-      distance = inner;
-      for (;;) {
-        const double place = s.places[l + 1 - m0];
-        const Vector4 zero = {}, places = {place, place, place, place};
-        for (std::size_t k = 0; k < s.radii; ++k) code += distance > s.radii2[k] ? places : zero;
-        if (++l == coordinates) break;
-        Vector4 other;
-        load4(other, columns + l * stride + c);
-        const Vector4 difference = ci[l] - other;
-        distance += difference * difference;
-      }
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
       for (std::size_t lane = 0; lane < lanes; ++lane) {
         const std::size_t j = index[c + lane];
-        const bool neighbour = inner[lane] <= eps2 && inner[lane] > s.floor2 &&
+        const bool neighbour = distance[lane] <= eps2 && distance[lane] > s.floor2 &&
                                (j > i ? j - i : i - j) > s.theiler;
         near[kept] = std::uint32_t(c + lane);
-        near_code[kept] = std::uint32_t(code[lane]);
+        near_distance[kept] = distance[lane];
         kept += neighbour ? 1 : 0;
       }
     }
   }
-  // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums. Four
-  // interleaved counters per slot (by p mod 4): consecutive neighbours of one profile would
-  // otherwise wait on each other's increment of the same counter.
-  constexpr std::size_t interleave = 4;
-  if (sums.member_position.size() < kept * interleave + 1)
-    sums.member_position.resize(kept * interleave + 1);
-  std::uint32_t* __restrict position = sums.member_position.data();
-  position[0] = 0;
-  std::int32_t* __restrict near_slot = sums.near_slot.data();
-  for (std::size_t p = 0; p < kept; ++p) {
-    const std::uint32_t profile = near_code[p];
-    std::int32_t slot = sums.slot_of[profile];
-    if (slot < 0) {
-      slot = std::int32_t(sums.profiles.size());
-      sums.slot_of[profile] = slot;
-      sums.profiles.push_back(profile);
-      std::fill_n(position + std::size_t(slot) * interleave + 1, interleave, 0u);
-    }
-    near_slot[p] = slot;
-    ++position[std::size_t(slot) * interleave + (p % interleave) + 1];
+  // Pass 2, four neighbours per vector: the radius bins of the scanned dimensions as a code (the
+  // sum of the place values (radii + 1)^d for every radius below the distance in dimension
+  // min_dimension + d), the distance growing coordinate by coordinate from the one of pass 1.
+  // The compares of one dimension are summed as a tree (a chain of dependent adds was the
+  // bottleneck when every candidate block was coded).
+  for (std::size_t p = kept; p < kept + 4; ++p) {  // padding lanes: the reference itself
+    near[p] = std::uint32_t(own);
+    near_distance[p] = 0;
   }
-  const std::size_t used = sums.profiles.size();
-  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
-  sums.member_end.resize(used + 1);
-  for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
-  std::uint32_t* __restrict members = sums.members.data();
-  for (std::size_t p = 0; p < kept; ++p)
-    members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
+  std::uint32_t* __restrict near_code = sums.near_code.data();
+  for (std::size_t p = 0; p < kept; p += 4) {
+    Vector4 distance;
+    load4(distance, near_distance + p);
+    Vector4 code = {};
+    for (std::size_t d = 0;; ++d) {
+      const double place = s.places[d];
+      const Vector4 zero = {}, places = {place, place, place, place};
+      Vector4 even = {}, odd = {};
+      std::size_t k = 0;
+      for (; k + 1 < s.radii; k += 2) {
+        even += distance > s.radii2[k] ? places : zero;
+        odd += distance > s.radii2[k + 1] ? places : zero;
+      }
+      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
+      code += even + odd;
+      if (d + 1 == s.dims) break;
+      const double* column = columns + (m0 + d) * stride;
+      const Vector4 other = {column[near[p]], column[near[p + 1]], column[near[p + 2]],
+                             column[near[p + 3]]};
+      const Vector4 difference = ci[m0 + d] - other;
+      distance += difference * difference;
+    }
+    for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
+  }
+  // Pass 3: the neighbours slot by slot, then each slot's history sums.
+  if (sums.member_position.size() < kept * profile_interleave + 1) {
+    sums.member_position.resize(kept * profile_interleave + 1);
+    sums.member_end.resize(kept + 1);
+    sums.profiles.resize(kept);
+  }
+  const std::size_t used = group_by_profile(near_code, near, kept, sums.slot_of.data(),
+                                            sums.profiles.data(), sums.member_position.data(),
+                                            sums.near_slot.data(), sums.members.data(),
+                                            sums.member_end.data());
+  const std::uint32_t* members = sums.members.data();
   // Each profile's sums go straight to the bin of its radius in every dimension where it is
   // within the largest radius.
   const std::size_t vectors = s.padded / 4;
@@ -281,7 +318,6 @@ inline void add_separations(const double* xi, const double* histories, std::size
       default: break;
     }
   }
-  sums.profiles.clear();
 }
 
 // One reference's table: the summed histories of its neighbours binned by radius and dimension
@@ -404,6 +440,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
     NeighbourSums sums;
     RowWindow window;
+    std::vector<std::uint32_t> visit;
     sums.slot_of.assign(profile_codes, -1);
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
@@ -420,8 +457,18 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       const std::size_t row = row_order[rank];
       window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
                   grid.row_begin(std::min(row + 2, grid.rows())));
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q) {
-        const std::size_t i = grid.entries()[q].index;
+      // References in the order of their second coordinate: consecutive ones are then close
+      // and share most neighbours, whose histories stay in L2 (in storage order, box by box
+      // with time order inside a box, the neighbour histories of a whole 3 x 3 block of
+      // boxes cycled through L2 and came from L3). Changes the order of the products only.
+      visit.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        visit.push_back(std::uint32_t(q));
+      const nonlinear::BoxGrid::Entry* entries = grid.entries();
+      std::sort(visit.begin(), visit.end(),
+                [&](std::uint32_t u, std::uint32_t w) { return entries[u].b < entries[w].b; });
+      for (const std::uint32_t q : visit) {
+        const std::size_t i = entries[q].index;
         if (!is_reference[i]) continue;
         const std::size_t block = block_of(i);
         std::fill(bins.begin(), bins.end(), 0.0);
