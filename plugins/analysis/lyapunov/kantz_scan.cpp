@@ -45,9 +45,37 @@ struct ScanShape {
   std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
-  double digit_scale = 1;          // 1 / (radii + 1)
   // Profile codes: place value (radii + 1)^d of dimension index d.
   std::vector<double> places;
+  // The possible profiles (radius bins nondecreasing with the dimension, within the largest
+  // radius in min_dimension), numbered densely: profile_of[code] (-1 for codes that cannot
+  // occur), and for profile k the bins it adds to, bin_of[bins_begin[k] .. bins_begin[k + 1])
+  // as r * dims + d. Precomputed once: a slot table filled per reference and the decoding of
+  // each slot's code were a visible cost.
+  std::vector<std::int32_t> profile_of;
+  std::vector<std::uint32_t> bins_begin, bin_of;
+  std::size_t profile_count() const { return bins_begin.size() - 1; }
+  void number_profiles() {
+    std::size_t codes = 1;
+    for (std::size_t d = 0; d < dims; ++d) codes *= radii + 1;
+    profile_of.assign(codes, -1);
+    bins_begin.assign(1, 0);
+    bin_of.clear();
+    std::vector<std::size_t> digits(dims);
+    for (std::size_t code = 0; code < codes; ++code) {
+      std::size_t rest = code;
+      bool possible = true;
+      for (std::size_t d = 0; d < dims; ++d, rest /= radii + 1) {
+        digits[d] = rest % (radii + 1);
+        possible = possible && (d == 0 ? digits[d] < radii : digits[d] >= digits[d - 1]);
+      }
+      if (!possible) continue;
+      profile_of[code] = std::int32_t(bins_begin.size() - 1);
+      for (std::size_t d = 0; d < dims && digits[d] < radii; ++d)
+        bin_of.push_back(std::uint32_t(digits[d] * dims + d));
+      bins_begin.push_back(std::uint32_t(bin_of.size()));
+    }
+  }
 };
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
@@ -55,17 +83,14 @@ struct ScanShape {
 // neighbours with the same profile are summed into one slot, so each neighbour costs one history
 // sum whatever the number of dimensions.
 struct NeighbourSums {
-  std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
-  std::vector<std::uint32_t> profiles;   // code of each used slot (buffer)
   std::vector<double*> targets;          // the bins a slot adds to
   std::vector<double> own;               // the reference's delay coordinates
   std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
   std::vector<double> near_distance;     // their squared distance in min_dimension
   std::vector<std::uint32_t> near_code;  // their profile code
-  std::vector<std::int32_t> near_slot;   // their slot
-  std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
-  std::vector<std::uint32_t> member_end; // slot boundaries in members (used + 1)
-  std::vector<std::uint32_t> member_position;  // counting-sort positions
+  std::vector<std::int32_t> next;        // the next neighbour of the same profile, -1: none
+  std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
+  std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
 };
 
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
@@ -100,16 +125,20 @@ struct RowWindow {
 inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 
 // sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
-// samples t: the partial sums stay in registers while the members stream by.
+// samples t: the partial sums stay in registers while the members stream by. The members are a
+// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p].
 template <std::size_t Vectors>
-[[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories, std::size_t padded,
-                            const std::uint32_t* member, const std::uint32_t* member_end,
-                            std::size_t offset, double* const* targets, std::size_t target_count) {
+[[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories,
+                                                   std::size_t padded, std::int32_t first,
+                                                   const std::int32_t* next,
+                                                   const std::uint32_t* near, std::size_t offset,
+                                                   double* const* targets,
+                                                   std::size_t target_count) {
   Vector4 acc[Vectors] = {};
   Vector4 reference[Vectors];
   for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
-  for (; member < member_end; ++member) {
-    const double* xj = histories + std::size_t(*member) * padded + offset;
+  for (std::int32_t p = first; p >= 0; p = next[p]) {
+    const double* xj = histories + std::size_t(near[p]) * padded + offset;
     for (std::size_t v = 0; v < Vectors; ++v) {
       Vector4 other;
       load4(other, xj + 4 * v);
@@ -127,41 +156,24 @@ template <std::size_t Vectors>
     }
 }
 
-// Counting sort of the neighbours by profile code: the slots (distinct codes in order of first
-// appearance, slot_of[code] set and left for the caller to reset), members = near grouped slot
-// by slot with slot s at [member_end[s], member_end[s + 1]). Returns the slot count. Four
-// interleaved counters per slot (by p mod 4): consecutive neighbours of one profile would
-// otherwise wait on each other's increment of the same counter. Kept out of line: inlined into
-// the vector passes its pointers were spilled to the stack and reloaded every iteration.
-constexpr std::size_t profile_interleave = 4;
-[[gnu::noinline]] std::size_t group_by_profile(const std::uint32_t* __restrict code,
-                                               const std::uint32_t* __restrict near,
-                                               std::size_t kept, std::int32_t* __restrict slot_of,
-                                               std::uint32_t* __restrict profiles,
-                                               std::uint32_t* __restrict position,
-                                               std::int32_t* __restrict near_slot,
-                                               std::uint32_t* __restrict members,
-                                               std::uint32_t* __restrict member_end) {
-  constexpr std::size_t interleave = profile_interleave;
-  std::size_t used = 0;
-  position[0] = 0;
-  for (std::size_t p = 0; p < kept; ++p) {
-    const std::uint32_t profile = code[p];
-    std::int32_t slot = slot_of[profile];
-    if (slot < 0) {
-      slot = std::int32_t(used);
-      slot_of[profile] = slot;
-      profiles[used++] = profile;
-      for (std::size_t c = 1; c <= interleave; ++c) position[std::size_t(slot) * interleave + c] = 0;
-    }
-    near_slot[p] = slot;
-    ++position[std::size_t(slot) * interleave + (p % interleave) + 1];
+// The neighbours grouped by profile as linked lists (in order of p): head[k] = first neighbour of
+// profile k (-1: none), next[p] = the one after p, count[k] = their number. One pass and no
+// scatter: a counting sort's scatter (position loaded, incremented and stored, then the member
+// stored at it) stalled on store forwarding. Kept out of line: inlined into the vector passes
+// its pointers were spilled to the stack and reloaded every iteration.
+[[gnu::noinline]] void group_by_profile(const std::uint32_t* __restrict code, std::size_t kept,
+                                        const std::int32_t* __restrict profile_of,
+                                        std::size_t profiles, std::int32_t* __restrict head,
+                                        std::int32_t* __restrict next,
+                                        std::uint32_t* __restrict count) {
+  std::fill_n(head, profiles, -1);
+  std::fill_n(count, profiles, 0u);
+  for (std::size_t p = kept; p-- > 0;) {
+    const auto k = std::size_t(profile_of[code[p]]);
+    next[p] = head[k];
+    head[k] = std::int32_t(p);
+    ++count[k];
   }
-  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
-  for (std::size_t slot = 0; slot <= used; ++slot) member_end[slot] = position[slot * interleave];
-  for (std::size_t p = 0; p < kept; ++p)
-    members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
-  return used;
 }
 
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
@@ -190,8 +202,7 @@ constexpr std::size_t profile_interleave = 4;
     sums.near.resize(candidates + 4);
     sums.near_distance.resize(candidates + 4);
     sums.near_code.resize(candidates + 4);
-    sums.near_slot.resize(candidates);
-    sums.members.resize(candidates);
+    sums.next.resize(candidates);
   }
   // Passes 1 and 2, four consecutive candidates per vector: the squared distance in each
   // dimension (coordinates summed in order, as in the definition), the radius bins of the
@@ -270,51 +281,37 @@ constexpr std::size_t profile_interleave = 4;
     }
     for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
   }
-  // Pass 3: the neighbours slot by slot, then each slot's history sums.
-  if (sums.member_position.size() < kept * profile_interleave + 1) {
-    sums.member_position.resize(kept * profile_interleave + 1);
-    sums.member_end.resize(kept + 1);
-    sums.profiles.resize(kept);
-  }
-  const std::size_t used = group_by_profile(near_code, near, kept, sums.slot_of.data(),
-                                            sums.profiles.data(), sums.member_position.data(),
-                                            sums.near_slot.data(), sums.members.data(),
-                                            sums.member_end.data());
-  const std::uint32_t* members = sums.members.data();
-  // Each profile's sums go straight to the bin of its radius in every dimension where it is
-  // within the largest radius.
+  // Pass 3: the neighbours profile by profile, then each profile's history sums, which go
+  // straight to the bin of its radius in every dimension where it is within the largest radius.
+  const std::size_t profiles = s.profile_count();
+  sums.head.resize(profiles);
+  sums.profile_count.resize(profiles);
+  group_by_profile(near_code, kept, s.profile_of.data(), profiles, sums.head.data(),
+                   sums.next.data(), sums.profile_count.data());
+  const std::int32_t* next = sums.next.data();
   const std::size_t vectors = s.padded / 4;
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
-  for (std::size_t slot = 0; slot < used; ++slot) {
-    std::uint32_t code = sums.profiles[slot];
-    sums.slot_of[code] = -1;
-    const std::uint32_t* begin = members + sums.member_end[slot];
-    const std::uint32_t* end = members + sums.member_end[slot + 1];
+  for (std::size_t k = 0; k < profiles; ++k) {
+    const std::int32_t front = sums.head[k];
+    if (front < 0) continue;
     std::size_t target_count = 0;
-    for (std::size_t d = 0; d < s.dims; ++d) {
-      // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per digit
-      // was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away from an
-      // integer).
-      const auto quotient = std::uint32_t((double(code) + 0.5) * s.digit_scale);
-      const std::size_t ri = code - quotient * std::uint32_t(s.radii + 1);
-      code = quotient;
-      if (ri == s.radii) break;
-      targets[target_count++] = bins + (ri * s.dims + d) * s.padded;
-      bin_count[ri * s.dims + d] += double(end - begin);
+    for (std::size_t b = s.bins_begin[k]; b < s.bins_begin[k + 1]; ++b) {
+      targets[target_count++] = bins + s.bin_of[b] * s.padded;
+      bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
     }
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
-      add_separations<7>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+      add_separations<7>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
     if (v + 4 <= vectors) {
-      add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+      add_separations<4>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
       v += 4;
     }
     switch (vectors - v) {
-      case 3: add_separations<3>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
-      case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
-      case 1: add_separations<1>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
@@ -402,7 +399,6 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
-  shape.digit_scale = 1.0 / double(nr + 1);
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
@@ -413,6 +409,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     throw PointFailure(fmt::format("kantz_scan: {} radii x {} dimensions are too many (at most "
                                    "(radii + 1)^dimensions = 2^24 combinations)",
                                    nr, dims));
+  shape.number_profiles();
 
   // References are visited row by row of the grid and box by box within a row, so that
   // consecutive ones share their neighbours; each keeps the bootstrap block of its time index.
@@ -441,7 +438,6 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     NeighbourSums sums;
     RowWindow window;
     std::vector<std::uint32_t> visit;
-    sums.slot_of.assign(profile_codes, -1);
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
