@@ -91,6 +91,7 @@ struct NeighbourSums {
   std::vector<std::int32_t> next;        // the next neighbour of the same profile, -1: none
   std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
   std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
+  std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
 };
 
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
@@ -157,23 +158,28 @@ template <std::size_t Vectors>
 }
 
 // The neighbours grouped by profile as linked lists (in order of p): head[k] = first neighbour of
-// profile k (-1: none), next[p] = the one after p, count[k] = their number. One pass and no
-// scatter: a counting sort's scatter (position loaded, incremented and stored, then the member
-// stored at it) stalled on store forwarding. Kept out of line: inlined into the vector passes
-// its pointers were spilled to the stack and reloaded every iteration.
-[[gnu::noinline]] void group_by_profile(const std::uint32_t* __restrict code, std::size_t kept,
-                                        const std::int32_t* __restrict profile_of,
-                                        std::size_t profiles, std::int32_t* __restrict head,
-                                        std::int32_t* __restrict next,
-                                        std::uint32_t* __restrict count) {
-  std::fill_n(head, profiles, -1);
-  std::fill_n(count, profiles, 0u);
+// profile k (-1: none; all -1 on entry), next[p] = the one after p, count[k] = their number (0 on
+// entry), the profiles present in `present` (ascending). Returns how many are present. One pass
+// and no scatter: a counting sort's scatter (position loaded, incremented and stored, then the
+// member stored at it) stalled on store forwarding. Kept out of line: inlined into the vector
+// passes its pointers were spilled to the stack and reloaded every iteration.
+[[gnu::noinline]] std::size_t group_by_profile(const std::uint32_t* __restrict code,
+                                               std::size_t kept,
+                                               const std::int32_t* __restrict profile_of,
+                                               std::int32_t* __restrict head,
+                                               std::int32_t* __restrict next,
+                                               std::uint32_t* __restrict count,
+                                               std::uint32_t* __restrict present) {
+  std::size_t used = 0;
   for (std::size_t p = kept; p-- > 0;) {
     const auto k = std::size_t(profile_of[code[p]]);
+    if (head[k] < 0) present[used++] = std::uint32_t(k);
     next[p] = head[k];
     head[k] = std::int32_t(p);
     ++count[k];
   }
+  std::sort(present, present + used);
+  return used;
 }
 
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
@@ -203,6 +209,7 @@ template <std::size_t Vectors>
     sums.near_distance.resize(candidates + 4);
     sums.near_code.resize(candidates + 4);
     sums.next.resize(candidates);
+    sums.present.resize(candidates);
   }
   // Passes 1 and 2, four consecutive candidates per vector: the squared distance in each
   // dimension (coordinates summed in order, as in the definition), the radius bins of the
@@ -283,23 +290,23 @@ template <std::size_t Vectors>
   }
   // Pass 3: the neighbours profile by profile, then each profile's history sums, which go
   // straight to the bin of its radius in every dimension where it is within the largest radius.
-  const std::size_t profiles = s.profile_count();
-  sums.head.resize(profiles);
-  sums.profile_count.resize(profiles);
-  group_by_profile(near_code, kept, s.profile_of.data(), profiles, sums.head.data(),
-                   sums.next.data(), sums.profile_count.data());
+  const std::size_t used = group_by_profile(near_code, kept, s.profile_of.data(),
+                                            sums.head.data(), sums.next.data(),
+                                            sums.profile_count.data(), sums.present.data());
   const std::int32_t* next = sums.next.data();
   const std::size_t vectors = s.padded / 4;
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
-  for (std::size_t k = 0; k < profiles; ++k) {
+  for (std::size_t u = 0; u < used; ++u) {
+    const std::size_t k = sums.present[u];
     const std::int32_t front = sums.head[k];
-    if (front < 0) continue;
+    sums.head[k] = -1;
     std::size_t target_count = 0;
     for (std::size_t b = s.bins_begin[k]; b < s.bins_begin[k + 1]; ++b) {
       targets[target_count++] = bins + s.bin_of[b] * s.padded;
       bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
     }
+    sums.profile_count[k] = 0;
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
@@ -437,6 +444,8 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
     NeighbourSums sums;
     RowWindow window;
+    sums.head.assign(shape.profile_count(), -1);
+    sums.profile_count.assign(shape.profile_count(), 0);
     std::vector<std::uint32_t> visit;
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
