@@ -184,10 +184,11 @@ template <std::size_t Vectors>
 
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
 // for each profile the summed squared coordinate differences along the whole separation history
-// (the distance in any dimension at any step is a sum of these differences). Two passes: the
-// distances and profile codes of four candidates at a time with a branch-free compaction of the
-// neighbours, and the history sums profile by profile with the sums held in registers (one load
-// per history sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
+// (the distance in any dimension at any step is a sum of these differences). Passes: the
+// distances in min_dimension of four candidates at a time with a branch-free compaction of the
+// neighbours; the profile codes of four neighbours at a time; the neighbours grouped by profile;
+// the history sums profile by profile with the sums held in registers (one load per history
+// sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
 [[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
                                                                  const nonlinear::BoxGrid& grid,
                                                                  const RowWindow& window,
@@ -211,12 +212,9 @@ template <std::size_t Vectors>
     sums.next.resize(candidates);
     sums.present.resize(candidates);
   }
-  // Passes 1 and 2, four consecutive candidates per vector: the squared distance in each
-  // dimension (coordinates summed in order, as in the definition), the radius bins of the
-  // scanned dimensions as a code (the sum of the place values (radii + 1)^d for every radius
-  // below the distance in dimension min_dimension + d), and a branch-free compaction of the
-  // neighbours: within the largest radius in min_dimension, not coincident, outside the Theiler
-  // window.
+  // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
+  // (coordinates summed in order, as in the definition) and a branch-free compaction of the
+  // neighbours: within the largest radius, not coincident, outside the Theiler window.
   const std::size_t m0 = std::size_t(s.min_dimension);
   const std::size_t coordinates = m0 + s.dims - 1;
   const std::size_t stride = window.stride;
@@ -462,16 +460,20 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       const std::size_t row = row_order[rank];
       window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
                   grid.row_begin(std::min(row + 2, grid.rows())));
-      // References in the order of their second coordinate: consecutive ones are then close
-      // and share most neighbours, whose histories stay in L2 (in storage order, box by box
-      // with time order inside a box, the neighbour histories of a whole 3 x 3 block of
-      // boxes cycled through L2 and came from L3). Changes the order of the products only.
+      // References in the order of their second coordinate (one-axis grid: their first):
+      // consecutive ones are then close and share most neighbours, whose histories stay in L2
+      // (in storage order, box by box with time order inside a box, the neighbour histories of
+      // a whole 3 x 3 block of boxes cycled through L2). Changes the order of the products only.
       visit.clear();
       for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
         visit.push_back(std::uint32_t(q));
       const nonlinear::BoxGrid::Entry* entries = grid.entries();
-      std::sort(visit.begin(), visit.end(),
-                [&](std::uint32_t u, std::uint32_t w) { return entries[u].b < entries[w].b; });
+      if (shape.axes == 2)
+        std::sort(visit.begin(), visit.end(),
+                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].b < entries[w].b; });
+      else
+        std::sort(visit.begin(), visit.end(),
+                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].a < entries[w].a; });
       for (const std::uint32_t q : visit) {
         const std::size_t i = entries[q].index;
         if (!is_reference[i]) continue;
