@@ -39,6 +39,7 @@ namespace {
 
 // What one reference's neighbour pass needs to know about the scan.
 using Vector4 = double __attribute__((vector_size(32)));  // four doubles (AVX2; SSE2: two halves)
+using Mask4 = long long __attribute__((vector_size(32)));  // their comparisons (0 or -1)
 
 struct ScanShape {
   int min_dimension = 1, axes = 1;
@@ -226,6 +227,7 @@ template <std::size_t Vectors>
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
   std::uint32_t* __restrict near = sums.near.data();
   double* __restrict near_distance = sums.near_distance.data();
+  const Vector4 lane_number = {0, 1, 2, 3};
   std::size_t kept = 0;
   for (std::size_t run = 0; run < runs; ++run) {
     const std::size_t run_end = last[run] - window_begin;
@@ -239,16 +241,16 @@ template <std::size_t Vectors>
       }
       // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
       // runs along the grid order: skip blocks of four with none within it.
-      const auto within = distance <= eps2;
-      if (!(within[0] | within[1] | within[2] | within[3])) continue;
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
-      for (std::size_t lane = 0; lane < lanes; ++lane) {
+      const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
+      if (!(within[0] | within[1] | within[2] | within[3])) continue;
+      // All four lanes, without branches (short-circuit tests per lane mispredicted).
+      for (std::size_t lane = 0; lane < 4; ++lane) {
         const std::size_t j = index[c + lane];
-        const bool neighbour = distance[lane] <= eps2 && distance[lane] > s.floor2 &&
-                               (j > i ? j - i : i - j) > s.theiler;
+        const std::size_t gap = j > i ? j - i : i - j;
         near[kept] = std::uint32_t(c + lane);
         near_distance[kept] = distance[lane];
-        kept += neighbour ? 1 : 0;
+        kept += std::size_t(within[lane] & 1) & std::size_t(gap > s.theiler);
       }
     }
   }
@@ -345,18 +347,37 @@ template <std::size_t Vectors>
       for (std::size_t l = 1; l < m; ++l)
         for (std::size_t k = 0; k < steps; ++k) mean_square[k] += running[k + l * s.step];
       const double inverse = 1.0 / n;
-      double* p = product + (ri * s.dims + d) * steps;
-      double* f = factors + (ri * s.dims + d) * steps;
-      double low = 1, high = 1;
-      for (std::size_t k = 0; k < steps; ++k) {
-        const double v = mean_square[k] * inverse;
-        const bool positive = v > 0;
-        p[k] *= positive ? v : 1.0;
-        f[k] += positive ? 1.0 : 0.0;
-        low = std::min(low, p[k]);
-        high = std::max(high, p[k]);
+      double* __restrict p = product + (ri * s.dims + d) * steps;
+      double* __restrict f = factors + (ri * s.dims + d) * steps;
+      const double* __restrict ms = mean_square;
+      // Four steps per vector, without running min/max (which kept this loop scalar).
+      const Vector4 one = {1, 1, 1, 1}, zero = {}, scale = {inverse, inverse, inverse, inverse};
+      const Vector4 tiny = {1e-200, 1e-200, 1e-200, 1e-200}, huge = {1e200, 1e200, 1e200, 1e200};
+      Mask4 outside4 = {};
+      std::size_t k = 0;
+      for (; k + 4 <= steps; k += 4) {
+        Vector4 v, pk, fk;
+        load4(v, ms + k);
+        load4(pk, p + k);
+        load4(fk, f + k);
+        v *= scale;
+        const Mask4 positive = v > zero;
+        pk *= positive ? v : one;
+        fk += positive ? one : zero;
+        std::memcpy(p + k, &pk, sizeof pk);
+        std::memcpy(f + k, &fk, sizeof fk);
+        outside4 |= (pk < tiny) | (pk > huge);
       }
-      extreme = extreme || low < 1e-200 || high > 1e200;
+      int outside = int((outside4[0] | outside4[1] | outside4[2] | outside4[3]) != 0);
+      for (; k < steps; ++k) {
+        const double v = ms[k] * inverse;
+        const bool positive = v > 0;
+        const double next = p[k] * (positive ? v : 1.0);
+        p[k] = next;
+        f[k] += positive ? 1.0 : 0.0;
+        outside |= int(next < 1e-200) | int(next > 1e200);
+      }
+      extreme = extreme || outside != 0;
     }
   }
   return extreme;
