@@ -51,8 +51,8 @@ struct ScanShape {
   // The possible profiles (radius bins nondecreasing with the dimension, within the largest
   // radius in min_dimension), numbered densely: profile_of[code] (-1 for codes that cannot
   // occur), and for profile k the bins it adds to, bin_of[bins_begin[k] .. bins_begin[k + 1])
-  // as r * dims + d. Precomputed once: a slot table filled per reference and the decoding of
-  // each slot's code were a visible cost.
+  // as r * dims + d. Precomputed once: a table of slots filled per reference and the decoding
+  // of each slot's code were a visible cost.
   std::vector<std::int32_t> profile_of;
   std::vector<std::uint32_t> bins_begin, bin_of;
   std::size_t profile_count() const { return bins_begin.size() - 1; }
@@ -81,10 +81,10 @@ struct ScanShape {
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
 // dimensions form a "profile" (r_d per dimension d, nondecreasing, `radii` = beyond the largest);
-// neighbours with the same profile are summed into one slot, so each neighbour costs one history
-// sum whatever the number of dimensions.
+// neighbours with the same profile are summed together, so each neighbour costs one history sum
+// whatever the number of dimensions.
 struct NeighbourSums {
-  std::vector<double*> targets;          // the bins a slot adds to
+  std::vector<double*> targets;          // the bins a profile adds to
   std::vector<double> own;               // the reference's delay coordinates
   std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
   std::vector<double> near_distance;     // their squared distance in min_dimension
