@@ -39,32 +39,60 @@ namespace {
 
 // What one reference's neighbour pass needs to know about the scan.
 using Vector4 = double __attribute__((vector_size(32)));  // four doubles (AVX2; SSE2: two halves)
+using Mask4 = long long __attribute__((vector_size(32)));  // their comparisons (0 or -1)
 
 struct ScanShape {
   int min_dimension = 1, axes = 1;
   std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
-  double digit_scale = 1;          // 1 / (radii + 1)
   // Profile codes: place value (radii + 1)^d of dimension index d.
   std::vector<double> places;
+  // The possible profiles (radius bins nondecreasing with the dimension, within the largest
+  // radius in min_dimension), numbered densely: profile_of[code] (-1 for codes that cannot
+  // occur), and for profile k the bins it adds to, bin_of[bins_begin[k] .. bins_begin[k + 1])
+  // as r * dims + d. Precomputed once: a table of slots filled per reference and the decoding
+  // of each slot's code were a visible cost.
+  std::vector<std::int32_t> profile_of;
+  std::vector<std::uint32_t> bins_begin, bin_of;
+  std::size_t profile_count() const { return bins_begin.size() - 1; }
+  void number_profiles() {
+    std::size_t codes = 1;
+    for (std::size_t d = 0; d < dims; ++d) codes *= radii + 1;
+    profile_of.assign(codes, -1);
+    bins_begin.assign(1, 0);
+    bin_of.clear();
+    std::vector<std::size_t> digits(dims);
+    for (std::size_t code = 0; code < codes; ++code) {
+      std::size_t rest = code;
+      bool possible = true;
+      for (std::size_t d = 0; d < dims; ++d, rest /= radii + 1) {
+        digits[d] = rest % (radii + 1);
+        possible = possible && (d == 0 ? digits[d] < radii : digits[d] >= digits[d - 1]);
+      }
+      if (!possible) continue;
+      profile_of[code] = std::int32_t(bins_begin.size() - 1);
+      for (std::size_t d = 0; d < dims && digits[d] < radii; ++d)
+        bin_of.push_back(std::uint32_t(digits[d] * dims + d));
+      bins_begin.push_back(std::uint32_t(bin_of.size()));
+    }
+  }
 };
 
 // Per-thread scratch of one reference's neighbour pass. A neighbour's radius bins in the scanned
 // dimensions form a "profile" (r_d per dimension d, nondecreasing, `radii` = beyond the largest);
-// neighbours with the same profile are summed into one slot, so each neighbour costs one history
-// sum whatever the number of dimensions.
+// neighbours with the same profile are summed together, so each neighbour costs one history sum
+// whatever the number of dimensions.
 struct NeighbourSums {
-  std::vector<std::int32_t> slot_of;     // profile code -> slot, -1 when unused
-  std::vector<std::uint32_t> profiles;   // code of each used slot
-  std::vector<double*> targets;          // the bins a slot adds to
+  std::vector<double*> targets;          // the bins a profile adds to
   std::vector<double> own;               // the reference's delay coordinates
   std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
+  std::vector<double> near_distance;     // their squared distance in min_dimension
   std::vector<std::uint32_t> near_code;  // their profile code
-  std::vector<std::int32_t> near_slot;   // their slot
-  std::vector<std::uint32_t> members;    // window rows of the neighbours, slot by slot
-  std::vector<std::uint32_t> member_end; // slot boundaries in members (used + 1)
-  std::vector<std::uint32_t> member_position;  // counting-sort positions
+  std::vector<std::int32_t> next;        // the next neighbour of the same profile, -1: none
+  std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
+  std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
+  std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
 };
 
 // The separation histories of the points of three adjacent grid rows (boxes of the first axis),
@@ -99,16 +127,20 @@ struct RowWindow {
 inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 
 // sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
-// samples t: the partial sums stay in registers while the members stream by.
+// samples t: the partial sums stay in registers while the members stream by. The members are a
+// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p].
 template <std::size_t Vectors>
-inline void add_separations(const double* xi, const double* histories, std::size_t padded,
-                            const std::uint32_t* member, const std::uint32_t* member_end,
-                            std::size_t offset, double* const* targets, std::size_t target_count) {
+[[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories,
+                                                   std::size_t padded, std::int32_t first,
+                                                   const std::int32_t* next,
+                                                   const std::uint32_t* near, std::size_t offset,
+                                                   double* const* targets,
+                                                   std::size_t target_count) {
   Vector4 acc[Vectors] = {};
   Vector4 reference[Vectors];
   for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
-  for (; member < member_end; ++member) {
-    const double* xj = histories + std::size_t(*member) * padded + offset;
+  for (std::int32_t p = first; p >= 0; p = next[p]) {
+    const double* xj = histories + std::size_t(near[p]) * padded + offset;
     for (std::size_t v = 0; v < Vectors; ++v) {
       Vector4 other;
       load4(other, xj + 4 * v);
@@ -126,12 +158,38 @@ inline void add_separations(const double* xi, const double* histories, std::size
     }
 }
 
+// The neighbours grouped by profile as linked lists (in order of p): head[k] = first neighbour of
+// profile k (-1: none; all -1 on entry), next[p] = the one after p, count[k] = their number (0 on
+// entry), the profiles present in `present` (ascending). Returns how many are present. One pass
+// and no scatter: a counting sort's scatter (position loaded, incremented and stored, then the
+// member stored at it) stalled on store forwarding. Kept out of line: inlined into the vector
+// passes its pointers were spilled to the stack and reloaded every iteration.
+[[gnu::noinline]] std::size_t group_by_profile(const std::uint32_t* __restrict code,
+                                               std::size_t kept,
+                                               const std::int32_t* __restrict profile_of,
+                                               std::int32_t* __restrict head,
+                                               std::int32_t* __restrict next,
+                                               std::uint32_t* __restrict count,
+                                               std::uint32_t* __restrict present) {
+  std::size_t used = 0;
+  for (std::size_t p = kept; p-- > 0;) {
+    const auto k = std::size_t(profile_of[code[p]]);
+    if (head[k] < 0) present[used++] = std::uint32_t(k);
+    next[p] = head[k];
+    head[k] = std::int32_t(p);
+    ++count[k];
+  }
+  std::sort(present, present + used);
+  return used;
+}
+
 // The neighbours of the reference at grid entry q within the largest radius, their profiles, and
 // for each profile the summed squared coordinate differences along the whole separation history
-// (the distance in any dimension at any step is a sum of these differences). Two passes: the
-// distances and profile codes of four candidates at a time with a branch-free compaction of the
-// neighbours, and the history sums profile by profile with the sums held in registers (one load
-// per history sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
+// (the distance in any dimension at any step is a sum of these differences). Passes: the
+// distances in min_dimension of four candidates at a time with a branch-free compaction of the
+// neighbours; the profile codes of four neighbours at a time; the neighbours grouped by profile;
+// the history sums profile by profile with the sums held in registers (one load per history
+// sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
 [[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
                                                                  const nonlinear::BoxGrid& grid,
                                                                  const RowWindow& window,
@@ -148,18 +206,16 @@ inline void add_separations(const double* xi, const double* histories, std::size
   const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
   std::size_t candidates = 0;
   for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
-  if (sums.near.size() < candidates) {
-    sums.near.resize(candidates);
-    sums.near_code.resize(candidates);
-    sums.near_slot.resize(candidates);
-    sums.members.resize(candidates);
+  if (sums.near.size() < candidates + 4) {
+    sums.near.resize(candidates + 4);
+    sums.near_distance.resize(candidates + 4);
+    sums.near_code.resize(candidates + 4);
+    sums.next.resize(candidates);
+    sums.present.resize(candidates);
   }
-  // Passes 1 and 2, four consecutive candidates per vector: the squared distance in each
-  // dimension (coordinates summed in order, as in the definition), the radius bins of the
-  // scanned dimensions as a code (the sum of the place values (radii + 1)^d for every radius
-  // below the distance in dimension min_dimension + d), and a branch-free compaction of the
-  // neighbours: within the largest radius in min_dimension, not coincident, outside the Theiler
-  // window.
+  // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
+  // (coordinates summed in order, as in the definition) and a branch-free compaction of the
+  // neighbours: within the largest radius, not coincident, outside the Theiler window.
   const std::size_t m0 = std::size_t(s.min_dimension);
   const std::size_t coordinates = m0 + s.dims - 1;
   const std::size_t stride = window.stride;
@@ -170,14 +226,14 @@ inline void add_separations(const double* xi, const double* histories, std::size
   double* ci = sums.own.data();
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
   std::uint32_t* __restrict near = sums.near.data();
-  std::uint32_t* __restrict near_code = sums.near_code.data();
+  double* __restrict near_distance = sums.near_distance.data();
+  const Vector4 lane_number = {0, 1, 2, 3};
   std::size_t kept = 0;
   for (std::size_t run = 0; run < runs; ++run) {
     const std::size_t run_end = last[run] - window_begin;
     for (std::size_t c = first[run] - window_begin; c < run_end; c += 4) {
-      Vector4 distance = {}, code = {};
-      std::size_t l = 0;
-      for (; l + 1 < m0; ++l) {
+      Vector4 distance = {};
+      for (std::size_t l = 0; l < m0; ++l) {
         Vector4 other;
         load4(other, columns + l * stride + c);
         const Vector4 difference = ci[l] - other;
@@ -185,103 +241,87 @@ inline void add_separations(const double* xi, const double* histories, std::size
       }
       // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
       // runs along the grid order: skip blocks of four with none within it.
-      Vector4 inner;
-      {
-        Vector4 other;
-        load4(other, columns + l * stride + c);
-        const Vector4 difference = ci[l] - other;
-        inner = distance + difference * difference;
-      }
-      const auto within = inner <= eps2;
-      if (!(within[0] | within[1] | within[2] | within[3])) continue;
-      distance = inner;
-      for (;;) {
-        const double place = s.places[l + 1 - m0];
-        const Vector4 zero = {}, places = {place, place, place, place};
-        for (std::size_t k = 0; k < s.radii; ++k) code += distance > s.radii2[k] ? places : zero;
-        if (++l == coordinates) break;
-        Vector4 other;
-        load4(other, columns + l * stride + c);
-        const Vector4 difference = ci[l] - other;
-        distance += difference * difference;
-      }
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
-      for (std::size_t lane = 0; lane < lanes; ++lane) {
+      const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
+      if (!(within[0] | within[1] | within[2] | within[3])) continue;
+      // All four lanes, without branches (short-circuit tests per lane mispredicted).
+      for (std::size_t lane = 0; lane < 4; ++lane) {
         const std::size_t j = index[c + lane];
-        const bool neighbour = inner[lane] <= eps2 && inner[lane] > s.floor2 &&
-                               (j > i ? j - i : i - j) > s.theiler;
+        const std::size_t gap = j > i ? j - i : i - j;
         near[kept] = std::uint32_t(c + lane);
-        near_code[kept] = std::uint32_t(code[lane]);
-        kept += neighbour ? 1 : 0;
+        near_distance[kept] = distance[lane];
+        kept += std::size_t(within[lane] & 1) & std::size_t(gap > s.theiler);
       }
     }
   }
-  // Pass 3: the neighbours slot by slot (counting sort), then each slot's history sums. Four
-  // interleaved counters per slot (by p mod 4): consecutive neighbours of one profile would
-  // otherwise wait on each other's increment of the same counter.
-  constexpr std::size_t interleave = 4;
-  if (sums.member_position.size() < kept * interleave + 1)
-    sums.member_position.resize(kept * interleave + 1);
-  std::uint32_t* __restrict position = sums.member_position.data();
-  position[0] = 0;
-  std::int32_t* __restrict near_slot = sums.near_slot.data();
-  for (std::size_t p = 0; p < kept; ++p) {
-    const std::uint32_t profile = near_code[p];
-    std::int32_t slot = sums.slot_of[profile];
-    if (slot < 0) {
-      slot = std::int32_t(sums.profiles.size());
-      sums.slot_of[profile] = slot;
-      sums.profiles.push_back(profile);
-      std::fill_n(position + std::size_t(slot) * interleave + 1, interleave, 0u);
-    }
-    near_slot[p] = slot;
-    ++position[std::size_t(slot) * interleave + (p % interleave) + 1];
+  // Pass 2, four neighbours per vector: the radius bins of the scanned dimensions as a code (the
+  // sum of the place values (radii + 1)^d for every radius below the distance in dimension
+  // min_dimension + d), the distance growing coordinate by coordinate from the one of pass 1.
+  // The compares of one dimension are summed as a tree (a chain of dependent adds was the
+  // bottleneck when every candidate block was coded).
+  for (std::size_t p = kept; p < kept + 4; ++p) {  // padding lanes: the reference itself
+    near[p] = std::uint32_t(own);
+    near_distance[p] = 0;
   }
-  const std::size_t used = sums.profiles.size();
-  for (std::size_t c = 0; c < used * interleave; ++c) position[c + 1] += position[c];
-  sums.member_end.resize(used + 1);
-  for (std::size_t slot = 0; slot <= used; ++slot) sums.member_end[slot] = position[slot * interleave];
-  std::uint32_t* __restrict members = sums.members.data();
-  for (std::size_t p = 0; p < kept; ++p)
-    members[position[std::size_t(near_slot[p]) * interleave + (p % interleave)]++] = near[p];
-  // Each profile's sums go straight to the bin of its radius in every dimension where it is
-  // within the largest radius.
+  std::uint32_t* __restrict near_code = sums.near_code.data();
+  for (std::size_t p = 0; p < kept; p += 4) {
+    Vector4 distance;
+    load4(distance, near_distance + p);
+    Vector4 code = {};
+    for (std::size_t d = 0;; ++d) {
+      const double place = s.places[d];
+      const Vector4 zero = {}, places = {place, place, place, place};
+      Vector4 even = {}, odd = {};
+      std::size_t k = 0;
+      for (; k + 1 < s.radii; k += 2) {
+        even += distance > s.radii2[k] ? places : zero;
+        odd += distance > s.radii2[k + 1] ? places : zero;
+      }
+      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
+      code += even + odd;
+      if (d + 1 == s.dims) break;
+      const double* column = columns + (m0 + d) * stride;
+      const Vector4 other = {column[near[p]], column[near[p + 1]], column[near[p + 2]],
+                             column[near[p + 3]]};
+      const Vector4 difference = ci[m0 + d] - other;
+      distance += difference * difference;
+    }
+    for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
+  }
+  // Pass 3: the neighbours profile by profile, then each profile's history sums, which go
+  // straight to the bin of its radius in every dimension where it is within the largest radius.
+  const std::size_t used = group_by_profile(near_code, kept, s.profile_of.data(),
+                                            sums.head.data(), sums.next.data(),
+                                            sums.profile_count.data(), sums.present.data());
+  const std::int32_t* next = sums.next.data();
   const std::size_t vectors = s.padded / 4;
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
-  for (std::size_t slot = 0; slot < used; ++slot) {
-    std::uint32_t code = sums.profiles[slot];
-    sums.slot_of[code] = -1;
-    const std::uint32_t* begin = members + sums.member_end[slot];
-    const std::uint32_t* end = members + sums.member_end[slot + 1];
+  for (std::size_t u = 0; u < used; ++u) {
+    const std::size_t k = sums.present[u];
+    const std::int32_t front = sums.head[k];
+    sums.head[k] = -1;
     std::size_t target_count = 0;
-    for (std::size_t d = 0; d < s.dims; ++d) {
-      // Digit d of the code in base radii + 1 (by a reciprocal: an integer division per digit
-      // was a visible cost; exact, the quotient is at least 1/(2 (radii + 1)) away from an
-      // integer).
-      const auto quotient = std::uint32_t((double(code) + 0.5) * s.digit_scale);
-      const std::size_t ri = code - quotient * std::uint32_t(s.radii + 1);
-      code = quotient;
-      if (ri == s.radii) break;
-      targets[target_count++] = bins + (ri * s.dims + d) * s.padded;
-      bin_count[ri * s.dims + d] += double(end - begin);
+    for (std::size_t b = s.bins_begin[k]; b < s.bins_begin[k + 1]; ++b) {
+      targets[target_count++] = bins + s.bin_of[b] * s.padded;
+      bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
     }
+    sums.profile_count[k] = 0;
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
-      add_separations<7>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+      add_separations<7>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
     if (v + 4 <= vectors) {
-      add_separations<4>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count);
+      add_separations<4>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
       v += 4;
     }
     switch (vectors - v) {
-      case 3: add_separations<3>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
-      case 2: add_separations<2>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
-      case 1: add_separations<1>(xi, histories, s.padded, begin, end, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
-  sums.profiles.clear();
 }
 
 // One reference's table: the summed histories of its neighbours binned by radius and dimension
@@ -307,18 +347,37 @@ inline void add_separations(const double* xi, const double* histories, std::size
       for (std::size_t l = 1; l < m; ++l)
         for (std::size_t k = 0; k < steps; ++k) mean_square[k] += running[k + l * s.step];
       const double inverse = 1.0 / n;
-      double* p = product + (ri * s.dims + d) * steps;
-      double* f = factors + (ri * s.dims + d) * steps;
-      double low = 1, high = 1;
-      for (std::size_t k = 0; k < steps; ++k) {
-        const double v = mean_square[k] * inverse;
-        const bool positive = v > 0;
-        p[k] *= positive ? v : 1.0;
-        f[k] += positive ? 1.0 : 0.0;
-        low = std::min(low, p[k]);
-        high = std::max(high, p[k]);
+      double* __restrict p = product + (ri * s.dims + d) * steps;
+      double* __restrict f = factors + (ri * s.dims + d) * steps;
+      const double* __restrict ms = mean_square;
+      // Four steps per vector, without running min/max (which kept this loop scalar).
+      const Vector4 one = {1, 1, 1, 1}, zero = {}, scale = {inverse, inverse, inverse, inverse};
+      const Vector4 tiny = {1e-200, 1e-200, 1e-200, 1e-200}, huge = {1e200, 1e200, 1e200, 1e200};
+      Mask4 outside4 = {};
+      std::size_t k = 0;
+      for (; k + 4 <= steps; k += 4) {
+        Vector4 v, pk, fk;
+        load4(v, ms + k);
+        load4(pk, p + k);
+        load4(fk, f + k);
+        v *= scale;
+        const Mask4 positive = v > zero;
+        pk *= positive ? v : one;
+        fk += positive ? one : zero;
+        std::memcpy(p + k, &pk, sizeof pk);
+        std::memcpy(f + k, &fk, sizeof fk);
+        outside4 |= (pk < tiny) | (pk > huge);
       }
-      extreme = extreme || low < 1e-200 || high > 1e200;
+      int outside = int((outside4[0] | outside4[1] | outside4[2] | outside4[3]) != 0);
+      for (; k < steps; ++k) {
+        const double v = ms[k] * inverse;
+        const bool positive = v > 0;
+        const double next = p[k] * (positive ? v : 1.0);
+        p[k] = next;
+        f[k] += positive ? 1.0 : 0.0;
+        outside |= int(next < 1e-200) | int(next > 1e200);
+      }
+      extreme = extreme || outside != 0;
     }
   }
   return extreme;
@@ -366,7 +425,6 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
-  shape.digit_scale = 1.0 / double(nr + 1);
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
@@ -377,6 +435,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     throw PointFailure(fmt::format("kantz_scan: {} radii x {} dimensions are too many (at most "
                                    "(radii + 1)^dimensions = 2^24 combinations)",
                                    nr, dims));
+  shape.number_profiles();
 
   // References are visited row by row of the grid and box by box within a row, so that
   // consecutive ones share their neighbours; each keeps the bootstrap block of its time index.
@@ -404,7 +463,9 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
     NeighbourSums sums;
     RowWindow window;
-    sums.slot_of.assign(profile_codes, -1);
+    sums.head.assign(shape.profile_count(), -1);
+    sums.profile_count.assign(shape.profile_count(), 0);
+    std::vector<std::uint32_t> visit;
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
@@ -420,8 +481,22 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       const std::size_t row = row_order[rank];
       window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
                   grid.row_begin(std::min(row + 2, grid.rows())));
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q) {
-        const std::size_t i = grid.entries()[q].index;
+      // References in the order of their second coordinate (one-axis grid: their first):
+      // consecutive ones are then close and share most neighbours, whose histories stay in L2
+      // (in storage order, box by box with time order inside a box, the neighbour histories of
+      // a whole 3 x 3 block of boxes cycled through L2). Changes the order of the products only.
+      visit.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        visit.push_back(std::uint32_t(q));
+      const nonlinear::BoxGrid::Entry* entries = grid.entries();
+      if (shape.axes == 2)
+        std::sort(visit.begin(), visit.end(),
+                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].b < entries[w].b; });
+      else
+        std::sort(visit.begin(), visit.end(),
+                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].a < entries[w].a; });
+      for (const std::uint32_t q : visit) {
+        const std::size_t i = entries[q].index;
         if (!is_reference[i]) continue;
         const std::size_t block = block_of(i);
         std::fill(bins.begin(), bins.end(), 0.0);
