@@ -39,6 +39,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
+# Debian's SUNDIALS is compiled without optimisation: build the same source package optimised
+# into build/deps/sundials (found first by the CMake presets; falls back to the packaged one).
+"$root/framework/scripts/optimised_sundials.sh"
+
 # OpenMPI refuses to start as root unless told it is deliberate (the MPI tests run mpirun).
 if [ "$(id -u)" -eq 0 ]; then
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
