@@ -21,6 +21,9 @@ PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p
   series_compliance_ = 1.0 / p.contact_stiffness_n_per_m +
                        (p.wheel_regeneration ? 1.0 / p.wheel_wear_stiffness_n_per_m : 0.0) +
                        (p.work_regeneration ? 1.0 / p.work_removal_stiffness_n_per_m : 0.0);
+  series_stiffness_ = 1.0 / series_compliance_;
+  wheel_wear_compliance_ = p.wheel_regeneration ? 1.0 / p.wheel_wear_stiffness_n_per_m : 0.0;
+  work_removal_compliance_ = p.work_regeneration ? 1.0 / p.work_removal_stiffness_n_per_m : 0.0;
 }
 
 void PlungeTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
@@ -62,12 +65,12 @@ void PlungeTimeDomain::contact(const ContactInput& in, ContactOutput& out) const
   constexpr auto work = static_cast<std::size_t>(Rotor::work);
   const double interference = in.infeed_m - in.previous_surface_m[wheel] -
                               in.previous_surface_m[work] - displacement_m(in.state);
-  const double force = interference / series_compliance_;
+  const double force = interference * series_stiffness_;
   out.penetration_m = interference;
   out.normal_force_n = force;
   out.tangential_force_n = 0.0;
-  out.removed_m[wheel] = p_.wheel_regeneration ? force / p_.wheel_wear_stiffness_n_per_m : 0.0;
-  out.removed_m[work] = p_.work_regeneration ? force / p_.work_removal_stiffness_n_per_m : 0.0;
+  out.removed_m[wheel] = force * wheel_wear_compliance_;
+  out.removed_m[work] = force * work_removal_compliance_;
   out.depth_of_cut_m = out.removed_m[work];
 }
 

@@ -47,6 +47,10 @@ class PlungeTimeDomain final : public TimeDomainModel {
   std::vector<Mode> modes_;
   double series_compliance_;  // 1/kc + 1/kg (wheel on) + 1/kw (work on)
   double total_compliance_;   // sum 1/k_i
+  // Reciprocals for the contact law, which runs in every right-hand side and surface write
+  // (multiplications instead of three dependent divisions): kc-kg-kw in series, and 1/kg, 1/kw
+  // (0 for a surface that does not regenerate).
+  double series_stiffness_, wheel_wear_compliance_, work_removal_compliance_;
 };
 
 }  // namespace chatterlab
