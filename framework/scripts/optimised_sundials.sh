@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds an optimised copy of Debian 12's own SUNDIALS into build/deps/sundials, which the CMake
-# presets search first (CMAKE_PREFIX_PATH); without it the build uses the packaged library.
+# Builds an optimised copy of Debian 12's own SUNDIALS into build/deps/sundials, which the
+# top-level CMakeLists.txt uses when present; without it the build uses the packaged library.
 #
 # Why: Debian's libsundials 6.4.1+dfsg1-3 is compiled without optimisation. Its debian/rules sets
 # -DCMAKE_C_FLAGS=-fcommon, which replaces dpkg's CFLAGS (-O2) rather than adding to them, so
@@ -52,7 +52,7 @@ for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list; do
 done
 apt_options=(-o "Dir::Etc::sourcelist=/dev/null" -o "Dir::Etc::sourceparts=$work/apt/sources.d"
              -o "Dir::State::Lists=$work/apt/lists" -o "Dir::Cache=$work/apt/cache"
-             -o "APT::Sandbox::User=root")
+             -o "APT::Sandbox::User=root" -o "Acquire::Retries=1" -o "Acquire::http::Timeout=30")
 
 echo "chatterlab: building an optimised SUNDIALS $version from Debian's source package" \
      "(the packaged one is compiled without optimisation; see $0)" >&2

@@ -40,7 +40,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # Debian's SUNDIALS is compiled without optimisation: build the same source package optimised
-# into build/deps/sundials (found first by the CMake presets; falls back to the packaged one).
+# into build/deps/sundials (used by CMakeLists.txt when present; else the packaged one).
 "$root/framework/scripts/optimised_sundials.sh"
 
 # OpenMPI refuses to start as root unless told it is deliberate (the MPI tests run mpirun).
