@@ -489,12 +489,10 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
         visit.push_back(std::uint32_t(q));
       const nonlinear::BoxGrid::Entry* entries = grid.entries();
-      if (shape.axes == 2)
-        std::sort(visit.begin(), visit.end(),
-                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].b < entries[w].b; });
-      else
-        std::sort(visit.begin(), visit.end(),
-                  [&](std::uint32_t u, std::uint32_t w) { return entries[u].a < entries[w].a; });
+      const double nonlinear::BoxGrid::Entry::*along =
+          shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
+      std::sort(visit.begin(), visit.end(),
+                [&](std::uint32_t u, std::uint32_t w) { return entries[u].*along < entries[w].*along; });
       for (const std::uint32_t q : visit) {
         const std::size_t i = entries[q].index;
         if (!is_reference[i]) continue;

@@ -18,12 +18,17 @@ PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p
     modes_.push_back({2.0 * std::numbers::pi * m.frequency_hz, m.damping_ratio, 1.0 / m.stiffness_n_per_m});
     total_compliance_ += 1.0 / m.stiffness_n_per_m;
   }
-  series_compliance_ = 1.0 / p.contact_stiffness_n_per_m +
-                       (p.wheel_regeneration ? 1.0 / p.wheel_wear_stiffness_n_per_m : 0.0) +
-                       (p.work_regeneration ? 1.0 / p.work_removal_stiffness_n_per_m : 0.0);
-  series_stiffness_ = 1.0 / series_compliance_;
   wheel_wear_compliance_ = p.wheel_regeneration ? 1.0 / p.wheel_wear_stiffness_n_per_m : 0.0;
   work_removal_compliance_ = p.work_regeneration ? 1.0 / p.work_removal_stiffness_n_per_m : 0.0;
+  series_stiffness_ =
+      1.0 / (1.0 / p.contact_stiffness_n_per_m + wheel_wear_compliance_ + work_removal_compliance_);
+}
+
+SimulationSettings converged_reference_settings(SimulationSettings settings) {
+  settings.relative_tolerance = 1e-8;
+  settings.samples_per_wave *= 4.0;
+  settings.max_steps_per_wave *= 4.0;
+  return settings;
 }
 
 void PlungeTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {

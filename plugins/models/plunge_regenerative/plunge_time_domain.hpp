@@ -23,6 +23,9 @@ namespace chatterlab {
 // at 250 and 1000 Hz (the benchmark and PlungeTimeDomainAccuracy use them). Not for decaying
 // responses (the engine default is for those).
 void apply_growth_rate_settings(SimulationSettings& settings);
+// The same run converged (rtol 1e-8, 4x denser steps and surface samples): the reference against
+// which the benchmark and the tests measure the integration error of `settings`.
+SimulationSettings converged_reference_settings(SimulationSettings settings);
 
 class PlungeTimeDomain final : public TimeDomainModel {
  public:
@@ -45,12 +48,11 @@ class PlungeTimeDomain final : public TimeDomainModel {
   };
   PlungeRegenerativeParameters p_;
   std::vector<Mode> modes_;
-  double series_compliance_;  // 1/kc + 1/kg (wheel on) + 1/kw (work on)
   double total_compliance_;   // sum 1/k_i
   // Reciprocals for the contact law, which runs in every right-hand side and surface write
-  // (multiplications instead of three dependent divisions): kc-kg-kw in series, and 1/kg, 1/kw
-  // (0 for a surface that does not regenerate).
-  double series_stiffness_, wheel_wear_compliance_, work_removal_compliance_;
+  // (multiplications instead of three dependent divisions): 1/kg, 1/kw (0 for a surface that
+  // does not regenerate) and kc, kg, kw in series, 1/(1/kc + 1/kg + 1/kw).
+  double wheel_wear_compliance_, work_removal_compliance_, series_stiffness_;
 };
 
 }  // namespace chatterlab
