@@ -44,10 +44,31 @@ inline double* data(N_Vector v) { return NV_DATA_S(v); }
 // order, as the serial originals.
 namespace fast_serial {
 inline sunindextype length(N_Vector v) { return NV_LENGTH_S(v); }
+// z = sum_i c_i x_i for a state of N components: the N sums in registers, each operand's data
+// pointer read once (in the generic loop below it is reloaded for every element, since the store
+// to z may alias it): 116 instructions per call for a 2-component state there, 10 % of a G1 run
+// (callgrind). The same sums in the same order.
+template <int N>
+void combine(int nvec, const sunrealtype* c, N_Vector* x, double* zd) {
+  double sum[N];
+  const double* x0 = data(x[0]);
+  for (int j = 0; j < N; ++j) sum[j] = c[0] * x0[j];
+  for (int i = 1; i < nvec; ++i) {
+    const double* xi = data(x[i]);
+    for (int j = 0; j < N; ++j) sum[j] += c[i] * xi[j];
+  }
+  for (int j = 0; j < N; ++j) zd[j] = sum[j];
+}
 int linear_combination(int nvec, sunrealtype* c, N_Vector* x, N_Vector z) {
   if (nvec < 1) return -1;
   const sunindextype n = length(z);
   double* zd = data(z);
+  switch (n) {  // one or two structural modes (G1), G5's eight states
+    case 2: combine<2>(nvec, c, x, zd); return 0;
+    case 4: combine<4>(nvec, c, x, zd); return 0;
+    case 8: combine<8>(nvec, c, x, zd); return 0;
+    default: break;
+  }
   // Element by element: safe when z is one of the x (ARKODE accumulates in place).
   for (sunindextype j = 0; j < n; ++j) {
     double sum = c[0] * data(x[0])[j];

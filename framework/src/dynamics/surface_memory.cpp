@@ -40,12 +40,7 @@ SurfaceMemory::SurfaceMemory(std::size_t samples_per_rev, std::vector<double> in
   }
 }
 
-std::size_t SurfaceMemory::slot(std::int64_t k) const {
-  return static_cast<std::size_t>(k) & (capacity_ - 1);  // k >= 0 here
-}
-
-double SurfaceMemory::value(std::int64_t k) const {
-  if (k >= 0) return ring_[slot(k)];
+double SurfaceMemory::initial_value(std::int64_t k) const {
   if (flat_) return 0.0;
   const auto n = static_cast<std::int64_t>(n_);
   if (k >= -2 * n) return initial_unrolled_[static_cast<std::size_t>(k + 2 * n)];
@@ -60,10 +55,8 @@ double SurfaceMemory::integral(std::int64_t k) const {
   return ring_integral_[slot(k)];
 }
 
-void SurfaceMemory::push(double v) {
-  if (with_integral_) ring_integral_[slot(next_)] = integral(next_ - 1) + 0.5 * spacing_ * (value(next_ - 1) + v);
-  ring_[slot(next_)] = v;
-  ++next_;
+void SurfaceMemory::push_integral(double v) {
+  ring_integral_[slot(next_)] = integral(next_ - 1) + 0.5 * spacing_ * (value(next_ - 1) + v);
 }
 
 double SurfaceMemory::interpolate(double theta, bool of_integral) const {
