@@ -70,7 +70,7 @@ TEST(PlungeTimeDomainAccuracy, SimulationAgreesWithTheRightmostRoot) {
   EXPECT_NEAR(root.root.imag() / kTwoPi, 361.7148, 1e-3);
   // The default tolerance, the growth-rate settings of the benchmark
   // (tests/bench/dynamics_bench.cpp, apply_growth_rate_settings: rtol 1e-2 with the step and
-  // surface resolution chosen for this accuracy: 4.7767 /s), and CVODE Adams at 1e-4 (4.781 /s).
+  // surface resolution chosen for this accuracy: 4.7743 /s), and CVODE Adams at 1e-4 (4.7756 /s).
   struct Case {
     const char* name;
     void (*configure)(SimulationSettings&);
@@ -100,7 +100,9 @@ TEST(PlungeTimeDomainAccuracy, SimulationAgreesWithTheRightmostRoot) {
 // (measured over 2..4 s = 1.83 Tw: 4.958 /s, and 4.965 /s for a converged reference run alike).
 // The fit therefore spans two work revolutions after the start-up transient: 0.5 .. 0.5 + 2 Tw.
 // Checked: against the root within 1 %, against a converged reference run (rtol 1e-8, 4x denser
-// surfaces and steps) within 0.3 %: the integration error of the settings themselves.
+// surfaces and steps) within 0.6 %: the integration error of the settings themselves, at most
+// half the 1 % budget (measured +0.32 % here; -0.33 / -0.55 / -0.55 % for 250 / 500 / 750 Hz
+// modes, docs/dynamics.md).
 TEST(PlungeTimeDomainAccuracy, ThousandHertzModeAtTheBenchmarkSettings) {
   auto p = reference_case();
   p.modes = {{1000.0, 0.05, 5e7}};
@@ -121,14 +123,14 @@ TEST(PlungeTimeDomainAccuracy, ThousandHertzModeAtTheBenchmarkSettings) {
   const double growth = fit_envelope(r.t_s, r.displacement_m, start_s, end_s).growth_rate_per_s;
   const double reference_growth = fit_envelope(reference.t_s, reference.displacement_m, start_s, end_s).growth_rate_per_s;
   EXPECT_NEAR(growth, root.root.real(), 0.01 * root.root.real());
-  EXPECT_NEAR(growth, reference_growth, 0.003 * reference_growth);
+  EXPECT_NEAR(growth, reference_growth, 0.006 * reference_growth);
   const double wheel_hz = p.wheel_speed_rpm / 60.0;
   const double f = dominant_frequency(r, start_s), f_root = root.root.imag() / kTwoPi;
   EXPECT_TRUE(std::abs(f - f_root) < 0.005 * f_root || std::abs(std::abs(f - f_root) - wheel_hz) < 0.005 * f_root)
       << f << " Hz against the root at " << f_root << " Hz";
-  // The settings are what makes this case cheap: about 7 steps per chatter period (the
+  // The settings are what makes this case cheap: about 6 steps per chatter period (the
   // benchmark's speed at 1000 Hz rests on it).
-  EXPECT_LT(static_cast<double>(r.steps) / s.duration_s, 11000.0);
+  EXPECT_LT(static_cast<double>(r.steps) / s.duration_s, 9000.0);
 }
 
 // Wheel regeneration alone (G3's model): the lattice spacing is the wheel frequency, the
