@@ -95,31 +95,34 @@ struct NeighbourSums {
   std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
 };
 
-// The separation histories of the points of three adjacent grid rows (boxes of the first axis),
-// copied in grid order: the candidates of a reference in the middle row then lie in three
-// contiguous stretches of this copy, read in order, instead of at random places in the series.
-// The delay coordinates and time indices again, one column per coordinate (structure of arrays):
-// the profile pass takes four consecutive candidates per vector. Rows are the unit of work of a
-// thread.
+// The points of a grid row and the reach_rows rows on either side (rows: boxes of the first
+// axis), each row sorted along the second axis (one-axis grid: the first) and copied in that
+// order: their separation histories x_{j + t} (t < history, zero padded), their delay
+// coordinates x_{j + l delay}, one column per coordinate (structure of arrays: the distance pass
+// takes four consecutive candidates per vector), and their time indices. Sorted rows make a
+// reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
+// boxes of the previous search spanned 3 eps on average). Rows are the unit of work of a thread.
 struct RowWindow {
-  nonlinear::CopiedCoordinates history;  // x_{j + t}, t < history, padded
-  std::vector<double> columns;           // x_{j + l delay} at [l * stride + entry - begin]
-  std::vector<std::uint32_t> index;      // j at [entry - begin]
-  std::size_t stride = 0;                // entries + 4 (zero slack for the last vector)
-  void fill(const ScanShape& s, const nonlinear::BoxGrid& grid, const double* x,
-            std::size_t first_entry, std::size_t end_entry) {
-    history.fill(grid, x, 1, first_entry, end_entry, s.history, s.padded);
+  std::vector<double> histories;         // x_{j + t} at [w * padded + t]
+  std::vector<double> columns;           // x_{j + l delay} at [l * stride + w]
+  std::vector<std::uint32_t> index;      // j at [w]
+  std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
+  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t count) {
     const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
-    stride = end_entry - first_entry + 4;
+    stride = count + 4;
+    histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
     index.assign(stride, 0);
-    const nonlinear::BoxGrid::Entry* entries = grid.entries();
-    for (std::size_t q = first_entry; q < end_entry; ++q) {
-      const std::size_t j = entries[q].index;
-      index[q - first_entry] = std::uint32_t(j);
-      for (std::size_t l = 0; l < coordinates; ++l)
-        columns[l * stride + q - first_entry] = x[j + l * s.step];
+    for (std::size_t w = 0; w < count; ++w) {
+      const std::size_t j = points[w];
+      index[w] = std::uint32_t(j);
+      for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
+      double* to = histories.data() + w * s.padded;
+      for (std::size_t t = 0; t < s.padded; ++t) to[t] = t < s.history ? x[j + t] : 0.0;
     }
+  }
+  const double* history(std::size_t w, std::size_t padded) const {
+    return histories.data() + w * padded;
   }
 };
 
@@ -183,45 +186,53 @@ template <std::size_t Vectors>
   return used;
 }
 
-// The neighbours of the reference at grid entry q within the largest radius, their profiles, and
-// for each profile the summed squared coordinate differences along the whole separation history
-// (the distance in any dimension at any step is a sum of these differences). Passes: the
-// distances in min_dimension of four candidates at a time with a branch-free compaction of the
-// neighbours; the profile codes of four neighbours at a time; the neighbours grouped by profile;
-// the history sums profile by profile with the sums held in registers (one load per history
-// sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
-[[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
-                                                                 const nonlinear::BoxGrid& grid,
-                                                                 const RowWindow& window,
-                                                                 std::size_t q,
-                                                                 NeighbourSums& sums,
-                                                                 double* bins, double* bin_count) {
-  const nonlinear::BoxGrid::Entry* entries = grid.entries();
-  const std::size_t i = entries[q].index;
-  const std::size_t window_begin = window.history.begin();
-  const double* histories = window.history.of(window_begin);
-  const double* xi = window.history.of(q);
+// Grid rows are a fraction 1 / reach_rows of the largest radius wide: a reference's candidates
+// lie in reach_rows rows on either side. Narrower rows mean fewer candidates (the stretches
+// cover (1 + 2 / reach_rows) x 2 eps^2 instead of 3 x 2 eps^2 around the eps disk) and a
+// smaller set of neighbour histories in use while a row is swept.
+constexpr std::size_t reach_rows = 2;
+
+// A reference's candidates: stretches [first, last) of window positions, one per row.
+struct Candidates {
+  std::size_t first[2 * reach_rows + 1] = {}, last[2 * reach_rows + 1] = {};
+  std::size_t runs = 0;
+};
+
+// The neighbours of the reference at window position `own` within the largest radius, their
+// profiles, and for each profile the summed squared coordinate differences along the whole
+// separation history (the distance in any dimension at any step is a sum of these differences).
+// Passes: the distances in min_dimension of four candidates at a time with a branch-free
+// compaction of the neighbours; the profile codes of four neighbours at a time; the neighbours
+// grouped by profile; the history sums profile by profile
+// with the sums held in registers (one load per history sample and neighbour, no stores).
+// Compiled for AVX2 as well (chosen at run time).
+[[gnu::target_clones("avx2", "default")]] void gather_neighbours(
+    const ScanShape& s, const RowWindow& window, std::size_t own, const Candidates& candidates,
+    NeighbourSums& sums, double* bins,
+    double* bin_count) {
+  const std::size_t i = window.index[own];
+  const double* histories = window.histories.data();
+  const double* xi = window.history(own, s.padded);
   const double eps2 = s.radii2[s.radii - 1];
-  std::size_t first[3], last[3];
-  const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
-  std::size_t candidates = 0;
-  for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
-  if (sums.near.size() < candidates + 4) {
-    sums.near.resize(candidates + 4);
-    sums.near_distance.resize(candidates + 4);
-    sums.near_code.resize(candidates + 4);
-    sums.next.resize(candidates);
-    sums.present.resize(candidates);
+  std::size_t count = 0;
+  for (std::size_t run = 0; run < candidates.runs; ++run)
+    count += candidates.last[run] - candidates.first[run];
+  if (sums.near.size() < count + 4) {
+    sums.near.resize(count + 4);
+    sums.near_distance.resize(count + 4);
+    sums.near_code.resize(count + 4);
+    sums.next.resize(count);
+    sums.present.resize(count);
   }
   // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
-  // (coordinates summed in order, as in the definition) and a branch-free compaction of the
-  // neighbours: within the largest radius, not coincident, outside the Theiler window.
+  // (coordinates summed in order, as in the definition: the same for (i, j) and (j, i)) and a
+  // branch-free compaction of the neighbours: within the largest radius, not coincident, outside
+  // the Theiler window.
   const std::size_t m0 = std::size_t(s.min_dimension);
   const std::size_t coordinates = m0 + s.dims - 1;
   const std::size_t stride = window.stride;
   const double* columns = window.columns.data();
   const std::uint32_t* index = window.index.data();
-  const std::size_t own = q - window_begin;
   sums.own.resize(coordinates);
   double* ci = sums.own.data();
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
@@ -229,9 +240,9 @@ template <std::size_t Vectors>
   double* __restrict near_distance = sums.near_distance.data();
   const Vector4 lane_number = {0, 1, 2, 3};
   std::size_t kept = 0;
-  for (std::size_t run = 0; run < runs; ++run) {
-    const std::size_t run_end = last[run] - window_begin;
-    for (std::size_t c = first[run] - window_begin; c < run_end; c += 4) {
+  for (std::size_t run = 0; run < candidates.runs; ++run) {
+    const std::size_t run_end = candidates.last[run];
+    for (std::size_t c = candidates.first[run]; c < run_end; c += 4) {
       Vector4 distance = {};
       for (std::size_t l = 0; l < m0; ++l) {
         Vector4 other;
@@ -239,8 +250,7 @@ template <std::size_t Vectors>
         const Vector4 difference = ci[l] - other;
         distance += difference * difference;
       }
-      // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
-      // runs along the grid order: skip blocks of four with none within it.
+      // Skip blocks of four with no candidate within the largest radius.
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
       const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
       if (!(within[0] | within[1] | within[2] | within[3])) continue;
@@ -428,7 +438,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
-  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back());
+  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
   if (profile_codes > (std::size_t(1) << 24))
@@ -437,15 +447,39 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
                                    nr, dims));
   shape.number_profiles();
 
-  // References are visited row by row of the grid and box by box within a row, so that
-  // consecutive ones share their neighbours; each keeps the bootstrap block of its time index.
+  // References and neighbours are visited row by row of the grid, each row in the order of its
+  // sort axis, so that consecutive references share their neighbours; each reference keeps the
+  // bootstrap block of its time index. sorted: the time indices of the grid's points, row by
+  // row, each row sorted along its sort axis (ties by time: one order for every window).
   std::vector<std::uint8_t> is_reference(limit, references == limit ? 1 : 0);
   if (references < limit)
     for (std::size_t r = 0; r < references; ++r)
       is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
-
+  const std::size_t rows = grid.rows();
+  std::vector<std::uint32_t> sorted(limit);
+  {
+    const nonlinear::BoxGrid::Entry* entries = grid.entries();
+    const double nonlinear::BoxGrid::Entry::*along =
+        shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
+    std::vector<std::uint32_t> order;
+    for (std::size_t row = 0; row < rows; ++row) {
+      order.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        order.push_back(std::uint32_t(q));
+      std::sort(order.begin(), order.end(), [&](std::uint32_t u, std::uint32_t w) {
+        const double au = entries[u].*along, aw = entries[w].*along;
+        return au < aw || (au == aw && entries[u].index < entries[w].index);
+      });
+      for (std::size_t n = 0; n < order.size(); ++n)
+        sorted[grid.row_begin(row) + n] = entries[order[n]].index;
+    }
+  }
   const std::vector<std::size_t> row_order = grid.rows_most_work_first();
+  // A candidate's sort-axis coordinate is at most eps from the reference's (the margin keeps
+  // every pair whose rounded distance is within eps).
+  const double reach = radii.back() * (1 + 1e-6);
+
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
@@ -465,7 +499,6 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     RowWindow window;
     sums.head.assign(shape.profile_count(), -1);
     sums.profile_count.assign(shape.profile_count(), 0);
-    std::vector<std::uint32_t> visit;
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
@@ -479,27 +512,30 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
       const std::size_t row = row_order[rank];
-      window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
-                  grid.row_begin(std::min(row + 2, grid.rows())));
-      // References in the order of their second coordinate (one-axis grid: their first):
-      // consecutive ones are then close and share most neighbours, whose histories stay in L2
-      // (in storage order, box by box with time order inside a box, the neighbour histories of
-      // a whole 3 x 3 block of boxes cycled through L2). Changes the order of the products only.
-      visit.clear();
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
-        visit.push_back(std::uint32_t(q));
-      const nonlinear::BoxGrid::Entry* entries = grid.entries();
-      const double nonlinear::BoxGrid::Entry::*along =
-          shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
-      std::sort(visit.begin(), visit.end(),
-                [&](std::uint32_t u, std::uint32_t w) { return entries[u].*along < entries[w].*along; });
-      for (const std::uint32_t q : visit) {
-        const std::size_t i = entries[q].index;
+      // The window: reach_rows rows on either side.
+      const std::size_t low = row > reach_rows ? row - reach_rows : 0;
+      const std::size_t high = std::min(row + reach_rows + 1, rows);
+      const std::size_t base = grid.row_begin(low);
+      window.fill(shape, x.data(), sorted.data() + base, grid.row_begin(high) - base);
+      auto first_of = [&](std::size_t u) { return grid.row_begin(u) - base; };
+      const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
+      for (std::size_t own = first_of(row); own < first_of(row + 1); ++own) {
+        const double v = along[own];
+        Candidates candidates;
+        for (std::size_t u = low; u < high; ++u) {
+          const double* from = along + first_of(u);
+          const double* first = std::lower_bound(from, along + first_of(u + 1), v - reach);
+          candidates.first[candidates.runs] = std::size_t(first - along);
+          candidates.last[candidates.runs] =
+              std::size_t(std::upper_bound(first, along + first_of(u + 1), v + reach) - along);
+          ++candidates.runs;
+        }
+        const std::size_t i = window.index[own];
         if (!is_reference[i]) continue;
-        const std::size_t block = block_of(i);
         std::fill(bins.begin(), bins.end(), 0.0);
         std::fill(bin_count.begin(), bin_count.end(), 0.0);
-        gather_neighbours(shape, grid, window, q, sums, bins.data(), bin_count.data());
+        gather_neighbours(shape, window, own, candidates, sums, bins.data(), bin_count.data());
+        const std::size_t block = block_of(i);
         const bool extreme = multiply_mean_squares(
             shape, steps, bins.data(), bin_count.data(), running.data(), mean_square.data(),
             product.data() + block * row_size, factors.data() + block * row_size);
