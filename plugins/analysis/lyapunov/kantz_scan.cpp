@@ -93,6 +93,7 @@ struct NeighbourSums {
   std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
   std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
   std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
+  std::size_t used = 0;                  // how many
 };
 
 // The points of a grid row and the reach_rows rows on either side (rows: boxes of the first
@@ -102,13 +103,23 @@ struct NeighbourSums {
 // takes four consecutive candidates per vector), and their time indices. Sorted rows make a
 // reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
 // boxes of the previous search spanned 3 eps on average). Rows are the unit of work of a thread.
+// History samples are stored in planes of plane_width samples (every point's samples 0..27, then
+// every point's 28..55, ...), and the history sums of a group of consecutive references run
+// plane by plane: the neighbour histories in use while a group is summed are then a plane's
+// share of the whole (whole histories of the neighbours of consecutive references were just
+// over the 512 KiB L2 and came from L3 on every reference).
+constexpr std::size_t plane_width = 28;  // seven vectors: add_separations' register blocking
 struct RowWindow {
-  std::vector<double> histories;         // x_{j + t} at [w * padded + t]
+  // Plane c: x_{j + t}, t = c * plane_width + u, at [c * plane_width * count + w * width(c) + u].
+  std::vector<double> histories;
   std::vector<double> columns;           // x_{j + l delay} at [l * stride + w]
   std::vector<std::uint32_t> index;      // j at [w]
   std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
-  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t count) {
+  std::size_t count = 0, padded = 0;
+  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n) {
     const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
+    count = n;
+    padded = s.padded;
     stride = count + 4;
     histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
@@ -117,13 +128,18 @@ struct RowWindow {
       const std::size_t j = points[w];
       index[w] = std::uint32_t(j);
       for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
-      double* to = histories.data() + w * s.padded;
-      for (std::size_t t = 0; t < s.padded; ++t) to[t] = t < s.history ? x[j + t] : 0.0;
+      for (std::size_t c = 0; c < planes(); ++c) {
+        double* to = histories.data() + c * plane_width * count + w * width(c);
+        for (std::size_t u = 0; u < width(c); ++u) {
+          const std::size_t t = c * plane_width + u;
+          to[u] = t < s.history ? x[j + t] : 0.0;
+        }
+      }
     }
   }
-  const double* history(std::size_t w, std::size_t padded) const {
-    return histories.data() + w * padded;
-  }
+  std::size_t planes() const { return (padded + plane_width - 1) / plane_width; }
+  std::size_t width(std::size_t c) const { return std::min(plane_width, padded - c * plane_width); }
+  const double* plane(std::size_t c) const { return histories.data() + c * plane_width * count; }
 };
 
 // (Out parameter: returning a 32-byte vector by value changes the ABI of the non-AVX clone.)
@@ -131,10 +147,11 @@ inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 
 // sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
 // samples t: the partial sums stay in registers while the members stream by. The members are a
-// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p].
+// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p],
+// its samples at histories + near[p] * width.
 template <std::size_t Vectors>
 [[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories,
-                                                   std::size_t padded, std::int32_t first,
+                                                   std::size_t width, std::int32_t first,
                                                    const std::int32_t* next,
                                                    const std::uint32_t* near, std::size_t offset,
                                                    double* const* targets,
@@ -143,7 +160,7 @@ template <std::size_t Vectors>
   Vector4 reference[Vectors];
   for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
   for (std::int32_t p = first; p >= 0; p = next[p]) {
-    const double* xj = histories + std::size_t(near[p]) * padded + offset;
+    const double* xj = histories + std::size_t(near[p]) * width + offset;
     for (std::size_t v = 0; v < Vectors; ++v) {
       Vector4 other;
       load4(other, xj + 4 * v);
@@ -192,27 +209,25 @@ template <std::size_t Vectors>
 // smaller set of neighbour histories in use while a row is swept.
 constexpr std::size_t reach_rows = 2;
 
+// References whose history sums run together, plane by plane (RowWindow).
+constexpr std::size_t reference_group = 16;
+
 // A reference's candidates: stretches [first, last) of window positions, one per row.
 struct Candidates {
   std::size_t first[2 * reach_rows + 1] = {}, last[2 * reach_rows + 1] = {};
   std::size_t runs = 0;
 };
 
-// The neighbours of the reference at window position `own` within the largest radius, their
-// profiles, and for each profile the summed squared coordinate differences along the whole
-// separation history (the distance in any dimension at any step is a sum of these differences).
-// Passes: the distances in min_dimension of four candidates at a time with a branch-free
-// compaction of the neighbours; the profile codes of four neighbours at a time; the neighbours
-// grouped by profile; the history sums profile by profile
-// with the sums held in registers (one load per history sample and neighbour, no stores).
-// Compiled for AVX2 as well (chosen at run time).
-[[gnu::target_clones("avx2", "default")]] void gather_neighbours(
-    const ScanShape& s, const RowWindow& window, std::size_t own, const Candidates& candidates,
-    NeighbourSums& sums, double* bins,
-    double* bin_count) {
+// The neighbours of the reference at window position `own` within the largest radius, grouped
+// by profile (in `sums`, for add_histories). Passes: the distances in min_dimension of four
+// candidates at a time with a branch-free compaction of the neighbours; the profile codes of
+// four neighbours at a time; the grouping. Compiled for AVX2 as well (chosen at run time).
+[[gnu::target_clones("avx2", "default")]] void find_neighbours(const ScanShape& s,
+                                                               const RowWindow& window,
+                                                               std::size_t own,
+                                                               const Candidates& candidates,
+                                                               NeighbourSums& sums) {
   const std::size_t i = window.index[own];
-  const double* histories = window.histories.data();
-  const double* xi = window.history(own, s.padded);
   const double eps2 = s.radii2[s.radii - 1];
   std::size_t count = 0;
   for (std::size_t run = 0; run < candidates.runs; ++run)
@@ -298,37 +313,52 @@ struct Candidates {
     }
     for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
   }
-  // Pass 3: the neighbours profile by profile, then each profile's history sums, which go
-  // straight to the bin of its radius in every dimension where it is within the largest radius.
-  const std::size_t used = group_by_profile(near_code, kept, s.profile_of.data(),
-                                            sums.head.data(), sums.next.data(),
-                                            sums.profile_count.data(), sums.present.data());
+  // Pass 3: the neighbours profile by profile.
+  sums.used = group_by_profile(near_code, kept, s.profile_of.data(), sums.head.data(),
+                               sums.next.data(), sums.profile_count.data(), sums.present.data());
+}
+
+// For each profile of the neighbours found by find_neighbours, the summed squared differences
+// of history plane c (samples c * plane_width + u), which go straight to the bin of its radius
+// in every dimension where it is within the largest radius, with the sums held in registers
+// (one load per history sample and neighbour, no stores). The last plane resets the groups.
+[[gnu::target_clones("avx2", "default")]] void add_histories(const ScanShape& s,
+                                                             const RowWindow& window,
+                                                             std::size_t own, std::size_t c,
+                                                             NeighbourSums& sums, double* bins,
+                                                             double* bin_count) {
+  const double* plane = window.plane(c);
+  const std::size_t width = window.width(c), start = c * plane_width, vectors = width / 4;
+  const bool last = c + 1 == window.planes();
+  const double* xi = plane + own * width;
   const std::int32_t* next = sums.next.data();
-  const std::size_t vectors = s.padded / 4;
+  const std::uint32_t* near = sums.near.data();
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
-  for (std::size_t u = 0; u < used; ++u) {
+  for (std::size_t u = 0; u < sums.used; ++u) {
     const std::size_t k = sums.present[u];
     const std::int32_t front = sums.head[k];
-    sums.head[k] = -1;
     std::size_t target_count = 0;
     for (std::size_t b = s.bins_begin[k]; b < s.bins_begin[k + 1]; ++b) {
-      targets[target_count++] = bins + s.bin_of[b] * s.padded;
-      bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
+      targets[target_count++] = bins + s.bin_of[b] * s.padded + start;
+      if (c == 0) bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
     }
-    sums.profile_count[k] = 0;
+    if (last) {
+      sums.head[k] = -1;
+      sums.profile_count[k] = 0;
+    }
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
-      add_separations<7>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<7>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
     if (v + 4 <= vectors) {
-      add_separations<4>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<4>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
       v += 4;
     }
     switch (vectors - v) {
-      case 3: add_separations<3>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 2: add_separations<2>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 1: add_separations<1>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
@@ -493,12 +523,17 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::vector<double> sum(out.sum.size(), 0.0), count(out.count.size(), 0.0);
     std::vector<double> product(out.sum.size(), 1.0), factors(out.sum.size(), 0.0);
     std::vector<std::size_t> pending(kantz_blocks, 0);
-    std::vector<double> bins(nr * dims * shape.padded);
-    std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
-    NeighbourSums sums;
+    // A group of consecutive references: their neighbours and their tables of binned sums.
+    const std::size_t table = nr * dims * shape.padded;
+    std::vector<NeighbourSums> group(reference_group);
+    std::vector<double> bins(reference_group * table), bin_count(reference_group * nr * dims);
+    std::vector<double> running(shape.padded), mean_square(steps);
+    std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
-    sums.head.assign(shape.profile_count(), -1);
-    sums.profile_count.assign(shape.profile_count(), 0);
+    for (NeighbourSums& sums : group) {
+      sums.head.assign(shape.profile_count(), -1);
+      sums.profile_count.assign(shape.profile_count(), 0);
+    }
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
@@ -508,6 +543,22 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
         factors[q] = 0.0;
       }
       pending[block] = 0;
+    };
+    // The group's history sums plane by plane, then its tables into the products.
+    auto sum_group = [&]() {
+      for (std::size_t c = 0; c < window.planes(); ++c)
+        for (std::size_t g = 0; g < members; ++g)
+          add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
+                        bin_count.data() + g * nr * dims);
+      for (std::size_t g = 0; g < members; ++g) {
+        const std::size_t block = block_of(window.index[member_own[g]]);
+        const bool extreme = multiply_mean_squares(
+            shape, steps, bins.data() + g * table, bin_count.data() + g * nr * dims,
+            running.data(), mean_square.data(), product.data() + block * row_size,
+            factors.data() + block * row_size);
+        if (extreme || ++pending[block] == flush) log_products(block);
+      }
+      members = 0;
     };
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
@@ -530,17 +581,14 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
               std::size_t(std::upper_bound(first, along + first_of(u + 1), v + reach) - along);
           ++candidates.runs;
         }
-        const std::size_t i = window.index[own];
-        if (!is_reference[i]) continue;
-        std::fill(bins.begin(), bins.end(), 0.0);
-        std::fill(bin_count.begin(), bin_count.end(), 0.0);
-        gather_neighbours(shape, window, own, candidates, sums, bins.data(), bin_count.data());
-        const std::size_t block = block_of(i);
-        const bool extreme = multiply_mean_squares(
-            shape, steps, bins.data(), bin_count.data(), running.data(), mean_square.data(),
-            product.data() + block * row_size, factors.data() + block * row_size);
-        if (extreme || ++pending[block] == flush) log_products(block);
+        if (!is_reference[window.index[own]]) continue;
+        std::fill_n(bins.data() + members * table, table, 0.0);
+        std::fill_n(bin_count.data() + members * nr * dims, nr * dims, 0.0);
+        find_neighbours(shape, window, own, candidates, group[members]);
+        member_own[members++] = own;
+        if (members == reference_group) sum_group();
       }
+      sum_group();
     }
     for (std::size_t b = 0; b < kantz_blocks; ++b) log_products(b);
 #pragma omp critical

@@ -101,6 +101,13 @@ TEST(Lyapunov, KantzScanMatchesDirectEvaluationInManyDimensions) {
                                               {0.1, 0.3});
 }
 
+TEST(Lyapunov, KantzScanMatchesDirectEvaluationOverTwoHistoryPlanes) {
+  // 40 steps: the separation histories (42 samples, padded to 48) span two storage planes of the
+  // window (28 + 20 samples).
+  expect_kantz_scan_matches_direct_evaluation(test_signals::henon(1000), 2, 3, 1, 0, 40,
+                                              {0.05, 0.12});
+}
+
 TEST(LyapunovAccuracy, KantzScanHenon) {
   // TISEAN lyap_k's setting (m = 2, radii 1/1000..1/100 of the range): every curve's linear region
   // has the slope lambda1 = 0.419.
