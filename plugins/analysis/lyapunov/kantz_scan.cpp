@@ -40,6 +40,7 @@ namespace {
 // What one reference's neighbour pass needs to know about the scan.
 using Vector4 = double __attribute__((vector_size(32)));  // four doubles (AVX2; SSE2: two halves)
 using Mask4 = long long __attribute__((vector_size(32)));  // their comparisons (0 or -1)
+using Code4 = std::int32_t __attribute__((vector_size(16)));  // four profile codes
 
 struct ScanShape {
   int min_dimension = 1, axes = 1;
@@ -311,7 +312,10 @@ struct Candidates {
       const Vector4 difference = ci[m0 + d] - other;
       distance += difference * difference;
     }
-    for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
+    // One vector conversion (codes < 2^24 are exact in either type); lane by lane, the four
+    // extractions and conversions were a visible cost.
+    const Code4 codes = __builtin_convertvector(code, Code4);
+    std::memcpy(near_code + p, &codes, sizeof codes);
   }
   // Pass 3: the neighbours profile by profile.
   sums.used = group_by_profile(near_code, kept, s.profile_of.data(), sums.head.data(),
