@@ -130,11 +130,12 @@ struct RowWindow {
       index[w] = std::uint32_t(j);
       for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
       for (std::size_t c = 0; c < planes(); ++c) {
+        // Samples t < history exist for every stored point (j < limit); zeros beyond.
         double* to = histories.data() + c * plane_width * count + w * width(c);
-        for (std::size_t u = 0; u < width(c); ++u) {
-          const std::size_t t = c * plane_width + u;
-          to[u] = t < s.history ? x[j + t] : 0.0;
-        }
+        const std::size_t t0 = c * plane_width;
+        const std::size_t valid = t0 < s.history ? std::min(width(c), s.history - t0) : 0;
+        std::copy_n(x + j + t0, valid, to);
+        std::fill(to + valid, to + width(c), 0.0);
       }
     }
   }
@@ -574,16 +575,21 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       window.fill(shape, x.data(), sorted.data() + base, grid.row_begin(high) - base);
       auto first_of = [&](std::size_t u) { return grid.row_begin(u) - base; };
       const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
+      // Each row's stretch [first, last): the points within reach of the reference along the
+      // sort axis; both ends only move forward as the references do.
+      Candidates candidates;
+      candidates.runs = high - low;
+      for (std::size_t u = low; u < high; ++u)
+        candidates.first[u - low] = candidates.last[u - low] = first_of(u);
       for (std::size_t own = first_of(row); own < first_of(row + 1); ++own) {
         const double v = along[own];
-        Candidates candidates;
         for (std::size_t u = low; u < high; ++u) {
-          const double* from = along + first_of(u);
-          const double* first = std::lower_bound(from, along + first_of(u + 1), v - reach);
-          candidates.first[candidates.runs] = std::size_t(first - along);
-          candidates.last[candidates.runs] =
-              std::size_t(std::upper_bound(first, along + first_of(u + 1), v + reach) - along);
-          ++candidates.runs;
+          std::size_t& first = candidates.first[u - low];
+          std::size_t& last = candidates.last[u - low];
+          const std::size_t end = first_of(u + 1);
+          while (first < end && along[first] < v - reach) ++first;
+          if (last < first) last = first;
+          while (last < end && along[last] <= v + reach) ++last;
         }
         if (!is_reference[window.index[own]]) continue;
         std::fill_n(bins.data() + members * table, table, 0.0);
