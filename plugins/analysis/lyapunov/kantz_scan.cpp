@@ -242,9 +242,8 @@ struct Candidates {
     sums.present.resize(count);
   }
   // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
-  // (coordinates summed in order, as in the definition: the same for (i, j) and (j, i)) and a
-  // branch-free compaction of the neighbours: within the largest radius, not coincident, outside
-  // the Theiler window.
+  // (coordinates summed in order, as in the definition) and a branch-free compaction of the
+  // neighbours: within the largest radius, not coincident, outside the Theiler window.
   const std::size_t m0 = std::size_t(s.min_dimension);
   const std::size_t coordinates = m0 + s.dims - 1;
   const std::size_t stride = window.stride;
