@@ -40,6 +40,7 @@ namespace {
 // What one reference's neighbour pass needs to know about the scan.
 using Vector4 = double __attribute__((vector_size(32)));  // four doubles (AVX2; SSE2: two halves)
 using Mask4 = long long __attribute__((vector_size(32)));  // their comparisons (0 or -1)
+using Code4 = std::int32_t __attribute__((vector_size(16)));  // four profile codes
 
 struct ScanShape {
   int min_dimension = 1, axes = 1;
@@ -93,34 +94,54 @@ struct NeighbourSums {
   std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
   std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
   std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
+  std::size_t used = 0;                  // how many
 };
 
-// The separation histories of the points of three adjacent grid rows (boxes of the first axis),
-// copied in grid order: the candidates of a reference in the middle row then lie in three
-// contiguous stretches of this copy, read in order, instead of at random places in the series.
-// The delay coordinates and time indices again, one column per coordinate (structure of arrays):
-// the profile pass takes four consecutive candidates per vector. Rows are the unit of work of a
-// thread.
+// The points of a grid row and the reach_rows rows on either side (rows: boxes of the first
+// axis), each row sorted along the second axis (one-axis grid: the first) and copied in that
+// order: their separation histories x_{j + t} (t < history, zero padded), their delay
+// coordinates x_{j + l delay}, one column per coordinate (structure of arrays: the distance pass
+// takes four consecutive candidates per vector), and their time indices. Sorted rows make a
+// reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
+// boxes of the previous search spanned 3 eps on average). Rows are the unit of work of a thread.
+// History samples are stored in planes of plane_width samples (every point's samples 0..27, then
+// every point's 28..55, ...), and the history sums of a group of consecutive references run
+// plane by plane: the neighbour histories in use while a group is summed are then a plane's
+// share of the whole (whole histories of the neighbours of consecutive references were just
+// over the 512 KiB L2 and came from L3 on every reference).
+constexpr std::size_t plane_width = 28;  // seven vectors: add_separations' register blocking
 struct RowWindow {
-  nonlinear::CopiedCoordinates history;  // x_{j + t}, t < history, padded
-  std::vector<double> columns;           // x_{j + l delay} at [l * stride + entry - begin]
-  std::vector<std::uint32_t> index;      // j at [entry - begin]
-  std::size_t stride = 0;                // entries + 4 (zero slack for the last vector)
-  void fill(const ScanShape& s, const nonlinear::BoxGrid& grid, const double* x,
-            std::size_t first_entry, std::size_t end_entry) {
-    history.fill(grid, x, 1, first_entry, end_entry, s.history, s.padded);
+  // Plane c: x_{j + t}, t = c * plane_width + u, at [c * plane_width * count + w * width(c) + u].
+  std::vector<double> histories;
+  std::vector<double> columns;           // x_{j + l delay} at [l * stride + w]
+  std::vector<std::uint32_t> index;      // j at [w]
+  std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
+  std::size_t count = 0, padded = 0;
+  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n) {
     const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
-    stride = end_entry - first_entry + 4;
+    count = n;
+    padded = s.padded;
+    stride = count + 4;
+    histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
     index.assign(stride, 0);
-    const nonlinear::BoxGrid::Entry* entries = grid.entries();
-    for (std::size_t q = first_entry; q < end_entry; ++q) {
-      const std::size_t j = entries[q].index;
-      index[q - first_entry] = std::uint32_t(j);
-      for (std::size_t l = 0; l < coordinates; ++l)
-        columns[l * stride + q - first_entry] = x[j + l * s.step];
+    for (std::size_t w = 0; w < count; ++w) {
+      const std::size_t j = points[w];
+      index[w] = std::uint32_t(j);
+      for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
+      for (std::size_t c = 0; c < planes(); ++c) {
+        // Samples t < history exist for every stored point (j < limit); zeros beyond.
+        double* to = histories.data() + c * plane_width * count + w * width(c);
+        const std::size_t t0 = c * plane_width;
+        const std::size_t valid = t0 < s.history ? std::min(width(c), s.history - t0) : 0;
+        std::copy_n(x + j + t0, valid, to);
+        std::fill(to + valid, to + width(c), 0.0);
+      }
     }
   }
+  std::size_t planes() const { return (padded + plane_width - 1) / plane_width; }
+  std::size_t width(std::size_t c) const { return std::min(plane_width, padded - c * plane_width); }
+  const double* plane(std::size_t c) const { return histories.data() + c * plane_width * count; }
 };
 
 // (Out parameter: returning a 32-byte vector by value changes the ABI of the non-AVX clone.)
@@ -128,10 +149,11 @@ inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
 
 // sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
 // samples t: the partial sums stay in registers while the members stream by. The members are a
-// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p].
+// list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p],
+// its samples at histories + near[p] * width.
 template <std::size_t Vectors>
 [[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories,
-                                                   std::size_t padded, std::int32_t first,
+                                                   std::size_t width, std::int32_t first,
                                                    const std::int32_t* next,
                                                    const std::uint32_t* near, std::size_t offset,
                                                    double* const* targets,
@@ -140,7 +162,7 @@ template <std::size_t Vectors>
   Vector4 reference[Vectors];
   for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
   for (std::int32_t p = first; p >= 0; p = next[p]) {
-    const double* xj = histories + std::size_t(near[p]) * padded + offset;
+    const double* xj = histories + std::size_t(near[p]) * width + offset;
     for (std::size_t v = 0; v < Vectors; ++v) {
       Vector4 other;
       load4(other, xj + 4 * v);
@@ -183,35 +205,41 @@ template <std::size_t Vectors>
   return used;
 }
 
-// The neighbours of the reference at grid entry q within the largest radius, their profiles, and
-// for each profile the summed squared coordinate differences along the whole separation history
-// (the distance in any dimension at any step is a sum of these differences). Passes: the
-// distances in min_dimension of four candidates at a time with a branch-free compaction of the
-// neighbours; the profile codes of four neighbours at a time; the neighbours grouped by profile;
-// the history sums profile by profile with the sums held in registers (one load per history
-// sample and neighbour, no stores). Compiled for AVX2 as well (chosen at run time).
-[[gnu::target_clones("avx2", "default")]] void gather_neighbours(const ScanShape& s,
-                                                                 const nonlinear::BoxGrid& grid,
-                                                                 const RowWindow& window,
-                                                                 std::size_t q,
-                                                                 NeighbourSums& sums,
-                                                                 double* bins, double* bin_count) {
-  const nonlinear::BoxGrid::Entry* entries = grid.entries();
-  const std::size_t i = entries[q].index;
-  const std::size_t window_begin = window.history.begin();
-  const double* histories = window.history.of(window_begin);
-  const double* xi = window.history.of(q);
+// Grid rows are a fraction 1 / reach_rows of the largest radius wide: a reference's candidates
+// lie in reach_rows rows on either side. Narrower rows mean fewer candidates (the stretches
+// cover (1 + 2 / reach_rows) x 2 eps^2 instead of 3 x 2 eps^2 around the eps disk) and a
+// smaller set of neighbour histories in use while a row is swept.
+constexpr std::size_t reach_rows = 2;
+
+// References whose history sums run together, plane by plane (RowWindow).
+constexpr std::size_t reference_group = 16;
+
+// A reference's candidates: stretches [first, last) of window positions, one per row.
+struct Candidates {
+  std::size_t first[2 * reach_rows + 1] = {}, last[2 * reach_rows + 1] = {};
+  std::size_t runs = 0;
+};
+
+// The neighbours of the reference at window position `own` within the largest radius, grouped
+// by profile (in `sums`, for add_histories). Passes: the distances in min_dimension of four
+// candidates at a time with a branch-free compaction of the neighbours; the profile codes of
+// four neighbours at a time; the grouping. Compiled for AVX2 as well (chosen at run time).
+[[gnu::target_clones("avx2", "default")]] void find_neighbours(const ScanShape& s,
+                                                               const RowWindow& window,
+                                                               std::size_t own,
+                                                               const Candidates& candidates,
+                                                               NeighbourSums& sums) {
+  const std::size_t i = window.index[own];
   const double eps2 = s.radii2[s.radii - 1];
-  std::size_t first[3], last[3];
-  const std::size_t runs = grid.runs_near(entries[q].a, entries[q].b, first, last);
-  std::size_t candidates = 0;
-  for (std::size_t run = 0; run < runs; ++run) candidates += last[run] - first[run];
-  if (sums.near.size() < candidates + 4) {
-    sums.near.resize(candidates + 4);
-    sums.near_distance.resize(candidates + 4);
-    sums.near_code.resize(candidates + 4);
-    sums.next.resize(candidates);
-    sums.present.resize(candidates);
+  std::size_t count = 0;
+  for (std::size_t run = 0; run < candidates.runs; ++run)
+    count += candidates.last[run] - candidates.first[run];
+  if (sums.near.size() < count + 4) {
+    sums.near.resize(count + 4);
+    sums.near_distance.resize(count + 4);
+    sums.near_code.resize(count + 4);
+    sums.next.resize(count);
+    sums.present.resize(count);
   }
   // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
   // (coordinates summed in order, as in the definition) and a branch-free compaction of the
@@ -221,7 +249,6 @@ template <std::size_t Vectors>
   const std::size_t stride = window.stride;
   const double* columns = window.columns.data();
   const std::uint32_t* index = window.index.data();
-  const std::size_t own = q - window_begin;
   sums.own.resize(coordinates);
   double* ci = sums.own.data();
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
@@ -229,9 +256,9 @@ template <std::size_t Vectors>
   double* __restrict near_distance = sums.near_distance.data();
   const Vector4 lane_number = {0, 1, 2, 3};
   std::size_t kept = 0;
-  for (std::size_t run = 0; run < runs; ++run) {
-    const std::size_t run_end = last[run] - window_begin;
-    for (std::size_t c = first[run] - window_begin; c < run_end; c += 4) {
+  for (std::size_t run = 0; run < candidates.runs; ++run) {
+    const std::size_t run_end = candidates.last[run];
+    for (std::size_t c = candidates.first[run]; c < run_end; c += 4) {
       Vector4 distance = {};
       for (std::size_t l = 0; l < m0; ++l) {
         Vector4 other;
@@ -239,8 +266,7 @@ template <std::size_t Vectors>
         const Vector4 difference = ci[l] - other;
         distance += difference * difference;
       }
-      // Candidates beyond the largest radius (half of them on the three rows of boxes) come in
-      // runs along the grid order: skip blocks of four with none within it.
+      // Skip blocks of four with no candidate within the largest radius.
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
       const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
       if (!(within[0] | within[1] | within[2] | within[3])) continue;
@@ -286,39 +312,57 @@ template <std::size_t Vectors>
       const Vector4 difference = ci[m0 + d] - other;
       distance += difference * difference;
     }
-    for (std::size_t lane = 0; lane < 4; ++lane) near_code[p + lane] = std::uint32_t(code[lane]);
+    // One vector conversion (codes < 2^24 are exact in either type); lane by lane, the four
+    // extractions and conversions were a visible cost.
+    const Code4 codes = __builtin_convertvector(code, Code4);
+    std::memcpy(near_code + p, &codes, sizeof codes);
   }
-  // Pass 3: the neighbours profile by profile, then each profile's history sums, which go
-  // straight to the bin of its radius in every dimension where it is within the largest radius.
-  const std::size_t used = group_by_profile(near_code, kept, s.profile_of.data(),
-                                            sums.head.data(), sums.next.data(),
-                                            sums.profile_count.data(), sums.present.data());
+  // Pass 3: the neighbours profile by profile.
+  sums.used = group_by_profile(near_code, kept, s.profile_of.data(), sums.head.data(),
+                               sums.next.data(), sums.profile_count.data(), sums.present.data());
+}
+
+// For each profile of the neighbours found by find_neighbours, the summed squared differences
+// of history plane c (samples c * plane_width + u), which go straight to the bin of its radius
+// in every dimension where it is within the largest radius, with the sums held in registers
+// (one load per history sample and neighbour, no stores). The last plane resets the groups.
+[[gnu::target_clones("avx2", "default")]] void add_histories(const ScanShape& s,
+                                                             const RowWindow& window,
+                                                             std::size_t own, std::size_t c,
+                                                             NeighbourSums& sums, double* bins,
+                                                             double* bin_count) {
+  const double* plane = window.plane(c);
+  const std::size_t width = window.width(c), start = c * plane_width, vectors = width / 4;
+  const bool last = c + 1 == window.planes();
+  const double* xi = plane + own * width;
   const std::int32_t* next = sums.next.data();
-  const std::size_t vectors = s.padded / 4;
+  const std::uint32_t* near = sums.near.data();
   std::vector<double*>& targets = sums.targets;
   targets.resize(s.dims);
-  for (std::size_t u = 0; u < used; ++u) {
+  for (std::size_t u = 0; u < sums.used; ++u) {
     const std::size_t k = sums.present[u];
     const std::int32_t front = sums.head[k];
-    sums.head[k] = -1;
     std::size_t target_count = 0;
     for (std::size_t b = s.bins_begin[k]; b < s.bins_begin[k + 1]; ++b) {
-      targets[target_count++] = bins + s.bin_of[b] * s.padded;
-      bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
+      targets[target_count++] = bins + s.bin_of[b] * s.padded + start;
+      if (c == 0) bin_count[s.bin_of[b]] += double(sums.profile_count[k]);
     }
-    sums.profile_count[k] = 0;
+    if (last) {
+      sums.head[k] = -1;
+      sums.profile_count[k] = 0;
+    }
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
-      add_separations<7>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<7>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
     if (v + 4 <= vectors) {
-      add_separations<4>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<4>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
       v += 4;
     }
     switch (vectors - v) {
-      case 3: add_separations<3>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 2: add_separations<2>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 1: add_separations<1>(xi, histories, s.padded, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
       default: break;
     }
   }
@@ -428,7 +472,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
-  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back());
+  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
   if (profile_codes > (std::size_t(1) << 24))
@@ -437,15 +481,39 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
                                    nr, dims));
   shape.number_profiles();
 
-  // References are visited row by row of the grid and box by box within a row, so that
-  // consecutive ones share their neighbours; each keeps the bootstrap block of its time index.
+  // References and neighbours are visited row by row of the grid, each row in the order of its
+  // sort axis, so that consecutive references share their neighbours; each reference keeps the
+  // bootstrap block of its time index. sorted: the time indices of the grid's points, row by
+  // row, each row sorted along its sort axis (ties by time: one order for every window).
   std::vector<std::uint8_t> is_reference(limit, references == limit ? 1 : 0);
   if (references < limit)
     for (std::size_t r = 0; r < references; ++r)
       is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
-
+  const std::size_t rows = grid.rows();
+  std::vector<std::uint32_t> sorted(limit);
+  {
+    const nonlinear::BoxGrid::Entry* entries = grid.entries();
+    const double nonlinear::BoxGrid::Entry::*along =
+        shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
+    std::vector<std::uint32_t> order;
+    for (std::size_t row = 0; row < rows; ++row) {
+      order.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        order.push_back(std::uint32_t(q));
+      std::sort(order.begin(), order.end(), [&](std::uint32_t u, std::uint32_t w) {
+        const double au = entries[u].*along, aw = entries[w].*along;
+        return au < aw || (au == aw && entries[u].index < entries[w].index);
+      });
+      for (std::size_t n = 0; n < order.size(); ++n)
+        sorted[grid.row_begin(row) + n] = entries[order[n]].index;
+    }
+  }
   const std::vector<std::size_t> row_order = grid.rows_most_work_first();
+  // A candidate's sort-axis coordinate is at most eps from the reference's (the margin keeps
+  // every pair whose rounded distance is within eps).
+  const double reach = radii.back() * (1 + 1e-6);
+
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
   // Products of per-reference mean square distances, one per block and table entry, are logged
@@ -459,13 +527,17 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::vector<double> sum(out.sum.size(), 0.0), count(out.count.size(), 0.0);
     std::vector<double> product(out.sum.size(), 1.0), factors(out.sum.size(), 0.0);
     std::vector<std::size_t> pending(kantz_blocks, 0);
-    std::vector<double> bins(nr * dims * shape.padded);
-    std::vector<double> bin_count(nr * dims), running(shape.padded), mean_square(steps);
-    NeighbourSums sums;
+    // A group of consecutive references: their neighbours and their tables of binned sums.
+    const std::size_t table = nr * dims * shape.padded;
+    std::vector<NeighbourSums> group(reference_group);
+    std::vector<double> bins(reference_group * table), bin_count(reference_group * nr * dims);
+    std::vector<double> running(shape.padded), mean_square(steps);
+    std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
-    sums.head.assign(shape.profile_count(), -1);
-    sums.profile_count.assign(shape.profile_count(), 0);
-    std::vector<std::uint32_t> visit;
+    for (NeighbourSums& sums : group) {
+      sums.head.assign(shape.profile_count(), -1);
+      sums.profile_count.assign(shape.profile_count(), 0);
+    }
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
         if (factors[q] == 0) continue;
@@ -476,35 +548,56 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
       }
       pending[block] = 0;
     };
+    // The group's history sums plane by plane, then its tables into the products.
+    auto sum_group = [&]() {
+      for (std::size_t c = 0; c < window.planes(); ++c)
+        for (std::size_t g = 0; g < members; ++g)
+          add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
+                        bin_count.data() + g * nr * dims);
+      for (std::size_t g = 0; g < members; ++g) {
+        const std::size_t block = block_of(window.index[member_own[g]]);
+        const bool extreme = multiply_mean_squares(
+            shape, steps, bins.data() + g * table, bin_count.data() + g * nr * dims,
+            running.data(), mean_square.data(), product.data() + block * row_size,
+            factors.data() + block * row_size);
+        if (extreme || ++pending[block] == flush) log_products(block);
+      }
+      members = 0;
+    };
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
       const std::size_t row = row_order[rank];
-      window.fill(shape, grid, x.data(), grid.row_begin(row > 0 ? row - 1 : 0),
-                  grid.row_begin(std::min(row + 2, grid.rows())));
-      // References in the order of their second coordinate (one-axis grid: their first):
-      // consecutive ones are then close and share most neighbours, whose histories stay in L2
-      // (in storage order, box by box with time order inside a box, the neighbour histories of
-      // a whole 3 x 3 block of boxes cycled through L2). Changes the order of the products only.
-      visit.clear();
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
-        visit.push_back(std::uint32_t(q));
-      const nonlinear::BoxGrid::Entry* entries = grid.entries();
-      const double nonlinear::BoxGrid::Entry::*along =
-          shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
-      std::sort(visit.begin(), visit.end(),
-                [&](std::uint32_t u, std::uint32_t w) { return entries[u].*along < entries[w].*along; });
-      for (const std::uint32_t q : visit) {
-        const std::size_t i = entries[q].index;
-        if (!is_reference[i]) continue;
-        const std::size_t block = block_of(i);
-        std::fill(bins.begin(), bins.end(), 0.0);
-        std::fill(bin_count.begin(), bin_count.end(), 0.0);
-        gather_neighbours(shape, grid, window, q, sums, bins.data(), bin_count.data());
-        const bool extreme = multiply_mean_squares(
-            shape, steps, bins.data(), bin_count.data(), running.data(), mean_square.data(),
-            product.data() + block * row_size, factors.data() + block * row_size);
-        if (extreme || ++pending[block] == flush) log_products(block);
+      // The window: reach_rows rows on either side.
+      const std::size_t low = row > reach_rows ? row - reach_rows : 0;
+      const std::size_t high = std::min(row + reach_rows + 1, rows);
+      const std::size_t base = grid.row_begin(low);
+      window.fill(shape, x.data(), sorted.data() + base, grid.row_begin(high) - base);
+      auto first_of = [&](std::size_t u) { return grid.row_begin(u) - base; };
+      const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
+      // Each row's stretch [first, last): the points within reach of the reference along the
+      // sort axis; both ends only move forward as the references do.
+      Candidates candidates;
+      candidates.runs = high - low;
+      for (std::size_t u = low; u < high; ++u)
+        candidates.first[u - low] = candidates.last[u - low] = first_of(u);
+      for (std::size_t own = first_of(row); own < first_of(row + 1); ++own) {
+        const double v = along[own];
+        for (std::size_t u = low; u < high; ++u) {
+          std::size_t& first = candidates.first[u - low];
+          std::size_t& last = candidates.last[u - low];
+          const std::size_t end = first_of(u + 1);
+          while (first < end && along[first] < v - reach) ++first;
+          if (last < first) last = first;
+          while (last < end && along[last] <= v + reach) ++last;
+        }
+        if (!is_reference[window.index[own]]) continue;
+        std::fill_n(bins.data() + members * table, table, 0.0);
+        std::fill_n(bin_count.data() + members * nr * dims, nr * dims, 0.0);
+        find_neighbours(shape, window, own, candidates, group[members]);
+        member_own[members++] = own;
+        if (members == reference_group) sum_group();
       }
+      sum_group();
     }
     for (std::size_t b = 0; b < kantz_blocks; ++b) log_products(b);
 #pragma omp critical

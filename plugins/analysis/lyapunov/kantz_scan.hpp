@@ -17,8 +17,9 @@ inline constexpr std::size_t kantz_blocks = 20;
 //   S(k) = < ln sqrt( < |X_{i+k} - X_{j+k}|^2 >_j ) >_i .
 // One fixed-radius search at the largest eps serves all radii and dimensions: each neighbour's
 // separation history is computed once (coordinate differences shared by all dimensions) and
-// binned by the smallest eps that holds it; the bins are summed per reference. A box grid on
-// the first (up to) two coordinates does the search. `references` = 0 takes every vector.
+// binned by the smallest eps that holds it; the bins are summed per reference. The search runs
+// over rows (half-eps boxes of the first coordinate), each sorted along the second coordinate
+// (if m >= 2): a +-eps stretch per row. `references` = 0 takes every vector.
 struct KantzScan {
   int min_dimension = 1, max_dimension = 1;
   std::vector<double> radii;  // ascending
