@@ -161,8 +161,16 @@ bool is_real_kind(const ParamSpec* spec) {
 void append_toml_table(std::string& out, const Json& table, const std::string& header,
                        const std::vector<ParamSpec>& specs) {
   for (const auto& [key, value] : table.items())
-    if (!value.is_null() && !is_table_array(value))
+    if (!value.is_null() && !is_table_array(value) && !value.is_object())
       out += toml_key(key) + " = " + toml_value(value, is_real_kind(find_spec(specs, key))) + '\n';
+  // Nested tables ([header.key]) after the plain keys, as TOML needs.
+  for (const auto& [key, value] : table.items()) {
+    if (!value.is_object()) continue;
+    const ParamSpec* spec = find_spec(specs, key);
+    const std::string nested = header + "." + toml_key(key);
+    out += fmt::format("\n[{}]\n", nested);
+    append_toml_table(out, value, nested, spec != nullptr ? spec->fields : std::vector<ParamSpec>{});
+  }
   for (const auto& [key, value] : table.items()) {
     if (!is_table_array(value)) continue;
     const ParamSpec* spec = find_spec(specs, key);
@@ -240,6 +248,7 @@ std::string_view short_type(ValueKind kind) {
     case ValueKind::real_list: return "real list";
     case ValueKind::real_matrix: return "real matrix";
     case ValueKind::table_list: return "table list";
+    case ValueKind::table: return "table";
   }
   return "?";
 }
@@ -268,6 +277,7 @@ std::string limits_text(const ParamSpec& spec) {
 }
 
 std::string default_text(const ParamSpec& spec) {
+  if (spec.kind == ValueKind::table) return spec.optional ? "optional" : "-";  // fields below
   if (spec.required()) return "required";
   if (spec.default_value.is_null()) return "optional";
   return toml_value(spec.default_value, is_real_kind(&spec));
@@ -279,9 +289,12 @@ void append_param_rows(const std::vector<ParamSpec>& specs, const std::string& p
     rows.push_back({std::string(2 * static_cast<std::size_t>(depth), ' ') + prefix + spec.key,
                     std::string(short_type(spec.kind)), spec.unit.empty() ? "-" : spec.unit,
                     limits_text(spec), default_text(spec), spec.description});
-    // Fields of each element of a list of tables, e.g. modes[].frequency_hz.
+    // Fields of each element of a list of tables, e.g. modes[].frequency_hz, and of a nested
+    // table, e.g. simulation.seed.
     if (spec.kind == ValueKind::table_list)
       append_param_rows(spec.fields, prefix + spec.key + "[].", depth + 1, rows);
+    if (spec.kind == ValueKind::table)
+      append_param_rows(spec.fields, prefix + spec.key + ".", depth + 1, rows);
   }
 }
 

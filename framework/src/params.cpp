@@ -20,6 +20,7 @@ std::string_view to_string(ValueKind kind) {
     case ValueKind::real_list: return "list of real numbers";
     case ValueKind::real_matrix: return "matrix (list of equal-length lists of real numbers)";
     case ValueKind::table_list: return "list of tables";
+    case ValueKind::table: return "table";
   }
   return "?";
 }
@@ -173,6 +174,9 @@ struct Checker {
         }
         return out;
       }
+      case ValueKind::table:
+        if (!v.is_object()) type_error();
+        return validate_params(v, spec.fields, path, sources);
     }
     fail(path, "unsupported parameter kind");
   }
@@ -209,6 +213,12 @@ Json validate_params(const Json& table, const std::vector<ParamSpec>& specs, std
     // null: an optional parameter left out, as a previous validation wrote it (validating a
     // validated table again must succeed: grid values are checked that way).
     if (it == table.end() || it->is_null()) {
+      // A nested table left out is the table of its fields' defaults (and a required field
+      // in it is reported as missing).
+      if (spec.kind == ValueKind::table && spec.default_value.is_object()) {
+        out[spec.key] = validate_params(spec.default_value, spec.fields, key_path, sources);
+        continue;
+      }
       if (spec.required())
         check.fail(std::string(path), fmt::format("missing required key '{}' ({}{})", key_path,
                                                   spec.description, unit_suffix(spec)));

@@ -44,11 +44,16 @@ class CatalogModel final : public Model {
     count.min = 1, count.max = 10, count.default_value = 2;
     auto stages = param_spec("stages", ValueKind::table_list, "", "feed stages");
     stages.fields = {gap, count}, stages.min_items = 1;
-    info.params = {speed, damping, stiffness, shape, trims, stages};
+    auto rate = param_spec("rate_m_per_s", ValueKind::real, "m/s", "infeed rate");
+    rate.default_value = 1e-5;
+    auto infeed = param_spec("infeed", ValueKind::table, "", "[model.infeed]: the infeed");
+    infeed.fields = {rate}, infeed.default_value = Json::object();
+    info.params = {speed, damping, stiffness, shape, trims, stages, infeed};
     info.example_params = {
         {"speed_rpm", 1500},
         {"trims", {1, 0.5}},
-        {"stages", Json::array({{{"gap_m", 1.5e-5}}, {{"gap_m", 2e-5}, {"count", 3}}})}};
+        {"stages", Json::array({{{"gap_m", 1.5e-5}}, {{"gap_m", 2e-5}, {"count", 3}}})},
+        {"infeed", {{"rate_m_per_s", 2e-5}}}};
     return info;
   }
 };
@@ -101,21 +106,26 @@ TEST(Catalog, DescribePrintsEveryParameterWithTypeUnitLimitsAndDefault) {
   Thread safety:  copy per thread (each thread of a run builds its own instance)
 
 Parameters ([model]):
-  key                type        unit  limits                   default    description
-  speed_rpm          real        rpm   > 0                      required   spindle speed
-  damping_ratio      real        1     [0, 1)                   0.05       damping ratio
-  stiffness_n_per_m  real        N/m   >= 1e6                   2e8        contact stiffness
-  mode_shape         string      1     one of bending, torsion  "bending"  shape of the mode
-  trims              real list   1     at least 2 entries       optional   trim factors
-  stages             table list  -     at least 1 entry         required   feed stages
-    stages[].gap_m   real        m     > 0                      required   gap of the stage
-    stages[].count   integer     1     [1, 10]                  2          repetitions
+  key                    type        unit  limits                   default    description
+  speed_rpm              real        rpm   > 0                      required   spindle speed
+  damping_ratio          real        1     [0, 1)                   0.05       damping ratio
+  stiffness_n_per_m      real        N/m   >= 1e6                   2e8        contact stiffness
+  mode_shape             string      1     one of bending, torsion  "bending"  shape of the mode
+  trims                  real list   1     at least 2 entries       optional   trim factors
+  stages                 table list  -     at least 1 entry         required   feed stages
+    stages[].gap_m       real        m     > 0                      required   gap of the stage
+    stages[].count       integer     1     [1, 10]                  2          repetitions
+  infeed                 table       -     -                        -          [model.infeed]: the infeed
+    infeed.rate_m_per_s  real        m/s   -                        1e-5       infeed rate
 
 Example:
   [model]
   type = "catalog_test_model"
   speed_rpm = 1500.0
   trims = [1.0, 0.5]
+
+  [model.infeed]
+  rate_m_per_s = 2e-5
 
   [[model.stages]]
   gap_m = 1.5e-5

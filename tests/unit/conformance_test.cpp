@@ -66,6 +66,12 @@ void check_specs(const std::vector<ParamSpec>& specs, const std::string& path) {
       EXPECT_FALSE(spec.fields.empty()) << "a list of tables without fields";
       check_specs(spec.fields, key + "[]");
     }
+    if (spec.kind == ValueKind::table) {
+      EXPECT_FALSE(spec.fields.empty()) << "a table without fields";
+      EXPECT_TRUE(spec.optional || spec.default_value.is_object())
+          << "a table is optional or defaults to its fields' defaults ({})";
+      check_specs(spec.fields, key);
+    }
   }
 }
 

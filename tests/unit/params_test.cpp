@@ -165,6 +165,40 @@ TEST(ValidateParams, TableListsValidateEachItemAtItsOwnPath) {
   EXPECT_EQ(error_of(table, {modes}), "p.toml:7: unknown key 'model.modes.0.mass'; valid keys: damping_ratio");
 }
 
+// A nested table ([feed_risk.simulation]): its fields validated at their own path; left out,
+// the table of its fields' defaults (default_value {}) or null (optional).
+TEST(ValidateParams, NestedTablesValidateTheirFieldsAndFillDefaults) {
+  auto damping = real_spec("damping_ratio", 0, false, 1, true);
+  auto steps = of_kind("steps", ValueKind::integer);
+  steps.default_value = 8;
+  auto simulation = of_kind("simulation", ValueKind::table);
+  simulation.fields = {steps};
+  simulation.default_value = Json::object();
+  auto optimise = of_kind("optimise", ValueKind::table);
+  optimise.fields = {damping};
+  optimise.optional = true;
+  const std::vector<ParamSpec> specs{simulation, optimise};
+  Json out = validate_params(Json::object(), specs, "far", FixedSourceMap());
+  EXPECT_EQ(out["simulation"], Json({{"steps", 8}}));
+  EXPECT_TRUE(out["optimise"].is_null());
+  EXPECT_EQ(validate_params(out, specs, "far", FixedSourceMap()), out);
+  out = validate_params(Json::parse(R"({"simulation": {"steps": 3.0}, "optimise": {"damping_ratio": 0.5}})"),
+                        specs, "far", FixedSourceMap());
+  EXPECT_EQ(out["simulation"]["steps"], 3);
+  EXPECT_EQ(out["optimise"]["damping_ratio"], 0.5);
+  EXPECT_EQ(error_of(Json::parse(R"({"optimise": {"damping_ratio": 1.5}})"), specs, "far"),
+            "p.toml:40: far.optimise.damping_ratio = 1.5 [N/m]: out of range, must be >= 0 and < 1 "
+            "(contact stiffness)");
+  EXPECT_EQ(error_of(Json::parse(R"({"simulation": {"step": 3}})"), specs),
+            "p.toml:7: unknown key 'model.simulation.step' (did you mean 'steps'?); valid keys: steps");
+  EXPECT_EQ(error_of(Json{{"simulation", 3}}, specs), "p.toml:7: model.simulation = 3: expected a table");
+  // A required field of a table left out is missing even when the table is.
+  optimise.optional = false;
+  optimise.default_value = Json::object();
+  EXPECT_EQ(error_of(Json::object(), {optimise}),
+            "p.toml:7: missing required key 'model.optimise.damping_ratio' (contact stiffness [N/m])");
+}
+
 TEST(ParamValues, ReadsValidatedValuesAndRejectsUndeclaredKeys) {
   ParamValues values(Json::parse(R"({"k": 2.5, "n": 3, "b": true, "s": "x", "xs": [1, 2],
                                     "m": [[1, 2], [3, 4]], "t": [{"a": 1.0}], "o": null})"));

@@ -24,6 +24,8 @@ enum class ValueKind {
   real_list,    // [1.0, 2.0, ...]
   real_matrix,  // [[...], [...]] rectangular
   table_list,   // [{...}, {...}] each element validated against `fields`
+  table,        // a nested table [<table>.<key>] validated against `fields`; left out, it is
+                // the table of its fields' defaults (default_value {}) or null (optional)
 };
 
 std::string_view to_string(ValueKind kind);
@@ -40,7 +42,7 @@ struct ParamSpec {
   bool min_exclusive = false;
   bool max_exclusive = false;
   std::vector<std::string> choices;  // allowed strings (empty: any)
-  std::vector<ParamSpec> fields;     // element fields for table_list
+  std::vector<ParamSpec> fields;     // element fields for table_list, the fields of a table
   std::size_t min_items = 0;         // for lists/matrices/table_list
   bool optional = false;             // absent and no default: left null, plugin decides
   bool required() const { return default_value.is_null() && !optional; }

@@ -99,15 +99,6 @@ std::vector<ParamSpec> optimise_specs() {
           factor, tolerance};
 }
 
-Json subtable(Json& table, const char* key, const std::string& path, const SourceMap& sources) {
-  if (!table.contains(key)) return Json();
-  Json t = table[key];
-  table.erase(key);
-  if (!t.is_object())
-    throw InputError(fmt::format("{}: {} = {}: expected a table [{}]", sources.locate(path).str(), path, t.dump(), path));
-  return t;
-}
-
 fs::path study_dir(const SourceMap& sources, const std::string& key) {
   return fs::path(sources.locate(key).file).parent_path();
 }
@@ -421,6 +412,15 @@ PluginInfo FeedRiskKind::info() {
                                                   "risk class chatter: accumulated amplification at or above this"),
                                          10.0);
   amplification.min = 1.0;
+  // [feed_risk.simulation] (always run unless disabled: its defaults) and [feed_risk.optimise]
+  // (only when present).
+  ParamSpec simulation = param_spec("simulation", ValueKind::table, "",
+                                    "[feed_risk.simulation]: the simulation along the schedule");
+  simulation.fields = simulation_specs();
+  simulation.default_value = Json::object();
+  ParamSpec optimise = optional(param_spec("optimise", ValueKind::table, "",
+                                           "[feed_risk.optimise]: search for a chatter-aware spindle speed"));
+  optimise.fields = optimise_specs();
   info.params = {
       plan_dir,
       positive("reference_contact_width_mm", "mm", "contact width at which the [model]'s kc, kg, kw hold"),
@@ -432,14 +432,15 @@ PluginInfo FeedRiskKind::info() {
       scaling,
       with_default(positive("initial_waviness_um", "um",
                             "disturbance level: the predicted waviness starts here, the simulation's initial "
-                            "displacement (settings in [feed_risk.simulation] and [feed_risk.optimise], "
-                            "docs/feed_risk.md)"),
+                            "displacement (docs/feed_risk.md)"),
                    1.0),
       with_default(positive("marginal_growth_rate_per_s", "1/s",
                             "risk class marginal: growth rate above minus this value"),
                    0.1),
       amplification,
       tolerance,
+      simulation,
+      optimise,
   };
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"reference_contact_width_mm", 35.0}, {"reference_work_radius_mm", 50.0},
@@ -472,12 +473,9 @@ void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
   if (!document.contains("feed_risk") || !document["feed_risk"].is_object())
     throw InputError(fmt::format("{}: missing table [feed_risk] (the feed_risk study needs it)",
                                  sources.locate("study").str()));
-  Json fr = document["feed_risk"];
-  Json simulation = subtable(fr, "simulation", "feed_risk.simulation", sources);
-  Json optimise = subtable(fr, "optimise", "feed_risk.optimise", sources);
-  fr = validate_params(fr, info().params, "feed_risk", sources);
-  simulation = validate_params(simulation.is_null() ? Json::object() : simulation, simulation_specs(),
-                               "feed_risk.simulation", sources);
+  // Also [feed_risk.simulation] (defaults filled in) and [feed_risk.optimise] (null if absent).
+  Json fr = validate_params(document["feed_risk"], info().params, "feed_risk", sources);
+  const Json optimise = fr.at("optimise");
 
   // The plan: saved, or planned here from the feed_plan tables.
   Json machine, wheel;
@@ -532,7 +530,6 @@ void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
   }
 
   if (!optimise.is_null()) {
-    optimise = validate_params(optimise, optimise_specs(), "feed_risk.optimise", sources);
     const auto [from, to] = spindle_range(machine);
     for (const Json& a : optimise["modulation_amplitude_ratios"]) {
       const double ratio = a.get<double>();
@@ -551,8 +548,6 @@ void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
   }
   if (!wheel.contains("diameter_mm"))
     throw InputError(fmt::format("{}: the wheel has no diameter_mm", sources.locate("wheel").str()));
-  fr["simulation"] = simulation;
-  if (!optimise.is_null()) fr["optimise"] = optimise;
   document["model"] = std::move(model);
   document["stability"] = std::move(stability);
   document["feed_risk"] = std::move(fr);
@@ -614,7 +609,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   std::optional<OptimiseResult> best;
   PlanRisk best_risk;
   AlongPlanSimulation best_sim;
-  if (fr.contains("optimise")) {
+  if (!fr.at("optimise").is_null()) {
     const Json& o = fr["optimise"];
     OptimiseSettings os;
     std::tie(os.spindle_min_rpm, os.spindle_max_rpm) = spindle_range(src.machine);
