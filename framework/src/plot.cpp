@@ -312,8 +312,8 @@ std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
 }  // namespace
 
 void render(const Curves& figure, const fs::path& out_dir, const std::string& stem) {
-  static constexpr std::array<std::string_view, 5> kStyles{"lines", "points", "linespoints",
-                                                           "impulses", "steps"};
+  static constexpr std::array<std::string_view, 6> kStyles{"lines", "points", "linespoints",
+                                                           "impulses", "steps", "dashes"};
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
   if (figure.equal_aspect && (figure.log_x || figure.log_y))
     throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));
@@ -333,8 +333,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
     data += fmt::format("{}# series {}: {}\n", i == 0 ? "" : "\n\n", i, s.label);
     for (std::size_t k = 0; k < s.x.size(); ++k)
       data += fmt::format("{} {}\n", number(s.x[k]), number(s.y[k]));
-    plots.push_back(fmt::format("'{}.dat' index {} using 1:2 with {} ls {} title {}", stem, i,
-                                s.style, i % 8 + 1, gp_string(s.label)));
+    // "dashes": lines with a dash pattern (after the line style, which would reset it), for a
+    // curve drawn over another that may hide it.
+    const bool dashes = s.style == "dashes";
+    plots.push_back(fmt::format("'{}.dat' index {} using 1:2 with {} ls {}{} title {}", stem, i,
+                                dashes ? "lines" : s.style, i % 8 + 1, dashes ? " dt 2" : "",
+                                gp_string(s.label)));
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
   if (figure.reference_y && !(figure.log_y && *figure.reference_y <= 0)) {

@@ -215,7 +215,7 @@ TEST(Plot, CurvesWithReferenceLine) {
   curves.reference_label = "stability limit";
   for (int k = 0; k < 3; ++k) {
     Series s = series("work speed " + std::to_string(40 + 10 * k) + " rpm", {}, {},
-                      k == 0 ? "linespoints" : "lines");
+                      k == 0 ? "linespoints" : k == 1 ? "lines" : "dashes");
     for (int i = 0; i < 60; ++i) {
       double x = 1000.0 + 20.0 * i;
       s.x.push_back(x);
@@ -231,6 +231,10 @@ TEST(Plot, CurvesWithReferenceLine) {
     EXPECT_NE(svg.find(text), std::string::npos) << text;
   std::string dat = read_all(dir / "growth_rate.dat");
   EXPECT_NE(dat.find("# series 2: work speed 60 rpm"), std::string::npos);
+  // "dashes" is gnuplot's lines with a dash pattern.
+  const std::string gp = read_all(dir / "growth_rate.gp");
+  EXPECT_NE(gp.find("index 2 using 1:2 with lines ls 3 dt 2"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("index 1 using 1:2 with lines ls 2"), std::string::npos) << gp;
 }
 
 TEST(Plot, LogCurvesDropAReferenceLineTheAxisCannotShow) {
@@ -350,7 +354,7 @@ TEST(Plot, BadFiguresAreRejectedWithTheReason) {
   } catch (const PlotError& e) {
     EXPECT_STREQ(e.what(),
                  "series 'a': unknown style 'lines; !rm' (valid: lines, points, linespoints, "
-                 "impulses, steps)");
+                 "impulses, steps, dashes)");
   }
   EXPECT_FALSE(fs::exists(dir / "c.gp"));  // rejected before anything is written
 }

@@ -19,7 +19,7 @@ class PlotError : public std::runtime_error {
 struct Series {
   std::string label;
   std::vector<double> x, y;
-  std::string style = "lines";  // gnuplot style: lines, points, linespoints, impulses
+  std::string style = "lines";  // lines, points, linespoints, impulses, steps, dashes (dashed lines)
 };
 
 struct Curves {

@@ -298,11 +298,14 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
     profile.y.push_back(rho * std::sin(th));
   }
   polar.series.push_back(std::move(profile));
-  for (const char* name : {"least_squares", "minimum_zone", "minimum_circumscribed",
-                           "maximum_inscribed"}) {
+  // The least-squares circle last and dashed: it often lies almost on the minimum-zone circle,
+  // which would hide it.
+  for (const char* name : {"minimum_zone", "minimum_circumscribed", "maximum_inscribed",
+                           "least_squares"}) {
     const Json& c = rd.at(name);
+    const bool dashed = std::string_view(name) == "least_squares";
     plot::Series circle{fmt::format("{} (RONt {:.3g} um)", name, c.at("RONt_um").get<double>()),
-                        {}, {}, "lines"};
+                        {}, {}, dashed ? "dashes" : "lines"};
     for (int k = 0; k <= 360; ++k) {
       const double th = k * std::numbers::pi / 180.0;
       const double rho = base + limacon(c, th) - limacon(ls, th);
