@@ -3,10 +3,10 @@
 // structural mode (250, 500, 750 or 1000 Hz), with the default integrator (ARKODE ERKStep,
 // Dormand-Prince 5(4)) at the growth-rate settings of plunge_time_domain.hpp
 // (apply_growth_rate_settings: rtol 1e-2, largest step 1/(3 f_max), 8 surface samples per wave
-// of f_max), which keep the 1 % root agreement of the growing G1 response. The G1BothSurfaces cases report their own accuracy
-// (counters err_root_pct, err_ref_pct: accuracy_counters below); the engine default stays
-// rtol 1e-6 for decaying responses (docs/dynamics.md). Counter speedup = simulated seconds / CPU
-// seconds of the benchmark thread. Numbers: docs/performance.md.
+// of f_max), which keep the 1 % root agreement of the growing G1 response. The G1BothSurfaces cases
+// report their own accuracy (counters err_root_pct, err_ref_pct: accuracy_counters below); the
+// engine default stays rtol 1e-6 for decaying responses (docs/dynamics.md). Counter speedup =
+// simulated seconds / CPU seconds of the benchmark thread. Numbers: docs/performance.md.
 //
 //   build/ci/tests/bench/dynamics_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
