@@ -97,6 +97,7 @@ void validate_input(Json& document, const SourceMap& sources) {
         "{}: missing table [input] (file = \"signal.csv\", column = \"...\", sample_rate_hz = "
         "...)",
         sources.locate("input").str()));
+  study_support::integer_columns_as_names(document["input"], {"column"});
   Json input = validate_params(document["input"], input_specs(), "input", sources);
   const std::string where = sources.locate("input.file").str();
   input["file"] = study_support::resolve_data_file(input["file"], "input.file", sources).string();

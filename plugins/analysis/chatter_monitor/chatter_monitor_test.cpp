@@ -132,6 +132,10 @@ TEST(ChatterMonitor, WavInputTakesTheRateFromTheHeader) {
       "s.toml", study_text("file = \"accel.wav\"", "[monitor.rbf_density]\n")));
   EXPECT_DOUBLE_EQ(study.document.at("input").at("sample_rate_hz").get<double>(), 8000.0);
   EXPECT_EQ(study.document.at("input").at("column"), "1");  // the only channel
+  // `column = 1` (a TOML integer) is the same 1-based channel index.
+  const Study by_index = load_study(dir.write(
+      "i.toml", study_text("file = \"accel.wav\"\ncolumn = 1", "[monitor.rbf_density]\n")));
+  EXPECT_EQ(by_index.document.at("input").at("column"), "1");
   const auto out = ChatterMonitor().run_point(study.point_document(0), PointContext{});
   ASSERT_TRUE(out[0].is_number());
   EXPECT_GT(out[0].get<double>(), spec.time_of_amplitude(1.0));

@@ -579,6 +579,7 @@ PluginInfo ErrorSeparationKind::info() {
 void ErrorSeparationKind::validate(Json& document, const SourceMap& sources) const {
   // [input]: file / files and columns by hand (lists of strings), the rest by spec.
   Json input = ss::table_or_empty(document, "input", sources);
+  ss::integer_columns_as_names(input, {"columns", "section_column"});
   std::vector<std::string> input_keys{"file", "files", "columns"};
   for (const ParamSpec& s : input_specs()) input_keys.push_back(s.key);
   ss::check_known_keys(input, input_keys, "input", sources);

@@ -261,6 +261,16 @@ TEST(ErrorSeparationKind, BadInputIsRefusedWithItsReason) {
   expect_in(m, "study.toml:5: input.columns: no column \"D\" in");
   expect_in(m, "(columns: A, B, C)");
 
+  // Integer columns are 1-based indices, as "4" would be: probes.csv has three.
+  m = error(
+      "[study]\nkind = \"error_separation\"\n[input]\nfile = \"probes.csv\"\n"
+      "columns = [1, 2, 4]\n[probes]\nangles_deg = [0, 99, 202]\n");
+  expect_in(m, "study.toml:5: input.columns: no column \"4\" in");
+  const Study by_index = testing::load_text(
+      dir, "[study]\nkind = \"error_separation\"\n[input]\nfile = \"probes.csv\"\n"
+           "columns = [1, 2, 3]\n[probes]\nangles_deg = [0, 99, 202]\n");
+  EXPECT_EQ(by_index.document.at("input").at("columns"), Json({"1", "2", "3"}));
+
   m = error(study_text("angles_deg = [0, 99]\n"));
   expect_in(m, "probes.angles_deg = [0, 99]: 2 angles for 3 input.columns");
 

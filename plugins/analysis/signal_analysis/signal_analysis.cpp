@@ -41,7 +41,7 @@ ParamSpec input_file_spec() {
 
 std::vector<ParamSpec> input_specs() {
   ParamSpec column = param_spec("column", ValueKind::string, "",
-                                "column: header name or 1-based index (absent: the only column)");
+                                "column: header name or 1-based index (\"2\" or 2; absent: the only column)");
   column.optional = true;
   ParamSpec rate = param_spec("sample_rate_hz", ValueKind::real, "Hz",
                               "samples per second (required unless the file is WAV)");
@@ -96,6 +96,7 @@ void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format(
         "{}: missing table [input] (file = \"...\", column = \"...\", sample_rate_hz = ...)",
         where("input")));
+  study_support::integer_columns_as_names(document["input"], {"column"});
   Json input = validate_params(document["input"], input_specs(), "input", sources);
   const fs::path file = study_support::resolve_data_file(input["file"], "input.file", sources);
   const DataTable table = study_support::read_table_at(file, "input.file", sources);

@@ -40,6 +40,21 @@ TEST_F(SignalAnalysisInput, MissingColumnListsTheColumns) {
   EXPECT_NE(m.find("t_s, displacement_m"), std::string::npos) << m;
 }
 
+TEST_F(SignalAnalysisInput, IntegerColumnIsTheOneBasedIndex) {
+  // `column = 2` (a TOML integer) reads the second column, as `column = "2"` does; 3 is named
+  // as out of range with the columns listed.
+  write_signal(dir_, "s.csv", test_signals::henon(500));
+  const Study s = testing::load_text(dir_, study("file = \"s.csv\"\ncolumn = 2\nsample_rate_hz = 1000"));
+  EXPECT_EQ(s.document.at("input").at("column"), "2");
+  const SampledSeries series = SignalAnalysis::load_series(s.document.at("input"));
+  ASSERT_EQ(series.values.size(), 500u);
+  EXPECT_DOUBLE_EQ(series.values[7], test_signals::henon(500)[7]);
+  const std::string m =
+      load_error(dir_, study("file = \"s.csv\"\ncolumn = 3\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("input.column = \"3\""), std::string::npos) << m;
+  EXPECT_NE(m.find("t_s, displacement_m"), std::string::npos) << m;
+}
+
 TEST_F(SignalAnalysisInput, MissingSampleRateIsNamed) {
   write_signal(dir_, "s.csv", test_signals::henon(500));
   const std::string m = load_error(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <iostream>
 #include <set>
 
@@ -106,6 +107,21 @@ void render_all(const std::vector<std::pair<std::string, std::function<void()>>>
     }
   }
   if (!errors.empty()) throw plot::PlotError(fmt::format("{}", fmt::join(errors, "; ")));
+}
+
+void integer_columns_as_names(Json& table, const std::vector<std::string>& keys) {
+  if (!table.is_object()) return;
+  auto as_name = [](Json& value) {
+    if (value.is_number_integer()) value = std::to_string(value.get<std::int64_t>());
+  };
+  for (const std::string& key : keys) {
+    if (!table.contains(key)) continue;
+    Json& value = table[key];
+    if (value.is_array())
+      for (Json& item : value) as_name(item);
+    else
+      as_name(value);
+  }
 }
 
 const SourceMap& no_sources() {

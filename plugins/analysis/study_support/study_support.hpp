@@ -41,6 +41,11 @@ DataTable read_table_at(const std::filesystem::path& file, const std::string& pa
 const std::vector<double>& column_at(const DataTable& table, const std::string& name,
                                      const std::string& path, const SourceMap& sources);
 
+// Column keys given as TOML integers (`column = 2`, `columns = [1, 2, 3]`) mean 1-based column
+// indices, the same as "2": rewritten in place as strings in table[key] for each key (a list's
+// integer items too) before the string-typed checks see them. Absent keys are left alone.
+void integer_columns_as_names(Json& table, const std::vector<std::string>& keys);
+
 // The study's name for plot titles: [study] name, else the study file's stem.
 std::string study_title(const Json& document, const std::filesystem::path& study_file);
 

@@ -370,10 +370,7 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format("{}: missing table [input] (file, column, spacing_mm or "
                                  "samples_per_rev with closed = true)",
                                  sources.locate("input").str()));
-  // `column = 2` (a number) means the same as column = "2": the 1-based column index.
-  if (document["input"].is_object() && document["input"].contains("column") &&
-      document["input"]["column"].is_number_integer())
-    document["input"]["column"] = std::to_string(document["input"]["column"].get<std::int64_t>());
+  study_support::integer_columns_as_names(document["input"], {"column", "x_column"});
   Json input = validated_table(document, "input", input_specs(), sources);
   Json filter = validated_table(document, "filter", filter_specs(), sources);
   Json process = validated_table(document, "process", process_specs(), sources);
