@@ -317,6 +317,8 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
   if (figure.equal_aspect && (figure.log_x || figure.log_y))
     throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));
+  if (figure.integer_x && figure.log_x)
+    throw PlotError(fmt::format("plot '{}': an integer x axis must be linear", stem));
 
   std::string data =
       fmt::format("# {}: one block per series (gnuplot index), columns x y\n", figure.title);
@@ -389,7 +391,11 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   // in the frame; gnuplot then shrinks one axis' box until the units match.
   gp += figure.equal_aspect ? "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n"
                               "set size ratio -1\n"
-                            : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
+                            : figure.integer_x
+                                  ? "set offsets 0.5, 0.5, graph 0.05, graph 0.05\n"
+                                  : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
+  // Whole-number ticks: gnuplot would label an index axis 1, 1.2, 1.4, ... over a short range.
+  if (figure.integer_x) gp += "set xtics 1\nset mxtics 1\n";
   gp += script_png_terminal(stem);
   gp += fmt::format("plot {}\n", fmt::join(plots, ", \\\n     "));
   gp += script_svg_replot(stem);

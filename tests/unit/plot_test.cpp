@@ -237,6 +237,35 @@ TEST(Plot, CurvesWithReferenceLine) {
   EXPECT_NE(gp.find("index 1 using 1:2 with lines ls 2"), std::string::npos) << gp;
 }
 
+TEST(Plot, IntegerXAxisTicksWholeNumbersWithMargins) {
+  // Two Lyapunov exponents: gnuplot alone would tick 1, 1.2, ..., 2 and draw both end points on
+  // the frame.
+  fs::path dir = output_dir("integer_x");
+  Curves curves;
+  curves.title = "spectrum";
+  curves.x_label = "exponent index i";
+  curves.integer_x = true;
+  curves.series.push_back(series("lambda_i", {1, 2}, {0.42, -1.62}, "linespoints"));
+  render(curves, dir, "spectrum");
+  expect_png(dir / "spectrum.png", 10000);
+  const std::string gp = read_all(dir / "spectrum.gp");
+  EXPECT_NE(gp.find("set offsets 0.5, 0.5,"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set xtics 1\n"), std::string::npos) << gp;
+  const std::string svg = read_all(dir / "spectrum.svg");
+  // Tick labels are "<text> 1</text>" in gnuplot's SVG; without integer_x: 1, 1.2, ..., 2.
+  EXPECT_NE(svg.find("<text> 1</text>"), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<text> 2</text>"), std::string::npos) << svg;
+  EXPECT_EQ(svg.find("<text> 1.2</text>"), std::string::npos) << "fractional tick on an index axis";
+
+  curves.log_x = true;
+  try {
+    render(curves, dir, "log");
+    FAIL() << "expected PlotError";
+  } catch (const PlotError& e) {
+    EXPECT_STREQ(e.what(), "plot 'log': an integer x axis must be linear");
+  }
+}
+
 TEST(Plot, LogCurvesDropAReferenceLineTheAxisCannotShow) {
   fs::path dir = output_dir("log_curves");
   Curves curves;

@@ -31,6 +31,9 @@ struct Curves {
   // One unit of x as long as one unit of y (gnuplot `set size ratio -1`): polar plots, where a
   // round part must look round. Not with log axes (PlotError).
   bool equal_aspect = false;
+  // x is an index (exponent number, embedding dimension): ticks on whole numbers only, and half
+  // a unit of margin so the end points are not drawn on the frame. Linear x only (PlotError).
+  bool integer_x = false;
 };
 
 // A 2-D map of z over a rectangular grid (z[iy * x.size() + ix]; NaN = failed point, drawn as a

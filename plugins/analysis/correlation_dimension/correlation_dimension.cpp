@@ -854,6 +854,7 @@ void CorrelationDimension::plot(const Json& result, const SampledSeries& series,
   slopes.log_x = true;
   saturation.title = fmt::format("{}: D2 versus embedding dimension", title);
   saturation.x_label = "embedding dimension d";
+  saturation.integer_x = true;
   saturation.y_label = "D2";
   plot::Series d2_curve{"D2(d)", {}, {}, "linespoints"};
   for (const Json& entry : result["by_dimension"]) {

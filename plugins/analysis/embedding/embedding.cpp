@@ -391,6 +391,7 @@ void EmbeddingAnalysis::plot(const Json& result, const SampledSeries& series,
     plot::Curves fnn;
     fnn.title = fmt::format("{}: false nearest neighbours and Cao's E1, E2", title);
     fnn.x_label = "embedding dimension d";
+    fnn.integer_x = true;
     fnn.y_label = "FNN fraction, E1(d), E2(d)";
     auto add = [&](const char* key, const char* label) {
       const auto v = result[key].get<std::vector<double>>();

@@ -261,6 +261,7 @@ void LyapunovSpectrum::plot(const Json& result, const SampledSeries& series,
   c.series.push_back(forward);
   if (!reversed.x.empty()) c.series.push_back(reversed);
   c.reference_y = 0.0;
+  c.integer_x = true;
   plot::render(c, out_dir, "lyapunov_spectrum");
 }
 
