@@ -240,12 +240,10 @@ TEST(Plot, CurvesWithReferenceLine) {
 TEST(Plot, IntegerXAxisTicksWholeNumbersWithMargins) {
   // Two Lyapunov exponents: gnuplot alone would tick 1, 1.2, ..., 2 and draw both end points on
   // the frame.
-  fs::path dir = output_dir("integer_x");
+  const fs::path dir = output_dir("integer_x");
   Curves curves;
-  curves.title = "spectrum";
-  curves.x_label = "exponent index i";
   curves.integer_x = true;
-  curves.series.push_back(series("lambda_i", {1, 2}, {0.42, -1.62}, "linespoints"));
+  curves.series = {series("lambda_i", {1, 2}, {0.42, -1.62}, "linespoints")};
   render(curves, dir, "spectrum");
   expect_png(dir / "spectrum.png", 10000);
   const std::string gp = read_all(dir / "spectrum.gp");
