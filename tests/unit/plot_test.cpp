@@ -42,6 +42,18 @@ fs::path output_dir(const std::string& test) {
   return dir;
 }
 
+// The PlotError message of rendering `figure` (and a test failure if nothing is thrown).
+template <class Figure>
+std::string plot_error(const Figure& figure, const fs::path& dir, const std::string& stem) {
+  try {
+    render(figure, dir, stem);
+  } catch (const PlotError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected PlotError for plot '" << stem << "'";
+  return {};
+}
+
 std::string read_all(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -256,12 +268,7 @@ TEST(Plot, IntegerXAxisTicksWholeNumbersWithMargins) {
   EXPECT_EQ(svg.find("<text> 1.2</text>"), std::string::npos) << "fractional tick on an index axis";
 
   curves.log_x = true;
-  try {
-    render(curves, dir, "log");
-    FAIL() << "expected PlotError";
-  } catch (const PlotError& e) {
-    EXPECT_STREQ(e.what(), "plot 'log': an integer x axis must be linear");
-  }
+  EXPECT_EQ(plot_error(curves, dir, "log"), "plot 'log': an integer x axis must be linear");
 }
 
 TEST(Plot, LogCurvesDropAReferenceLineTheAxisCannotShow) {
@@ -325,12 +332,7 @@ TEST(Plot, EqualAspectDrawsACircleRound) {
   EXPECT_NEAR(drawn_aspect(read_all(dir / "round.svg")), 1.0, 0.01);
 
   curves.log_y = true;
-  try {
-    render(curves, dir, "log");
-    FAIL() << "expected PlotError";
-  } catch (const PlotError& e) {
-    EXPECT_STREQ(e.what(), "plot 'log': equal aspect needs linear axes");
-  }
+  EXPECT_EQ(plot_error(curves, dir, "log"), "plot 'log': equal aspect needs linear axes");
 }
 
 TEST(Plot, TitlesWithQuotesAndBackslashesRender) {
@@ -353,36 +355,17 @@ TEST(Plot, BadFiguresAreRejectedWithTheReason) {
   map.x = {1, 2};
   map.y = {1, 2};
   map.z = {1, 2, 3};
-  try {
-    render(map, dir, "m");
-    FAIL() << "expected PlotError";
-  } catch (const PlotError& e) {
-    EXPECT_STREQ(e.what(), "heatmap 'm' has 3 z values for a 2 x 2 grid");
-  }
+  EXPECT_EQ(plot_error(map, dir, "m"), "heatmap 'm' has 3 z values for a 2 x 2 grid");
   map.z.push_back(4);
   map.log_x = true;
   map.x[0] = 0;
-  EXPECT_THROW(
-      {
-        try {
-          render(map, dir, "m");
-        } catch (const PlotError& e) {
-          EXPECT_STREQ(e.what(), "heatmap x value 0 cannot be shown on a log axis");
-          throw;
-        }
-      },
-      PlotError);
+  EXPECT_EQ(plot_error(map, dir, "m"), "heatmap x value 0 cannot be shown on a log axis");
 
   Curves curves;
   curves.series.push_back(series("a", {1, 2}, {1, 2}, "lines; !rm"));
-  try {
-    render(curves, dir, "c");
-    FAIL() << "expected PlotError";
-  } catch (const PlotError& e) {
-    EXPECT_STREQ(e.what(),
-                 "series 'a': unknown style 'lines; !rm' (valid: lines, points, linespoints, "
-                 "impulses, steps, dashes)");
-  }
+  EXPECT_EQ(plot_error(curves, dir, "c"),
+            "series 'a': unknown style 'lines; !rm' (valid: lines, points, linespoints, "
+            "impulses, steps, dashes)");
   EXPECT_FALSE(fs::exists(dir / "c.gp"));  // rejected before anything is written
 }
 
@@ -392,16 +375,11 @@ TEST(Plot, GnuplotErrorsCarryItsMessage) {
   curves.title = "negative values on a log axis";
   curves.log_y = true;  // every y <= 0: gnuplot has nothing to draw and fails
   curves.series.push_back(series("a", {1, 2}, {-1, -2}));
-  try {
-    render(curves, dir, "c");
-    FAIL() << "expected PlotError";
-  } catch (const PlotError& e) {
-    std::string what = e.what();
-    EXPECT_NE(what.find("gnuplot failed on " + (dir / "c.gp").string() + " (exit status 1)"),
-              std::string::npos)
-        << what;
-    EXPECT_NE(what.find("all points y value undefined"), std::string::npos) << what;
-  }
+  const std::string what = plot_error(curves, dir, "c");
+  EXPECT_NE(what.find("gnuplot failed on " + (dir / "c.gp").string() + " (exit status 1)"),
+            std::string::npos)
+      << what;
+  EXPECT_NE(what.find("all points y value undefined"), std::string::npos) << what;
 }
 
 TEST(Plot, MissingGnuplotIsReported) {
@@ -411,12 +389,7 @@ TEST(Plot, MissingGnuplotIsReported) {
   ::setenv("PATH", dir.c_str(), 1);  // a directory without gnuplot
   Curves curves;
   curves.series.push_back(series("a", {1, 2}, {1, 2}));
-  std::string what;
-  try {
-    render(curves, dir, "c");
-  } catch (const PlotError& e) {
-    what = e.what();
-  }
+  const std::string what = plot_error(curves, dir, "c");
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_NE(what.find("cannot run gnuplot (No such file or directory); install it (Debian "
                       "package gnuplot-nox)"),
