@@ -202,6 +202,19 @@ std::vector<std::string> kinds_reading(const std::string& table) {
   return kinds;
 }
 
+// Study kinds that read an analysis' parameters from [<table>.<name>] of their own tables
+// (StudyKind::nested_analyses), as (kind, table).
+std::vector<std::pair<std::string, std::string>> kinds_nesting(const std::string& analysis) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto* entry : study_kind_registry().sorted())
+    if (auto kind = entry->create(ParamValues{}))
+      for (const auto& nested : kind->nested_analyses())
+        if (std::find(nested.analyses.begin(), nested.analyses.end(), analysis) !=
+            nested.analyses.end())
+          out.emplace_back(entry->info.name, nested.table);
+  return out;
+}
+
 std::string example_toml(const CatalogEntry& e) {
   std::string out;
   if (is_analysis(e)) {
@@ -327,6 +340,10 @@ std::string describe_entry(const CatalogEntry& e) {
       usage += fmt::format(" (study kind{} {})", kinds.size() > 1 ? "s" : "",
                            fmt::join(kinds, ", "));
     facts.push_back({"Used as:", usage});
+    for (const auto& [kind, table] : kinds_nesting(info.name))
+      facts.push_back({"Also used as:",
+                       fmt::format("parameters in [{}.{}] (study kind {})", table,
+                                   toml_key(info.name), kind)});
   } else {
     facts.push_back({"Used as:", fmt::format("[{}] type = \"{}\"", e.kind, info.name)});
   }

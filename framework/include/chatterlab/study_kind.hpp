@@ -55,6 +55,15 @@ class StudyKind {
   // keys may only point into them. Default: the [model] table alone.
   virtual std::vector<std::string> tables() const { return {"model"}; }
 
+  // Analyses this kind configures from sub-tables [<table>.<analysis name>] of one of its own
+  // tables, e.g. chatter_monitor's [monitor.bp_network]: `chatterlab describe <analysis>` names
+  // them (a kind that lists analyses under [analysis] methods needs nothing here).
+  struct NestedAnalyses {
+    std::string table;
+    std::vector<std::string> analyses;
+  };
+  virtual std::vector<NestedAnalyses> nested_analyses() const { return {}; }
+
   // Validates the kind's own tables in `document` (e.g. [model] through the model registry,
   // [stability] against its specs) and fills defaults in place. `sources` locates lines for
   // errors. Throws InputError. Must accept its own output unchanged (idempotent): load_study

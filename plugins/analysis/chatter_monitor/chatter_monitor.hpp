@@ -12,6 +12,7 @@
 // Writes alarms.csv, features.csv, summary.json, network_weights.json (when trained) and plots.
 // docs/analysis/monitoring.md is the user documentation.
 #include <filesystem>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ class ChatterMonitor final : public StudyKind {
   static PluginInfo info();
 
   std::vector<std::string> tables() const override { return {"input", "monitor"}; }
+  std::vector<NestedAnalyses> nested_analyses() const override {
+    return {{"monitor", {std::begin(detector_names), std::end(detector_names)}}};
+  }
   void validate(Json& document, const SourceMap& sources) const override;
   std::vector<std::string> output_columns(const Json& document) const override;
   std::vector<Json> run_point(const Json& point_document,

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "analysis/monitor_common/monitor_common.hpp"
+#include "chatterlab/catalog.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
 #include "unit/study_test_support.hpp"
@@ -146,6 +147,20 @@ std::string error(const TempDir& dir, const std::string& text) { return testing:
 
 void expect_mentions(const std::string& message, const std::vector<std::string>& parts) {
   for (const auto& part : parts) EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+}
+
+// `chatterlab describe bp_network` / `rbf_density` also names the monitor's table, where the
+// chatter_monitor kind reads their parameters; lyapunov is not a detector.
+TEST(ChatterMonitor, DescribeOfADetectorNamesTheMonitorTable) {
+  for (const std::string name : {"bp_network", "rbf_density"}) {
+    const std::string text = describe_plugin(name);
+    EXPECT_NE(text.find(fmt::format("Also used as:   parameters in [monitor.{}] (study kind "
+                                    "chatter_monitor)\n",
+                                    name)),
+              std::string::npos)
+        << text;
+  }
+  EXPECT_EQ(describe_plugin("lyapunov").find("[monitor."), std::string::npos);
 }
 
 TEST(ChatterMonitor, BadInputNamesFileKeyAndLimit) {
