@@ -190,15 +190,24 @@ std::string analysis_table(const CatalogEntry& e) {
   return fmt::format("{}.{}", e.kind, toml_key(e.info->name));
 }
 
+// Every registered study kind, built once to ask what it reads (a kind holds no per-study
+// state, study_kind.hpp), with its name.
+template <class Visit>
+void for_each_study_kind(Visit visit) {
+  for (const auto* entry : study_kind_registry().sorted())
+    if (auto kind = entry->create(ParamValues{})) visit(entry->info.name, *kind);
+}
+
+bool contains(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
 // Study kinds that read a top-level table (e.g. [analysis]): where a component can be used.
 std::vector<std::string> kinds_reading(const std::string& table) {
   std::vector<std::string> kinds;
-  for (const auto* entry : study_kind_registry().sorted())
-    if (auto kind = entry->create(ParamValues{})) {
-      const auto tables = kind->tables();
-      if (std::find(tables.begin(), tables.end(), table) != tables.end())
-        kinds.push_back(entry->info.name);
-    }
+  for_each_study_kind([&](const std::string& name, const StudyKind& kind) {
+    if (contains(kind.tables(), table)) kinds.push_back(name);
+  });
   return kinds;
 }
 
@@ -206,12 +215,10 @@ std::vector<std::string> kinds_reading(const std::string& table) {
 // (StudyKind::nested_analyses), as (kind, table).
 std::vector<std::pair<std::string, std::string>> kinds_nesting(const std::string& analysis) {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const auto* entry : study_kind_registry().sorted())
-    if (auto kind = entry->create(ParamValues{}))
-      for (const auto& nested : kind->nested_analyses())
-        if (std::find(nested.analyses.begin(), nested.analyses.end(), analysis) !=
-            nested.analyses.end())
-          out.emplace_back(entry->info.name, nested.table);
+  for_each_study_kind([&](const std::string& name, const StudyKind& kind) {
+    for (const auto& nested : kind.nested_analyses())
+      if (contains(nested.analyses, analysis)) out.emplace_back(name, nested.table);
+  });
   return out;
 }
 

@@ -40,8 +40,9 @@ ParamSpec input_file_spec() {
 }
 
 std::vector<ParamSpec> input_specs() {
-  ParamSpec column = param_spec("column", ValueKind::string, "",
-                                "column: header name or 1-based index (\"2\" or 2; absent: the only column)");
+  ParamSpec column = param_spec(
+      "column", ValueKind::string, "",
+      "column: header name or 1-based index (\"2\" or 2; absent: the only column)");
   column.optional = true;
   ParamSpec rate = param_spec("sample_rate_hz", ValueKind::real, "Hz",
                               "samples per second (required unless the file is WAV)");
