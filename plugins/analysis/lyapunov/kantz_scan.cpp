@@ -47,6 +47,8 @@ struct ScanShape {
   std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
+  double centre = 0;        // histories hold float(x - centre): mid-range halves the rounding
+  double discard_code = 0;  // the profile code of a candidate lane that is no neighbour
   // Profile codes: place value (radii + 1)^d of dimension index d.
   std::vector<double> places;
   // The possible profiles (radius bins nondecreasing with the dimension, within the largest
@@ -77,6 +79,10 @@ struct ScanShape {
         bin_of.push_back(std::uint32_t(digits[d] * dims + d));
       bins_begin.push_back(std::uint32_t(bin_of.size()));
     }
+    // Code `codes` is the discard code: its profile, one past the real ones, collects the lanes
+    // of candidate blocks that hold no neighbour and is dropped by group_by_profile.
+    profile_of.push_back(std::int32_t(profile_count()));
+    discard_code = double(codes);
   }
 };
 
@@ -87,11 +93,10 @@ struct ScanShape {
 struct NeighbourSums {
   std::vector<double*> targets;          // the bins a profile adds to
   std::vector<double> own;               // the reference's delay coordinates
-  std::vector<std::uint32_t> near;       // neighbours within the largest radius (window rows)
-  std::vector<double> near_distance;     // their squared distance in min_dimension
-  std::vector<std::uint32_t> near_code;  // their profile code
-  std::vector<std::int32_t> next;        // the next neighbour of the same profile, -1: none
-  std::vector<std::int32_t> head;        // per profile: its first neighbour, -1: none
+  std::vector<std::uint32_t> near;       // slots: candidate window rows, four per block
+  std::vector<std::uint32_t> near_code;  // their profile code (discard: no neighbour)
+  std::vector<std::int32_t> next;        // the next slot of the same profile, -1: none
+  std::vector<std::int32_t> head;        // per profile (and discard): its first slot, -1: none
   std::vector<std::uint32_t> profile_count;  // per profile: its neighbours
   std::vector<std::uint32_t> present;    // the profiles of the reference's neighbours
   std::size_t used = 0;                  // how many
@@ -104,17 +109,23 @@ struct NeighbourSums {
 // takes four consecutive candidates per vector), and their time indices. Sorted rows make a
 // reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
 // boxes of the previous search spanned 3 eps on average). Rows are the unit of work of a thread.
-// History samples are stored in planes of plane_width samples (every point's samples 0..27, then
-// every point's 28..55, ...), and the history sums of a group of consecutive references run
-// plane by plane: the neighbour histories in use while a group is summed are then a plane's
-// share of the whole (whole histories of the neighbours of consecutive references were just
-// over the 512 KiB L2 and came from L3 on every reference).
-constexpr std::size_t plane_width = 28;  // seven vectors: add_separations' register blocking
+// History samples are stored in single precision, as x - centre: half the bytes per neighbour
+// and eight samples per vector made the scan about 0.7 of its time with doubles (Lorenz and
+// Henon benchmarks); the neighbour sets and radius bins are still decided in double precision.
+// Each stored sample is off by at most 2^-24 of half the data range, so the rms separation of a
+// reference's neighbours by at most sqrt(m) 2^-24 x range, and S(k) by that over the rms
+// (lyapunov_test checks this bound against the double-precision definition). Samples are
+// stored in planes of plane_width (every point's samples 0..55, then 56..111, ...), and the
+// history sums of a group of consecutive references run plane by plane: the neighbour
+// histories in use while a group is summed are then a plane's share of the whole. With the
+// benchmarks' 51 steps one plane holds the whole history.
+constexpr std::size_t plane_width = 56;  // seven vectors of eight: add_separations' blocking
 struct RowWindow {
   // Plane c: x_{j + t}, t = c * plane_width + u, at [c * plane_width * count + w * width(c) + u].
-  std::vector<double> histories;
+  std::vector<float> histories;
   std::vector<double> columns;           // x_{j + l delay} at [l * stride + w]
   std::vector<std::uint32_t> index;      // j at [w]
+  std::vector<double> time;              // j at [w] as a double (vector Theiler test)
   std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
   std::size_t count = 0, padded = 0;
   void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n) {
@@ -125,57 +136,69 @@ struct RowWindow {
     histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
     index.assign(stride, 0);
+    time.assign(stride, 0.0);
     for (std::size_t w = 0; w < count; ++w) {
       const std::size_t j = points[w];
       index[w] = std::uint32_t(j);
+      time[w] = double(j);
       for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
       for (std::size_t c = 0; c < planes(); ++c) {
         // Samples t < history exist for every stored point (j < limit); zeros beyond.
-        double* to = histories.data() + c * plane_width * count + w * width(c);
+        float* to = histories.data() + c * plane_width * count + w * width(c);
         const std::size_t t0 = c * plane_width;
         const std::size_t valid = t0 < s.history ? std::min(width(c), s.history - t0) : 0;
-        std::copy_n(x + j + t0, valid, to);
-        std::fill(to + valid, to + width(c), 0.0);
+        for (std::size_t u = 0; u < valid; ++u) to[u] = float(x[j + t0 + u] - s.centre);
+        std::fill(to + valid, to + width(c), 0.0f);
       }
     }
   }
   std::size_t planes() const { return (padded + plane_width - 1) / plane_width; }
   std::size_t width(std::size_t c) const { return std::min(plane_width, padded - c * plane_width); }
-  const double* plane(std::size_t c) const { return histories.data() + c * plane_width * count; }
+  const float* plane(std::size_t c) const { return histories.data() + c * plane_width * count; }
 };
 
 // (Out parameter: returning a 32-byte vector by value changes the ABI of the non-AVX clone.)
 inline void load4(Vector4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
+using Float8 = float __attribute__((vector_size(32)));  // eight floats (history samples)
+inline void load8(Float8& v, const float* p) { std::memcpy(&v, p, sizeof v); }
 
-// sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 4 consecutive history
-// samples t: the partial sums stay in registers while the members stream by. The members are a
+// sum[offset + t] += sum over the members of (xi - xj)^2 for `Vectors` x 8 consecutive history
+// samples t: the partial sums stay in registers (single precision) while the members stream by,
+// and are added to the double-precision bins at the end. The members are a
 // list: neighbour `first`, then next[first], ... up to -1; neighbour p is window row near[p],
 // its samples at histories + near[p] * width.
 template <std::size_t Vectors>
-[[gnu::always_inline]] inline void add_separations(const double* xi, const double* histories,
+[[gnu::always_inline]] inline void add_separations(const float* xi, const float* histories,
                                                    std::size_t width, std::int32_t first,
                                                    const std::int32_t* next,
                                                    const std::uint32_t* near, std::size_t offset,
                                                    double* const* targets,
                                                    std::size_t target_count) {
-  Vector4 acc[Vectors] = {};
-  Vector4 reference[Vectors];
-  for (std::size_t v = 0; v < Vectors; ++v) load4(reference[v], xi + offset + 4 * v);
+  Float8 acc[Vectors] = {};
+  Float8 reference[Vectors];
+  for (std::size_t v = 0; v < Vectors; ++v) load8(reference[v], xi + offset + 8 * v);
   for (std::int32_t p = first; p >= 0; p = next[p]) {
-    const double* xj = histories + std::size_t(near[p]) * width + offset;
+    const float* xj = histories + std::size_t(near[p]) * width + offset;
     for (std::size_t v = 0; v < Vectors; ++v) {
-      Vector4 other;
-      load4(other, xj + 4 * v);
-      const Vector4 d = reference[v] - other;
+      Float8 other;
+      load8(other, xj + 8 * v);
+      const Float8 d = reference[v] - other;
       acc[v] += d * d;
     }
   }
+  // The single-precision sums widened, four at a time.
+  Vector4 wide[2 * Vectors];
+  for (std::size_t v = 0; v < Vectors; ++v) {
+    const Float8& a = acc[v];
+    wide[2 * v] = __builtin_convertvector(__builtin_shufflevector(a, a, 0, 1, 2, 3), Vector4);
+    wide[2 * v + 1] = __builtin_convertvector(__builtin_shufflevector(a, a, 4, 5, 6, 7), Vector4);
+  }
   for (std::size_t target = 0; target < target_count; ++target)
-    for (std::size_t v = 0; v < Vectors; ++v) {
+    for (std::size_t v = 0; v < 2 * Vectors; ++v) {
       double* sum = targets[target] + offset + 4 * v;
       Vector4 total;
       load4(total, sum);
-      total += acc[v];
+      total += wide[v];
       std::memcpy(sum, &total, sizeof total);
     }
 }
@@ -192,7 +215,8 @@ template <std::size_t Vectors>
                                                std::int32_t* __restrict head,
                                                std::int32_t* __restrict next,
                                                std::uint32_t* __restrict count,
-                                               std::uint32_t* __restrict present) {
+                                               std::uint32_t* __restrict present,
+                                               std::size_t discard) {
   std::size_t used = 0;
   for (std::size_t p = kept; p-- > 0;) {
     const auto k = std::size_t(profile_of[code[p]]);
@@ -202,6 +226,10 @@ template <std::size_t Vectors>
     ++count[k];
   }
   std::sort(present, present + used);
+  // The discard profile sorts last: drop it and reset its list.
+  if (used > 0 && present[used - 1] == discard) --used;
+  head[discard] = -1;
+  count[discard] = 0;
   return used;
 }
 
@@ -221,39 +249,45 @@ struct Candidates {
 };
 
 // The neighbours of the reference at window position `own` within the largest radius, grouped
-// by profile (in `sums`, for add_histories). Passes: the distances in min_dimension of four
-// candidates at a time with a branch-free compaction of the neighbours; the profile codes of
-// four neighbours at a time; the grouping. Compiled for AVX2 as well (chosen at run time).
-[[gnu::target_clones("avx2", "default")]] void find_neighbours(const ScanShape& s,
-                                                               const RowWindow& window,
-                                                               std::size_t own,
-                                                               const Candidates& candidates,
-                                                               NeighbourSums& sums) {
+// by profile (in `sums`, for add_histories). Two passes: four candidates at a time, the
+// distance in min_dimension and, for blocks with a neighbour, the profile codes of all four
+// lanes (the discard code for lanes that are no neighbour); then the grouping. Compiled for
+// AVX2 as well (chosen at run time).
+// Radii: the number of radii as a compile-time constant (0: s.radii at run time). With the
+// radius loop unrolled the scan took 0.86-0.89 of its time (Lorenz benchmark, 5 radii).
+template <std::size_t Radii>
+[[gnu::always_inline]] inline void find_neighbours_with(const ScanShape& s,
+                                                        const RowWindow& window, std::size_t own,
+                                                        const Candidates& candidates,
+                                                        NeighbourSums& sums) {
+  const std::size_t radii = Radii > 0 ? Radii : s.radii;
   const std::size_t i = window.index[own];
   const double eps2 = s.radii2[s.radii - 1];
   std::size_t count = 0;
   for (std::size_t run = 0; run < candidates.runs; ++run)
     count += candidates.last[run] - candidates.first[run];
-  if (sums.near.size() < count + 4) {
-    sums.near.resize(count + 4);
-    sums.near_distance.resize(count + 4);
-    sums.near_code.resize(count + 4);
-    sums.next.resize(count);
-    sums.present.resize(count);
+  const std::size_t slots = count + 4 * candidates.runs;  // whole blocks of four
+  if (sums.near.size() < slots) {
+    sums.near.resize(slots);
+    sums.near_code.resize(slots);
+    sums.next.resize(slots);
+    sums.present.resize(slots);
   }
   // Pass 1, four consecutive candidates per vector: the squared distance in min_dimension
-  // (coordinates summed in order, as in the definition) and a branch-free compaction of the
-  // neighbours: within the largest radius, not coincident, outside the Theiler window.
+  // (coordinates summed in order, as in the definition); neighbours are within the largest
+  // radius, not coincident, outside the Theiler window. Every lane of a block with a neighbour
+  // takes a slot (near, near_code): no per-lane compaction.
   const std::size_t m0 = std::size_t(s.min_dimension);
   const std::size_t coordinates = m0 + s.dims - 1;
   const std::size_t stride = window.stride;
   const double* columns = window.columns.data();
-  const std::uint32_t* index = window.index.data();
   sums.own.resize(coordinates);
   double* ci = sums.own.data();
   for (std::size_t l = 0; l < coordinates; ++l) ci[l] = columns[l * stride + own];
   std::uint32_t* __restrict near = sums.near.data();
-  double* __restrict near_distance = sums.near_distance.data();
+  std::uint32_t* __restrict near_code = sums.near_code.data();
+  const double* times = window.time.data();
+  const double late = double(i) + double(s.theiler), early = double(i) - double(s.theiler);
   const Vector4 lane_number = {0, 1, 2, 3};
   std::size_t kept = 0;
   for (std::size_t run = 0; run < candidates.runs; ++run) {
@@ -270,56 +304,65 @@ struct Candidates {
       const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
       const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
       if (!(within[0] | within[1] | within[2] | within[3])) continue;
-      // All four lanes, without branches (short-circuit tests per lane mispredicted).
-      for (std::size_t lane = 0; lane < 4; ++lane) {
-        const std::size_t j = index[c + lane];
-        const std::size_t gap = j > i ? j - i : i - j;
-        near[kept] = std::uint32_t(c + lane);
-        near_distance[kept] = distance[lane];
-        kept += std::size_t(within[lane] & 1) & std::size_t(gap > s.theiler);
+      // The radius bins of the scanned dimensions as a code (the sum of the place values
+      // (radii + 1)^d for every radius below the distance in dimension min_dimension + d), the
+      // distance growing coordinate by coordinate; compares summed as a tree. Coding the lanes
+      // of a block here instead of in a pass over the compacted neighbours saves gathering
+      // their further coordinates.
+      Vector4 code = {};
+      for (std::size_t d = 0;; ++d) {
+        const double place = s.places[d];
+        const Vector4 zero = {}, places = {place, place, place, place};
+        Vector4 even = {}, odd = {};
+        std::size_t k = 0;
+        for (; k + 1 < radii; k += 2) {
+          even += distance > s.radii2[k] ? places : zero;
+          odd += distance > s.radii2[k + 1] ? places : zero;
+        }
+        if (k < radii) even += distance > s.radii2[k] ? places : zero;
+        code += even + odd;
+        if (d + 1 == s.dims) break;
+        Vector4 other;
+        load4(other, columns + (m0 + d) * stride + c);
+        const Vector4 difference = ci[m0 + d] - other;
+        distance += difference * difference;
       }
+      // All four lanes stored; those that are no neighbour (or inside the Theiler window)
+      // get the discard code, so no lane is extracted (codes < 2^24 convert exactly).
+      Vector4 time;
+      load4(time, times + c);
+      const Mask4 keep = within & ((time > late) | (time < early));
+      const Vector4 discard = {s.discard_code, s.discard_code, s.discard_code, s.discard_code};
+      const Code4 codes = __builtin_convertvector(keep ? code : discard, Code4);
+      const Code4 positions = {std::int32_t(c), std::int32_t(c + 1), std::int32_t(c + 2),
+                               std::int32_t(c + 3)};
+      std::memcpy(near_code + kept, &codes, sizeof codes);
+      std::memcpy(near + kept, &positions, sizeof positions);
+      kept += 4;
     }
   }
-  // Pass 2, four neighbours per vector: the radius bins of the scanned dimensions as a code (the
-  // sum of the place values (radii + 1)^d for every radius below the distance in dimension
-  // min_dimension + d), the distance growing coordinate by coordinate from the one of pass 1.
-  // The compares of one dimension are summed as a tree (a chain of dependent adds was the
-  // bottleneck when every candidate block was coded).
-  for (std::size_t p = kept; p < kept + 4; ++p) {  // padding lanes: the reference itself
-    near[p] = std::uint32_t(own);
-    near_distance[p] = 0;
-  }
-  std::uint32_t* __restrict near_code = sums.near_code.data();
-  for (std::size_t p = 0; p < kept; p += 4) {
-    Vector4 distance;
-    load4(distance, near_distance + p);
-    Vector4 code = {};
-    for (std::size_t d = 0;; ++d) {
-      const double place = s.places[d];
-      const Vector4 zero = {}, places = {place, place, place, place};
-      Vector4 even = {}, odd = {};
-      std::size_t k = 0;
-      for (; k + 1 < s.radii; k += 2) {
-        even += distance > s.radii2[k] ? places : zero;
-        odd += distance > s.radii2[k + 1] ? places : zero;
-      }
-      if (k < s.radii) even += distance > s.radii2[k] ? places : zero;
-      code += even + odd;
-      if (d + 1 == s.dims) break;
-      const double* column = columns + (m0 + d) * stride;
-      const Vector4 other = {column[near[p]], column[near[p + 1]], column[near[p + 2]],
-                             column[near[p + 3]]};
-      const Vector4 difference = ci[m0 + d] - other;
-      distance += difference * difference;
-    }
-    // One vector conversion (codes < 2^24 are exact in either type); lane by lane, the four
-    // extractions and conversions were a visible cost.
-    const Code4 codes = __builtin_convertvector(code, Code4);
-    std::memcpy(near_code + p, &codes, sizeof codes);
-  }
-  // Pass 3: the neighbours profile by profile.
+  // Pass 2: the neighbours profile by profile.
   sums.used = group_by_profile(near_code, kept, s.profile_of.data(), sums.head.data(),
-                               sums.next.data(), sums.profile_count.data(), sums.present.data());
+                               sums.next.data(), sums.profile_count.data(), sums.present.data(),
+                               s.profile_count());
+}
+
+[[gnu::target_clones("avx2", "default")]] void find_neighbours(const ScanShape& s,
+                                                               const RowWindow& window,
+                                                               std::size_t own,
+                                                               const Candidates& candidates,
+                                                               NeighbourSums& sums) {
+  switch (s.radii) {
+    case 1: return find_neighbours_with<1>(s, window, own, candidates, sums);
+    case 2: return find_neighbours_with<2>(s, window, own, candidates, sums);
+    case 3: return find_neighbours_with<3>(s, window, own, candidates, sums);
+    case 4: return find_neighbours_with<4>(s, window, own, candidates, sums);
+    case 5: return find_neighbours_with<5>(s, window, own, candidates, sums);
+    case 6: return find_neighbours_with<6>(s, window, own, candidates, sums);
+    case 7: return find_neighbours_with<7>(s, window, own, candidates, sums);
+    case 8: return find_neighbours_with<8>(s, window, own, candidates, sums);
+    default: return find_neighbours_with<0>(s, window, own, candidates, sums);
+  }
 }
 
 // For each profile of the neighbours found by find_neighbours, the summed squared differences
@@ -331,10 +374,10 @@ struct Candidates {
                                                              std::size_t own, std::size_t c,
                                                              NeighbourSums& sums, double* bins,
                                                              double* bin_count) {
-  const double* plane = window.plane(c);
-  const std::size_t width = window.width(c), start = c * plane_width, vectors = width / 4;
+  const float* plane = window.plane(c);
+  const std::size_t width = window.width(c), start = c * plane_width, vectors = width / 8;
   const bool last = c + 1 == window.planes();
-  const double* xi = plane + own * width;
+  const float* xi = plane + own * width;
   const std::int32_t* next = sums.next.data();
   const std::uint32_t* near = sums.near.data();
   std::vector<double*>& targets = sums.targets;
@@ -354,15 +397,15 @@ struct Candidates {
     // Seven vectors at a time: seven sums and seven reference vectors fill the 16 registers.
     std::size_t v = 0;
     for (; v + 7 <= vectors; v += 7)
-      add_separations<7>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<7>(xi, plane, width, front, next, near, 8 * v, targets.data(), target_count);
     if (v + 4 <= vectors) {
-      add_separations<4>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count);
+      add_separations<4>(xi, plane, width, front, next, near, 8 * v, targets.data(), target_count);
       v += 4;
     }
     switch (vectors - v) {
-      case 3: add_separations<3>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 2: add_separations<2>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
-      case 1: add_separations<1>(xi, plane, width, front, next, near, 4 * v, targets.data(), target_count); break;
+      case 3: add_separations<3>(xi, plane, width, front, next, near, 8 * v, targets.data(), target_count); break;
+      case 2: add_separations<2>(xi, plane, width, front, next, near, 8 * v, targets.data(), target_count); break;
+      case 1: add_separations<1>(xi, plane, width, front, next, near, 8 * v, targets.data(), target_count); break;
       default: break;
     }
   }
@@ -469,6 +512,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.theiler = theiler;
   shape.radii2 = radii2.data();
   shape.floor2 = std::pow(1e-9 * (*hi - *lo), 2);
+  shape.centre = 0.5 * (*hi + *lo);
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
@@ -535,8 +579,8 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
     for (NeighbourSums& sums : group) {
-      sums.head.assign(shape.profile_count(), -1);
-      sums.profile_count.assign(shape.profile_count(), 0);
+      sums.head.assign(shape.profile_count() + 1, -1);
+      sums.profile_count.assign(shape.profile_count() + 1, 0);
     }
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {

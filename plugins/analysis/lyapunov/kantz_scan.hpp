@@ -19,7 +19,10 @@ inline constexpr std::size_t kantz_blocks = 20;
 // separation history is computed once (coordinate differences shared by all dimensions) and
 // binned by the smallest eps that holds it; the bins are summed per reference. The search runs
 // over rows (half-eps boxes of the first coordinate), each sorted along the second coordinate
-// (if m >= 2): a +-eps stretch per row. `references` = 0 takes every vector.
+// (if m >= 2): a +-eps stretch per row. `references` = 0 takes every vector. Neighbour sets and
+// radius bins are decided in double precision; the separation histories are summed from
+// single-precision copies of the signal, which moves S(k) by at most about
+// sqrt(m) 2^-24 (max - min) / (rms separation) (see kantz_scan.cpp).
 struct KantzScan {
   int min_dimension = 1, max_dimension = 1;
   std::vector<double> radii;  // ascending
