@@ -132,6 +132,12 @@ TEST(Lyapunov, KantzScanMatchesDirectEvaluationOverTwoHistoryPlanes) {
                                               {0.05, 0.12});
 }
 
+TEST(Lyapunov, KantzScanMatchesDirectEvaluationWithNineRadii) {
+  // More than eight radii: the radius loop with its count known only at run time.
+  expect_kantz_scan_matches_direct_evaluation(test_signals::henon(1000), 2, 3, 1, 0, 6,
+                                              {0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.1, 0.11, 0.12});
+}
+
 TEST(Lyapunov, KantzScanMatchesDirectEvaluationExactlyOnAnIntegerSignal) {
   // Henon x in units of 1/1000, rounded: the float histories are exact, so the scan must agree
   // with the double-precision definition to the order of the sums (radii between integers).
