@@ -289,57 +289,64 @@ template <std::size_t Radii>
   const double* times = window.time.data();
   const double late = double(i) + double(s.theiler), early = double(i) - double(s.theiler);
   const Vector4 lane_number = {0, 1, 2, 3};
+  const Mask4 every_lane = lane_number >= 0.0;
   std::size_t kept = 0;
-  for (std::size_t run = 0; run < candidates.runs; ++run) {
-    const std::size_t run_end = candidates.last[run];
-    for (std::size_t c = candidates.first[run]; c < run_end; c += 4) {
-      Vector4 distance = {};
-      for (std::size_t l = 0; l < m0; ++l) {
-        Vector4 other;
-        load4(other, columns + l * stride + c);
-        const Vector4 difference = ci[l] - other;
-        distance += difference * difference;
+  // Candidates c .. c + 3, those of lanes `valid` in the run.
+  auto block = [&](std::size_t c, const Mask4& valid) __attribute__((always_inline)) {
+    Vector4 distance = {};
+    for (std::size_t l = 0; l < m0; ++l) {
+      Vector4 other;
+      load4(other, columns + l * stride + c);
+      const Vector4 difference = ci[l] - other;
+      distance += difference * difference;
+    }
+    // Skip blocks of four with no candidate within the largest radius.
+    const Mask4 within = (distance <= eps2) & (distance > s.floor2) & valid;
+    if (!(within[0] | within[1] | within[2] | within[3])) return;
+    // The radius bins of the scanned dimensions as a code (the sum of the place values
+    // (radii + 1)^d for every radius below the distance in dimension min_dimension + d), the
+    // distance growing coordinate by coordinate; compares summed as a tree. Coding the lanes
+    // of a block here instead of in a pass over the compacted neighbours saves gathering
+    // their further coordinates.
+    Vector4 code = {};
+    for (std::size_t d = 0;; ++d) {
+      const double place = s.places[d];
+      const Vector4 zero = {}, places = {place, place, place, place};
+      Vector4 even = {}, odd = {};
+      std::size_t k = 0;
+      for (; k + 1 < radii; k += 2) {
+        even += distance > s.radii2[k] ? places : zero;
+        odd += distance > s.radii2[k + 1] ? places : zero;
       }
-      // Skip blocks of four with no candidate within the largest radius.
-      const std::size_t lanes = std::min<std::size_t>(4, run_end - c);
-      const Mask4 within = (distance <= eps2) & (distance > s.floor2) & (lane_number < double(lanes));
-      if (!(within[0] | within[1] | within[2] | within[3])) continue;
-      // The radius bins of the scanned dimensions as a code (the sum of the place values
-      // (radii + 1)^d for every radius below the distance in dimension min_dimension + d), the
-      // distance growing coordinate by coordinate; compares summed as a tree. Coding the lanes
-      // of a block here instead of in a pass over the compacted neighbours saves gathering
-      // their further coordinates.
-      Vector4 code = {};
-      for (std::size_t d = 0;; ++d) {
-        const double place = s.places[d];
-        const Vector4 zero = {}, places = {place, place, place, place};
-        Vector4 even = {}, odd = {};
-        std::size_t k = 0;
-        for (; k + 1 < radii; k += 2) {
-          even += distance > s.radii2[k] ? places : zero;
-          odd += distance > s.radii2[k + 1] ? places : zero;
-        }
-        if (k < radii) even += distance > s.radii2[k] ? places : zero;
-        code += even + odd;
-        if (d + 1 == s.dims) break;
-        Vector4 other;
-        load4(other, columns + (m0 + d) * stride + c);
-        const Vector4 difference = ci[m0 + d] - other;
-        distance += difference * difference;
-      }
-      // All four lanes stored; those that are no neighbour (or inside the Theiler window)
-      // get the discard code, so no lane is extracted (codes < 2^24 convert exactly).
+      if (k < radii) even += distance > s.radii2[k] ? places : zero;
+      code += even + odd;
+      if (d + 1 == s.dims) break;
+      Vector4 other;
+      load4(other, columns + (m0 + d) * stride + c);
+      const Vector4 difference = ci[m0 + d] - other;
+      distance += difference * difference;
+    }
+    // All four lanes stored; those that are no neighbour (or inside the Theiler window)
+    // get the discard code, so no lane is extracted (codes < 2^24 convert exactly).
+    Mask4 keep = within;
+    if (s.theiler > 0) {  // else only the reference itself is in the window: not within
       Vector4 time;
       load4(time, times + c);
-      const Mask4 keep = within & ((time > late) | (time < early));
-      const Vector4 discard = {s.discard_code, s.discard_code, s.discard_code, s.discard_code};
-      const Code4 codes = __builtin_convertvector(keep ? code : discard, Code4);
-      const Code4 positions = {std::int32_t(c), std::int32_t(c + 1), std::int32_t(c + 2),
-                               std::int32_t(c + 3)};
-      std::memcpy(near_code + kept, &codes, sizeof codes);
-      std::memcpy(near + kept, &positions, sizeof positions);
-      kept += 4;
+      keep &= (time > late) | (time < early);
     }
+    const Vector4 discard = {s.discard_code, s.discard_code, s.discard_code, s.discard_code};
+    const Code4 codes = __builtin_convertvector(keep ? code : discard, Code4);
+    const Code4 positions = {std::int32_t(c), std::int32_t(c + 1), std::int32_t(c + 2),
+                             std::int32_t(c + 3)};
+    std::memcpy(near_code + kept, &codes, sizeof codes);
+    std::memcpy(near + kept, &positions, sizeof positions);
+    kept += 4;
+  };
+  for (std::size_t run = 0; run < candidates.runs; ++run) {
+    const std::size_t run_end = candidates.last[run];
+    std::size_t c = candidates.first[run];
+    for (; c + 4 <= run_end; c += 4) block(c, every_lane);
+    if (c < run_end) block(c, lane_number < double(run_end - c));
   }
   // Pass 2: the neighbours profile by profile.
   sums.used = group_by_profile(near_code, kept, s.profile_of.data(), sums.head.data(),
