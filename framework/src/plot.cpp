@@ -343,12 +343,17 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
                                 gp_string(s.label)));
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
-  if (figure.reference_y && !(figure.log_y && *figure.reference_y <= 0)) {
+  const bool reference = figure.reference_y && !(figure.log_y && *figure.reference_y <= 0);
+  if (reference) {
     std::string label = figure.reference_label.empty()
                             ? fmt::format("y = {}", number(*figure.reference_y))
                             : figure.reference_label;
+    // A function is drawn over the data's x range only; on an integer axis, whose half-unit
+    // margins lie outside it, the line is an arrow from frame to frame (set below) and the
+    // function is NaN: only its key entry shows.
     plots.push_back(fmt::format("{} with lines dt 2 lw 1.5 lc rgb 'black' title {}",
-                                number(*figure.reference_y), gp_string(label)));
+                                figure.integer_x ? "NaN" : number(*figure.reference_y),
+                                gp_string(label)));
   }
 
   std::string gp = script_preamble(stem, "Curves", figure.title, figure.x_label, figure.y_label);
@@ -396,6 +401,13 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
                                   : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
   // Whole-number ticks: gnuplot would label an index axis 1, 1.2, 1.4, ... over a short range.
   if (figure.integer_x) gp += "set xtics 1\nset mxtics 1\n";
+  // The integer axis' reference line; the y range still reaches it ("*<y": the autoscaled
+  // minimum at most y, "y<*": the maximum at least y), as it would for the function.
+  if (figure.integer_x && reference)
+    gp += fmt::format(
+        "set yrange [*<{0}:{0}<*]\nset arrow from graph 0, first {0} to graph 1, first {0} "
+        "nohead dt 2 lw 1.5 lc rgb 'black'\n",
+        number(*figure.reference_y));
   gp += script_png_terminal(stem);
   gp += fmt::format("plot {}\n", fmt::join(plots, ", \\\n     "));
   gp += script_svg_replot(stem);

@@ -255,17 +255,29 @@ TEST(Plot, IntegerXAxisTicksWholeNumbersWithMargins) {
   const fs::path dir = output_dir("integer_x");
   Curves curves;
   curves.integer_x = true;
+  curves.reference_y = 0.0;
   curves.series = {series("lambda_i", {1, 2}, {0.42, -1.62}, "linespoints")};
   render(curves, dir, "spectrum");
   expect_png(dir / "spectrum.png", 10000);
   const std::string gp = read_all(dir / "spectrum.gp");
   EXPECT_NE(gp.find("set offsets 0.5, 0.5,"), std::string::npos) << gp;
   EXPECT_NE(gp.find("set xtics 1\n"), std::string::npos) << gp;
+  // The y = 0 line crosses the margins too, not only the data's x range, and keeps its key.
+  EXPECT_NE(gp.find("set arrow from graph 0, first 0 to graph 1, first 0 nohead"),
+            std::string::npos)
+      << gp;
+  EXPECT_NE(read_all(dir / "spectrum.svg").find("y = 0"), std::string::npos);
   const std::string svg = read_all(dir / "spectrum.svg");
   // Tick labels are "<text> 1</text>" in gnuplot's SVG; without integer_x: 1, 1.2, ..., 2.
   EXPECT_NE(svg.find("<text> 1</text>"), std::string::npos) << svg;
   EXPECT_NE(svg.find("<text> 2</text>"), std::string::npos) << svg;
   EXPECT_EQ(svg.find("<text> 1.2</text>"), std::string::npos) << "fractional tick on an index axis";
+
+  // All data below the reference: the y range still reaches up to it.
+  curves.series = {series("lambda_i", {1, 2, 3}, {-0.2, -0.9, -14.5}, "linespoints")};
+  render(curves, dir, "negative");
+  EXPECT_NE(read_all(dir / "negative.gp").find("set yrange [*<0:0<*]"), std::string::npos);
+  expect_png(dir / "negative.png", 10000);
 
   curves.log_x = true;
   EXPECT_EQ(plot_error(curves, dir, "log"), "plot 'log': an integer x axis must be linear");
