@@ -110,7 +110,7 @@ struct NeighbourSums {
 // reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
 // boxes of the previous search spanned 3 eps on average). Rows are the unit of work of a thread.
 // History samples are stored in single precision, as x - centre: half the bytes per neighbour
-// and eight samples per vector made the scan about 0.7 of its time with doubles (Lorenz and
+// and eight samples per vector made the scan 0.65-0.75 of its time with doubles (Lorenz and
 // Henon benchmarks); the neighbour sets and radius bins are still decided in double precision.
 // Each stored sample is off by at most 2^-24 of half the data range, so the rms separation of a
 // reference's neighbours by at most sqrt(m) 2^-24 x range, and S(k) by that over the rms
@@ -203,12 +203,13 @@ template <std::size_t Vectors>
     }
 }
 
-// The neighbours grouped by profile as linked lists (in order of p): head[k] = first neighbour of
-// profile k (-1: none; all -1 on entry), next[p] = the one after p, count[k] = their number (0 on
-// entry), the profiles present in `present` (ascending). Returns how many are present. One pass
-// and no scatter: a counting sort's scatter (position loaded, incremented and stored, then the
-// member stored at it) stalled on store forwarding. Kept out of line: inlined into the vector
-// passes its pointers were spilled to the stack and reloaded every iteration.
+// The slots grouped by profile as linked lists (in order of p): head[k] = first slot of profile k
+// (-1: none; all -1 on entry), next[p] = the one after p, count[k] = their number (0 on entry),
+// the profiles present in `present` (ascending, the discard profile dropped). Returns how many
+// are present. One pass and no scatter: a counting sort's scatter (position loaded, incremented
+// and stored, then the slot stored at it) stalled on store forwarding, and a counting sort into
+// contiguous per-profile arrays made the whole scan 1.3 x slower (2026-11-22). Kept out of line:
+// inlined into the vector passes its pointers were spilled to the stack and reloaded.
 [[gnu::noinline]] std::size_t group_by_profile(const std::uint32_t* __restrict code,
                                                std::size_t kept,
                                                const std::int32_t* __restrict profile_of,
