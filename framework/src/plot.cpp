@@ -344,6 +344,7 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
   const bool reference = figure.reference_y && !(figure.log_y && *figure.reference_y <= 0);
+  constexpr const char* reference_style = "dt 2 lw 1.5 lc rgb 'black'";
   if (reference) {
     std::string label = figure.reference_label.empty()
                             ? fmt::format("y = {}", number(*figure.reference_y))
@@ -351,9 +352,9 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
     // A function is drawn over the data's x range only; on an integer axis, whose half-unit
     // margins lie outside it, the line is an arrow from frame to frame (set below) and the
     // function is NaN: only its key entry shows.
-    plots.push_back(fmt::format("{} with lines dt 2 lw 1.5 lc rgb 'black' title {}",
+    plots.push_back(fmt::format("{} with lines {} title {}",
                                 figure.integer_x ? "NaN" : number(*figure.reference_y),
-                                gp_string(label)));
+                                reference_style, gp_string(label)));
   }
 
   std::string gp = script_preamble(stem, "Curves", figure.title, figure.x_label, figure.y_label);
@@ -406,8 +407,8 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   if (figure.integer_x && reference)
     gp += fmt::format(
         "set yrange [*<{0}:{0}<*]\nset arrow from graph 0, first {0} to graph 1, first {0} "
-        "nohead dt 2 lw 1.5 lc rgb 'black'\n",
-        number(*figure.reference_y));
+        "nohead {1}\n",
+        number(*figure.reference_y), reference_style);
   gp += script_png_terminal(stem);
   gp += fmt::format("plot {}\n", fmt::join(plots, ", \\\n     "));
   gp += script_svg_replot(stem);

@@ -72,6 +72,7 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
   ASSERT_EQ(scan.references, limit);
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double unit = std::ldexp(1.0, -24), range = *hi - *lo;
+  const double coincident2 = std::pow(1e-9 * range, 2);  // the scan's coincidence rule
   auto dist2 = [&](std::size_t i, std::size_t j, int m, std::size_t k) {
     double s = 0;
     for (int l = 0; l < m; ++l) s += std::pow(x[i + k + std::size_t(l * delay)] - x[j + k + std::size_t(l * delay)], 2);
@@ -87,7 +88,7 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
         double n = 0;
         for (std::size_t j = 0; j < limit; ++j) {
           if ((j > i ? j - i : i - j) <= theiler || dist2(i, j, m, 0) > radii[r] * radii[r] ||
-              dist2(i, j, m0, 0) <= std::pow(1e-9 * range, 2))
+              dist2(i, j, m0, 0) <= coincident2)
             continue;
           for (std::size_t k = 0; k < steps; ++k) mean[k] += dist2(i, j, m, k);
           n += 1;
