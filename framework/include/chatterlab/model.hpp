@@ -1,6 +1,12 @@
 #pragma once
 // A dynamics model plugin (MODELS.md G1..G7). The model supplies physics only; the framework owns
 // root finding, integration, grids and output.
+//
+// Capabilities beyond the physics are typed interfaces a model class may also derive from; study
+// kinds reach them through the accessors below (the model returns `this`), never by the model's
+// name or by casting to a plugin's class:
+//   ClosedFormIndicators (closed_form.hpp)    closed-form criteria reported beside the roots
+//   ProcessConditionsModel (process_conditions.hpp)  parameters that follow the process conditions
 #include <memory>
 #include <optional>
 
@@ -9,6 +15,9 @@
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
+
+class ClosedFormIndicators;
+class ProcessConditionsModel;
 
 class Model {
  public:
@@ -25,6 +34,10 @@ class Model {
   // Time-domain form (states, contact law, regenerated surfaces) for the dynamics engine
   // (chatterlab/dynamics.hpp, study kind `simulate`), or null when the model has none.
   virtual std::unique_ptr<TimeDomainModel> time_domain() const { return nullptr; }
+
+  // ---- capabilities (null: the model does not have it)
+  virtual const ClosedFormIndicators* closed_forms() const { return nullptr; }
+  virtual const ProcessConditionsModel* process_conditions() const { return nullptr; }
 };
 
 }  // namespace chatterlab
