@@ -5,10 +5,6 @@
 // speed or the depth of cut over time (suppression_map, MODELS.md S1-S3). Study kinds reach any
 // model that implements this interface through Model::process_conditions(), never through its
 // parameter names, so a new model that declares the capability works with them unchanged.
-#include <limits>
-#include <optional>
-#include <vector>
-
 #include "chatterlab/params.hpp"
 
 namespace chatterlab {
@@ -33,23 +29,6 @@ struct ProcessScaling {
   double thickness_exponent = 0.0;
 };
 
-// A structural mode as the closed forms of MODELS.md G1/G3/S1 see it.
-struct ModeView {
-  double frequency_hz = 0.0;
-  double damping_ratio = 0.0;
-  double stiffness_n_per_m = 0.0;
-};
-
-// The G1 (Snoeys) stiffness chain of a model: what the closed forms (G3 wheel growth rate, S1
-// chatter frequency under variable feed) need. A regeneration that is switched off has an
-// infinite stiffness (its term vanishes from eq 2-16).
-struct StiffnessChain {
-  double contact_stiffness_n_per_m = 0.0;  // kc
-  double wheel_wear_stiffness_n_per_m = std::numeric_limits<double>::infinity();    // kg
-  double work_removal_stiffness_n_per_m = std::numeric_limits<double>::infinity();  // kw
-  std::vector<ModeView> modes;
-};
-
 class ProcessConditionsModel {
  public:
   virtual ~ProcessConditionsModel() = default;
@@ -63,10 +42,6 @@ class ProcessConditionsModel {
   // keeps what depends on it unchanged.
   virtual Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                              const ProcessScaling& scaling) const = 0;
-
-  // The G1 stiffness chain, when the model has one (closed forms are then reported beside the
-  // simulated and root-based results); nullopt otherwise.
-  virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
 };
 
 }  // namespace chatterlab
