@@ -8,7 +8,7 @@
 namespace chatterlab::cli {
 
 struct EmbeddedFile {
-  std::string_view path;  // relative to framework/cli, e.g. "skeletons/model/plugin.cpp"
+  std::string_view path;  // relative to framework/cli, e.g. "skeletons/model/plugin.cpp.in"
   std::string_view content;
 };
 

@@ -120,8 +120,8 @@ int new_plugin(const SdkArguments& args) {
   std::vector<std::pair<std::string, std::string>> files = {
       {"CMakeLists.txt", fill(embedded_file("skeletons/common/CMakeLists.txt"))},
       {"README.md", fill(embedded_file(kind_dir + "README.md")) + fill(embedded_file("skeletons/common/README.md"))},
-      {name + ".cpp", fill(embedded_file(kind_dir + "plugin.cpp"))},
-      {name + "_test.cpp", fill(embedded_file(kind_dir + "plugin_test.cpp"))},
+      {name + ".cpp", fill(embedded_file(kind_dir + "plugin.cpp.in"))},
+      {name + "_test.cpp", fill(embedded_file(kind_dir + "plugin_test.cpp.in"))},
       {"study.toml", fill(embedded_file(kind_dir + "study.toml"))}};
   if (args.plugin_kind == "analysis") files.emplace_back("signal.csv", example_signal_csv());
 

@@ -41,7 +41,7 @@ while read -r kind; do
 done < "$work/kinds"
 echo "init: $validated of $(wc -l < "$work/kinds") study kinds valid as written"
 grep -q "^# .*\[Hz\]" "$work/stability_map.toml" || fail "init stability_map: keys are not commented with units"
-for kind in stability_map simulate; do
+for kind in stability_map compliance_chart suppression_map simulate; do
   [ -f "$work/validate_$kind.out" ] || fail "init $kind did not write a valid study"
 done
 expect_exit 2 "$work/init_again" "$chatterlab" init stability_map -o "$work/stability_map.toml"

@@ -17,6 +17,7 @@
 //                 (linear) simulation agree with the rightmost characteristic root
 //   threads       the declared ThreadSafety holds: shareable instances used from several threads
 //                 at once, copy_per_thread copies on several threads, give the serial results
+//                 (to 1e-9 relative)
 //   study kind    reads at least one table
 #include <string>
 #include <vector>

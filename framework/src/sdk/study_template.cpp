@@ -136,8 +136,23 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
   document["study"] = {{"kind", kind_name}, {"name", options.name.empty() ? kind_name + " study" : options.name},
                        {"description", ""}};
   for (const std::string& table : kind->tables()) document[table] = Json::object();  // the kind's order
-  for (const std::string& table : settings_tables)
-    document[table] = settings_tables.size() == 1 ? info.example_params : Json::object();
+  // The kind's example_params belong to one of its settings tables: the only one, or the one
+  // where the kind accepts them (placed in another table they are unknown keys).
+  std::string example_table = settings_tables.size() == 1 ? settings_tables.front() : std::string();
+  if (example_table.empty() && !info.example_params.empty()) {
+    for (const Component& c : components)
+      if (!c.plugins.empty()) document[c.table] = component_table(*c.plugins.front());
+    for (const std::string& table : settings_tables) {
+      Json trial = document;
+      trial[table] = info.example_params;
+      const std::string why = refusal(*kind, trial, kind_name);
+      if (why.find("unknown key") == std::string::npos) {
+        example_table = table;
+        break;
+      }
+    }
+  }
+  if (!example_table.empty()) document[example_table] = info.example_params;
   // Each component: the chosen plugin, or the first whose example the kind accepts.
   std::vector<std::vector<std::string>> accepted(components.size());
   for (const Component& c : components)
@@ -222,7 +237,7 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
       const auto& others = accepted[static_cast<std::size_t>(c - components.begin())];
       if (others.size() > 1)
         t += fmt::format("# {} plugins this kind accepts: {}\n", c->registry_kind, fmt::join(others, ", "));
-    } else if (settings_tables.size() == 1) {
+    } else if (table == example_table) {
       specs = info.params;  // the kind's own settings
     }
     append_toml_table(t, value, toml_key(table), specs, true);
