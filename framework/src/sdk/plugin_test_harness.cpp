@@ -1,4 +1,5 @@
-// The harness of plugin libraries' own tests (chatterlab/plugin_test.hpp).
+// The harness of plugin libraries' own tests (chatterlab/plugin_test.hpp; named *_harness.cpp because
+// *_test.cpp files are tests, not library code).
 #include "chatterlab/plugin_test.hpp"
 
 #include <exception>
