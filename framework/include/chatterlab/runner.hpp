@@ -3,6 +3,7 @@
 // (`mpirun -np N chatterlab run ...` writes a results.csv byte-identical to one process).
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 
 #include "chatterlab/study.hpp"
@@ -15,6 +16,10 @@ struct RunOptions {
   bool resume = false;                  // keep finished points of an interrupted run
   std::optional<bool> progress;         // default: a progress bar iff stderr is a terminal
   bool plots = true;                    // false: results.csv + meta.json only (benchmarks)
+  // Called after each point this process computes, from whichever thread computed it (so it must
+  // be thread-safe and quick), with the points done so far and the points this process computes;
+  // once with (0, total) before the first. The Python API's progress display polls it.
+  std::function<void(std::size_t points_done, std::size_t points_total)> on_point_done;
 };
 
 struct RunSummary {

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -368,6 +369,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   runner::ProgressBar progress(rank == 0 && options.progress.value_or(runner::stderr_is_terminal()),
                                todo.size());
   std::vector<PointResult> mine(todo.size());
+  std::atomic<std::size_t> points_done{0};
+  if (options.on_point_done) options.on_point_done(0, todo.size());
   double compute_s = 0.0;
   const auto count = static_cast<std::ptrdiff_t>(todo.size());
 #pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
@@ -379,6 +382,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     journal->append(runner::journal_line(p, result));
     mine[static_cast<std::size_t>(k)] = std::move(result);
     progress.point_done();
+    if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   }
   journal->flush();
   progress.finish();

@@ -1,6 +1,7 @@
 // load_study: the generic part of reading a study (plugins, [study], top-level keys, [grid]);
 // the kind validates its own tables.
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -116,14 +117,14 @@ Json without_grid(const Json& document) {
 
 }  // namespace
 
-Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
-  TomlDocument toml = read_toml_study(file);
-  Json& document = toml.document;
-  const SourceMap& sources = *toml.sources;
+namespace {
 
+Study load_parsed(Json document, const std::filesystem::path& file, std::shared_ptr<const SourceMap> source_map,
+                  const LoadOptions& options) {
+  const SourceMap& sources = *source_map;
   Study study;
   study.file = file;
-  study.sources = toml.sources;
+  study.sources = std::move(source_map);
   study.plugin_libraries = load_plugins(document, file, sources);
   study.kind = validate_study_table(document, file, sources);
   auto kind = study_kind_registry().at(study.kind).create(ParamValues());
@@ -141,6 +142,20 @@ Study load_study(const std::filesystem::path& file, const LoadOptions& options) 
   for (const auto& [key, value] : validated.items())  // tables the kind added (defaults)
     if (!study.document.contains(key)) study.document[key] = value;
   return study;
+}
+
+}  // namespace
+
+Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
+  TomlDocument toml = read_toml_study(file);
+  return load_parsed(std::move(toml.document), file, std::move(toml.sources), options);
+}
+
+Study load_study_document(Json document, const std::filesystem::path& origin, const LoadOptions& options) {
+  if (!document.is_object())
+    throw InputError(fmt::format("{}: a study is a table of tables ([study], [model], ...), not {}",
+                                 origin.string(), messages::show(document)));
+  return load_parsed(std::move(document), origin, std::make_shared<LineSourceMap>(origin.string()), options);
 }
 
 std::size_t Study::point_count() const {
