@@ -60,12 +60,11 @@ class AnalysisResult(MappingABC):
 
 
 def _with_arrays(value: Any) -> Any:
-    """Curves (lists of numbers, and rectangular lists of such lists) as numpy arrays."""
+    """Rectangular lists of curves as 2-D numpy arrays (the compiled module already returns every
+    list of numbers as a float64 array)."""
     if isinstance(value, dict):
         return {key: _with_arrays(item) for key, item in value.items()}
     if isinstance(value, list) and value:
-        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-            return np.asarray(value, dtype=np.float64)
         items = [_with_arrays(v) for v in value]
         if all(isinstance(v, np.ndarray) and v.ndim == 1 and len(v) == len(items[0]) for v in items):
             return np.vstack(items)

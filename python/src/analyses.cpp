@@ -64,7 +64,7 @@ py::tuple analyse(const std::string& name, py::handle values, double sample_inte
   py::dict timing;
   timing["copy_s"] = copy_s;
   timing["analyse_s"] = analyse_s;
-  return py::make_tuple(to_python(result), timing);
+  return py::make_tuple(to_python_with_arrays(result), timing);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "convert.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -62,6 +63,35 @@ py::object to_python(const Json& value) {
     default:
       return py::none();  // binary and discarded values do not occur in chatterlab's documents
   }
+}
+
+namespace {
+
+bool is_numeric_array(const Json& value) {
+  return value.is_array() && !value.empty() &&
+         std::all_of(value.begin(), value.end(), [](const Json& item) { return item.is_number(); });
+}
+
+}  // namespace
+
+py::object to_python_with_arrays(const Json& value) {
+  if (is_numeric_array(value)) {
+    std::vector<double> numbers;
+    numbers.reserve(value.size());
+    for (const Json& item : value) numbers.push_back(item.get<double>());
+    return to_numpy(std::move(numbers));
+  }
+  if (value.is_array()) {
+    py::list out;
+    for (const Json& item : value) out.append(to_python_with_arrays(item));
+    return out;
+  }
+  if (value.is_object()) {
+    py::dict out;
+    for (const auto& [key, item] : value.items()) out[py::str(key)] = to_python_with_arrays(item);
+    return out;
+  }
+  return to_python(value);
 }
 
 py::array_t<double, py::array::c_style | py::array::forcecast> as_series(py::handle values, const std::string& where) {

@@ -18,6 +18,10 @@ namespace py = pybind11;
 // numpy scalars and arrays (as nested lists). Anything else: TypeError naming `where`.
 Json to_json(py::handle object, const std::string& where);
 py::object to_python(const Json& value);
+// The same, but every non-empty array of numbers (booleans excluded) becomes a float64 numpy array
+// in one pass: analysis results hold curves of 10^5 and more values, which as Python lists and
+// then arrays cost more than many analyses themselves.
+py::object to_python_with_arrays(const Json& value);
 
 // A C-contiguous float64 view of `values` (no copy when it already is one; numpy converts
 // other dtypes and strides once). ValueError unless it is one-dimensional.
