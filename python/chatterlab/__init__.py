@@ -22,6 +22,10 @@ value and limit), PointFailure (a RuntimeError: a numerical failure), PlotError.
 """
 
 from ._chatterlab import InputError, PlotError, PointFailure, __version__
+
+for _error in (InputError, PlotError, PointFailure):
+    _error.__module__ = __name__  # tracebacks say chatterlab.InputError, where users catch it
+del _error
 from .analysis import (AnalysisResult, analyse, correlation_dimension, embedding, error_separation, lyapunov,
                        lyapunov_spectrum, roundness, surface_profile, surrogates, waviness)
 from .catalog import describe, load_plugin, plugins
