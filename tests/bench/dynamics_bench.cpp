@@ -16,6 +16,7 @@
 
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/roots.hpp"
+#include "dynamics/route_agreement.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
 #include "models/torsional_coupling/torsional_coupling.hpp"
@@ -24,13 +25,9 @@ namespace {
 
 using namespace chatterlab;
 
+// The tests' reference case (plunge_time_domain.hpp) with its mode at frequency_hz.
 PlungeRegenerativeParameters one_mode(double frequency_hz) {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
-  p.work_removal_stiffness_n_per_m = 2e8;
+  PlungeRegenerativeParameters p = reference_g1_case();
   p.modes = {{frequency_hz, 0.05, 5e7}};
   return p;
 }
@@ -59,6 +56,7 @@ void environment_overrides(SimulationSettings& s) {
   if (const char* e = std::getenv("CHAT_RTOL")) s.relative_tolerance = std::atof(e);
   if (const char* e = std::getenv("CHAT_SPW")) s.samples_per_wave = std::atof(e);
   if (const char* e = std::getenv("CHAT_MSPW")) s.max_steps_per_wave = std::atof(e);
+  if (const char* e = std::getenv("CHAT_FSPW")) s.fixed_steps_per_wave = std::atof(e);
 }
 
 // Accuracy of the benchmark's own settings, outside the timed loop: the growth rate fitted over
@@ -150,6 +148,70 @@ void G5Torsional(benchmark::State& state) {
   run(state, *model, s);
 }
 BENCHMARK(G5Torsional)->Arg(6)->Arg(4)->Unit(benchmark::kMillisecond);
+// ------------------------------------------------------------------ G8, 60 s (issue 25)
+
+// The study's [simulation]: plunge infeed 15 um/s from rest, 1 um random initial surfaces
+// (seed 7), one-sided contact, snapshots at 2 s and the end, divergence limit 0.01 m.
+SimulationSettings g8_settings(double duration_s, double sample_rate_hz, TimeIntegrator integrator) {
+  SimulationSettings s;
+  s.duration_s = duration_s;
+  s.sample_rate_hz = sample_rate_hz;
+  s.infeed_rate_m_per_s = 15e-6;
+  s.disturbance = {0.0, 0.0};
+  s.initial_waviness_m = 1e-6;
+  s.seed = 7;
+  s.snapshot_times_s = {2.0, duration_s};
+  s.divergence_limit_m = 0.01;
+  s.integrator = integrator;
+  return s;
+}
+
+// The engine on the 60 s case; args: output sample rate [Hz], route (0 fixed step, 1 the ARKODE
+// reference at its default rtol 1e-6). Counters: speedup (simulated s per CPU s), steps and
+// contact events per simulated s; outside the timed loop, for the fixed-step route, its accuracy
+// against the reference at rtol 1e-8 over the study's growth phase (3 s: growth fitted over
+// 1.2..3.0 s, dominant frequency there, work surface at the 2 s snapshot).
+void G8Chatter60s(benchmark::State& state) {
+  const double rate = static_cast<double>(state.range(0));
+  const TimeIntegrator integrator =
+      state.range(1) == 0 ? TimeIntegrator::fixed_step : TimeIntegrator::explicit_runge_kutta;
+  PlungeTimeDomain model(g8_grinder());
+  SimulationSettings s = g8_settings(60.0, rate, integrator);
+  environment_overrides(s);
+  state.SetLabel(to_string(integrator));
+  double simulated = 0.0, events = 0.0, steps = 0.0;
+  for (auto _ : state) {
+    SimulationResult r = simulate(model, s);
+    benchmark::DoNotOptimize(r.displacement_m.data());
+    simulated += r.end_time_s;
+    events += static_cast<double>(r.contact_events);
+    steps += static_cast<double>(r.steps);
+    if (r.status != "completed") state.SkipWithError(r.status.c_str());
+  }
+  state.counters["speedup"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
+  state.counters["events_per_sim_s"] = events / simulated;
+  state.counters["steps_per_sim_s"] = steps / simulated;
+  if (integrator != TimeIntegrator::fixed_step || std::getenv("CHAT_NO_ACCURACY")) return;
+  SimulationSettings reference = g8_settings(3.0, rate, TimeIntegrator::explicit_runge_kutta);
+  if (const char* e = std::getenv("CHAT_SPW")) reference.samples_per_wave = std::atof(e);
+  reference.relative_tolerance = 1e-8;
+  const SimulationResult a = simulate(model, reference);
+  SimulationSettings fixed = g8_settings(3.0, rate, TimeIntegrator::fixed_step);
+  environment_overrides(fixed);
+  const SimulationResult b = simulate(model, fixed);
+  const dynamics_detail::RouteAgreement agreement = dynamics_detail::route_agreement(a, b, 1.2, 3.0);
+  state.counters["growth_err_pct"] = 100.0 * agreement.growth_error;
+  state.counters["freq_err_pct"] = 100.0 * agreement.frequency_error;
+  state.counters["surface_err_pct"] = 100.0 * agreement.surface_error;
+}
+BENCHMARK(G8Chatter60s)
+    ->Args({1000, 0})
+    ->Args({10000, 0})
+    ->Args({1000, 1})
+    ->Args({10000, 1})
+    ->ArgNames({"output_hz", "reference"})
+    ->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -21,18 +21,8 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// The reference case: one 250 Hz mode, zeta 0.05, km 5e7, kc 1e8, kg 1e9, kw 2e8,
-// 1450/55 rpm.
-PlungeRegenerativeParameters reference_case() {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
-  p.work_removal_stiffness_n_per_m = 2e8;
-  p.modes = {{250.0, 0.05, 5e7}};
-  return p;
-}
+// The reference case (plunge_time_domain.hpp).
+PlungeRegenerativeParameters reference_case() { return reference_g1_case(); }
 
 RightmostRoot root_of(const PlungeRegenerativeParameters& p) {
   PlungeCharacteristic e(p);
@@ -349,8 +339,8 @@ TEST(PlungeTimeDomain, DivergenceIsReportedWithTimeAndState) {
 
 // A right-hand side that breaks down at t = 10 ms (not a number from there on, as a model whose
 // force law fails would give): the run must stop with a PointFailure naming the time, the cause
-// and the integrator's flag (with ARKODE it used to hang: its step adaptation never ends on a NaN
-// error estimate). Not covered: the CVODE Adams option still loops in CVODE's step reduction on
+// and, on the reference route, the integrator's flag (with ARKODE it used to hang: its step
+// adaptation never ends on a NaN error estimate). Not covered: the CVODE Adams option still loops in CVODE's step reduction on
 // such a model (docs/dynamics.md).
 class BreakingOscillator final : public TimeDomainModel {
  public:
@@ -378,14 +368,26 @@ class BreakingOscillator final : public TimeDomainModel {
 };
 
 TEST(PlungeTimeDomain, NonFiniteRightHandSideStopsTheRunWithTimeAndCause) {
+  SimulationSettings s = linear_settings(0.05);
+  s.integrator = TimeIntegrator::explicit_runge_kutta;
   try {
-    simulate(BreakingOscillator(), linear_settings(0.05));
+    simulate(BreakingOscillator(), s);
     FAIL() << "no exception";
   } catch (const PointFailure& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("integrator failed at t = 0.01"), std::string::npos) << what;
     EXPECT_NE(what.find("right-hand side not finite at t = 0.01"), std::string::npos) << what;
     EXPECT_NE(what.find("ARKODE ARK_"), std::string::npos) << what;
+  }
+  // The fixed-step engine (Runge-Kutta: the model declares no linear form) names the stage's time.
+  s.integrator = TimeIntegrator::fixed_step;
+  try {
+    simulate(BreakingOscillator(), s);
+    FAIL() << "no exception";
+  } catch (const PointFailure& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("fixed-step integration failed at t = 0.01"), std::string::npos) << what;
+    EXPECT_NE(what.find("right-hand side not finite at t = 0.01"), std::string::npos) << what;
   }
 }
 
