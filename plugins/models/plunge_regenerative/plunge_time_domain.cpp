@@ -7,6 +7,7 @@
 namespace chatterlab {
 
 void apply_growth_rate_settings(SimulationSettings& settings) {
+  settings.integrator = TimeIntegrator::explicit_runge_kutta;
   settings.relative_tolerance = 1e-2;
   settings.max_steps_per_wave = 3.0;
   settings.samples_per_wave = 8.0;

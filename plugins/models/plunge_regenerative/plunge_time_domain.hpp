@@ -15,8 +15,9 @@
 
 namespace chatterlab {
 
-// Integrator settings for the growth rate of a growing (chatter) response of this model, chosen
-// from measured accuracy (docs/dynamics.md): rtol 1e-2 with the largest step 1/(3 f_max), i.e.
+// The adaptive ARKODE route's settings for the growth rate of a growing (chatter) response of
+// this model (they select that route), chosen from measured accuracy (docs/dynamics.md): rtol
+// 1e-2 with the largest step 1/(3 f_max), i.e.
 // ~5.9 Dormand-Prince steps per chatter period (G1's f_max is ~1.8x the chatter frequency; the
 // step is cap-limited, the error test would allow more), and 8 surface samples per wave of
 // f_max (~14 per chatter wave). The growth rate then agrees with a converged run within 0.6 %
