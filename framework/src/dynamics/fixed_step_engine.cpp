@@ -90,8 +90,10 @@ class FixedStepEngine final : public EngineCore {
   const LinearPropagator* current_ = nullptr;
   double next_form_change_ = kInfinity;
   std::vector<double> scales_;
-  // Forcing at the current step's four nodes (t_k - h .. t_k + 2h; first step t_k .. t_k + 3h).
+  // Forcing averages over the current step's four cells ([t_k - h, t_k] .. [t_k + 2h, t_k + 3h];
+  // first step [t_k, t_k + h] ..), and the step's forcing cubic through them.
   double nodes_[4] = {0.0, 0.0, 0.0, 0.0};
+  ForcingCubic cubic_;
   // Dense output: the piece [piece_a_.t, piece_b_.t] of the current step.
   Point piece_a_, piece_b_;
   std::vector<double> dense_;
@@ -148,8 +150,7 @@ bool FixedStepEngine::rhs(double t, const double* x, bool side, double* dx) {
 
 void FixedStepEngine::derivative(double t, bool side, const double* x, double* dx) {
   if (current_) {
-    const ForcingNodes nodes = first_step_ ? ForcingNodes::first_step : ForcingNodes::centred;
-    current_->derivative(side, x, current_->forcing_at(nodes, nodes_, local(t)), dx);
+    current_->derivative(side, x, cubic_.value(local(t)), dx);
     return;
   }
   rhs(t, x, side, dx);
@@ -160,8 +161,7 @@ void FixedStepEngine::slopes(bool side, Point& p) {
   p.has_second = current_ != nullptr;
   if (!p.has_second) return;
   // d2x/dt2 = A dx/dt + b df/dt.
-  const ForcingNodes nodes = first_step_ ? ForcingNodes::first_step : ForcingNodes::centred;
-  current_->derivative(side, p.f.data(), current_->forcing_rate_at(nodes, nodes_, local(p.t)), p.g.data());
+  current_->derivative(side, p.f.data(), cubic_.rate(local(p.t)), p.g.data());
 }
 
 void FixedStepEngine::advance(double t_a, double t_b, bool side, const double* x, const double* f_a, double* out) {
@@ -169,7 +169,7 @@ void FixedStepEngine::advance(double t_a, double t_b, bool side, const double* x
   if (current_) {
     const ForcingNodes nodes = first_step_ ? ForcingNodes::first_step : ForcingNodes::centred;
     if (a == 0.0 && b == h_) current_->step(side, nodes, x, nodes_, out);
-    else current_->piece(side, nodes, a, b, x, nodes_, out);
+    else current_->piece(side, cubic_, a, b, x, out);
     return;
   }
   // Classical Runge-Kutta over [t_a, t_b].
@@ -328,10 +328,10 @@ void FixedStepEngine::locate_event(bool side, Point& event) {
 
 SimulationResult FixedStepEngine::run() {
   const double t_end = settings_.duration_s;
-  // The step: steps_per_wave at the highest frequency; at most 3/4 of the time between two
-  // samples of a regenerated surface (at the rotor's nominal or largest scheduled speed), so that
-  // each step's forcing cell resolves the sampled surface (a rough one, e.g. random initial
-  // waviness, is white noise at the sample scale: docs/dynamics.md); at most an eighth of the
+  // The step: steps_per_wave at the highest frequency; with random initial waviness (white noise
+  // at the surface sample scale, docs/dynamics.md) at most 3/4 of the time between two samples of
+  // a regenerated surface (at the rotor's nominal or largest scheduled speed), so that each step's
+  // forcing cell resolves the rough surface; at most an eighth of the
   // shortest revolution (the forcing cells up to three steps ahead must read written surface).
   // Then shortened (by at most 20 %) so that sample times fall on step ends: a whole number of
   // steps per sample interval, or of sample intervals per step.
@@ -344,7 +344,7 @@ SimulationResult FixedStepEngine::run() {
                           : has_form_                           ? kDefaultExponentialStepsPerWave
                                                                 : kDefaultRungeKuttaStepsPerWave;
   double h_max = std::min(1.0 / (per_wave * f_max_), 0.125 * 60.0 / max_rpm_);
-  for (std::size_t r = 0; r < rotor_count; ++r) {
+  for (std::size_t r = 0; r < rotor_count && settings_.initial_waviness_m > 0.0; ++r) {
     const RotorState& rotor = rotors_[r];
     if (!rotor.surface) continue;
     const double rpm = rotor.law ? rotor.law->max_rpm(settings_.duration_s) : model_.nominal_speed_rpm(static_cast<Rotor>(r));
@@ -363,8 +363,10 @@ SimulationResult FixedStepEngine::run() {
   model_.initial_state(settings_.disturbance, now.x);
   in_contact_ = !settings_.one_sided_contact || penetration(0.0, now.x) > 0.0;
   select_form(0.0);
-  if (has_form_)
+  if (has_form_) {
     for (int j = 0; j < 4; ++j) nodes_[j] = forcing(static_cast<double>(j) * h_, static_cast<double>(j + 1) * h_);
+    cubic_ = LinearPropagator::cubic(ForcingNodes::first_step, nodes_, h_);
+  }
   slopes(in_contact_, now);
   piece_a_ = piece_b_ = now;
 
@@ -384,13 +386,18 @@ SimulationResult FixedStepEngine::run() {
       if (k > 1) {  // (step 1's centred cells are the first step's)
         std::copy(nodes_ + 1, nodes_ + 4, nodes_);
         nodes_[3] = forcing(static_cast<double>(k + 2) * h_, static_cast<double>(k + 3) * h_);
-        // The slopes at t_k under this step's forcing cubic (its value at t_k differs a little from
-        // the previous step's): the dense output interpolates this step's exact solution.
-        if (current_) slopes(in_contact_, now);
       }
+      // The slopes at t_k under this step's forcing cubic (its value at t_k differs a little from
+      // the previous step's): the dense output interpolates this step's exact solution.
+      const ForcingCubic previous = cubic_;
+      cubic_ = LinearPropagator::cubic(ForcingNodes::centred, nodes_, h_);
+      if (current_)
+        current_->reforce(in_contact_, cubic_.value(0.0) - previous.value(h_), cubic_.rate(0.0) - previous.rate(h_),
+                          now.f.data(), now.g.data());
     }
-    // Pieces of the step: split at linear-form changes and at contact events.
-    piece_a_ = now;
+    // Pieces of the step: split at linear-form changes and at contact events. (The points change
+    // hands by swapping: no copies of the state per step.)
+    std::swap(piece_a_, now);
     for (int piece = 0;; ++piece) {
       const double ta = piece_a_.t;
       const bool form_change = next_form_change_ <= t_next && next_form_change_ > ta;
@@ -412,6 +419,7 @@ SimulationResult FixedStepEngine::run() {
       write_surfaces(piece_a_.t, piece_b_.t);
       if (!record_samples_until(piece_b_.t, slack)) {
         check_divergence(piece_b_.t, piece_b_.x);
+        std::swap(now, piece_b_);  // the run ends where the failing output was asked
         stop = true;
         break;
       }
@@ -423,7 +431,7 @@ SimulationResult FixedStepEngine::run() {
       if (piece_a_.t >= t_next) break;
     }
     if (stop) break;
-    now = piece_a_;
+    std::swap(now, piece_a_);
     ++result_.steps;
     take_snapshots_until(now.t);
     if (check_divergence(now.t, now.x)) break;

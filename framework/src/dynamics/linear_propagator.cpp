@@ -74,6 +74,20 @@ LinearPropagator::LinearPropagator(const LinearForm& form, std::size_t n, double
   contact_.b = form.contact_input;
   free_.a = form.free_matrix;
   free_.b = form.free_input;
+  for (Side* side : {&contact_, &free_}) {
+    side->row_start.assign(1, 0);
+    side->ab.assign(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        const double a = side->a[i * n + j];
+        side->ab[i] += a * side->b[j];
+        if (a == 0.0) continue;
+        side->column.push_back(j);
+        side->value.push_back(a);
+      }
+      side->row_start.push_back(side->column.size());
+    }
+  }
   if (!decompose(contact_, scales, "contact") || !decompose(free_, scales, "free")) {
     ok_ = false;
     return;
@@ -93,10 +107,9 @@ LinearPropagator::LinearPropagator(const LinearForm& form, std::size_t n, double
       std::vector<double>& w = s->w[static_cast<int>(nodes)];
       w.assign(n * 4, 0.0);
       for (int j = 0; j < 4; ++j) {
-        double forcing[4] = {0.0, 0.0, 0.0, 0.0}, c[4];
+        double forcing[4] = {0.0, 0.0, 0.0, 0.0};
         forcing[j] = 1.0;
-        coefficients(nodes, forcing, c);
-        modal_piece(*s, c, 0.0, h, unit.data(), column.data());
+        modal_piece(*s, cubic(nodes, forcing, h).c, 0.0, h, unit.data(), column.data());
         for (std::size_t i = 0; i < n; ++i) w[i * 4 + static_cast<std::size_t>(j)] = column[i];
       }
     }
@@ -144,10 +157,13 @@ bool LinearPropagator::decompose(Side& side, std::span<const double> scales, con
   return true;
 }
 
-void LinearPropagator::coefficients(ForcingNodes nodes, const double forcing[4], double c[4]) const {
+ForcingCubic LinearPropagator::cubic(ForcingNodes nodes, const double forcing[4], double h) {
   const auto& m = (nodes == ForcingNodes::centred ? kCentred : kFirst).m;
+  ForcingCubic out;
+  out.h = h;
   for (int i = 0; i < 4; ++i)
-    c[i] = m[i][0] * forcing[0] + m[i][1] * forcing[1] + m[i][2] * forcing[2] + m[i][3] * forcing[3];
+    out.c[i] = m[i][0] * forcing[0] + m[i][1] * forcing[1] + m[i][2] * forcing[2] + m[i][3] * forcing[3];
+  return out;
 }
 
 void LinearPropagator::modal_piece(const Side& side, const double c[4], double a, double b, const double* x,
@@ -186,35 +202,26 @@ void LinearPropagator::step(bool in_contact, ForcingNodes nodes, const double* x
   }
 }
 
-void LinearPropagator::piece(bool in_contact, ForcingNodes nodes, double a, double b, const double* x,
-                             const double forcing[4], double* x_out) const {
-  double c[4];
-  coefficients(nodes, forcing, c);
-  modal_piece(side(in_contact), c, a, b, x, x_out);
+void LinearPropagator::piece(bool in_contact, const ForcingCubic& forcing, double a, double b, const double* x,
+                             double* x_out) const {
+  modal_piece(side(in_contact), forcing.c, a, b, x, x_out);
 }
 
 void LinearPropagator::derivative(bool in_contact, const double* x, double forcing, double* dx) const {
   const Side& s = side(in_contact);
   for (std::size_t i = 0; i < n_; ++i) {
-    const double* row = &s.a[i * n_];
     double sum = s.b[i] * forcing;
-    for (std::size_t j = 0; j < n_; ++j) sum += row[j] * x[j];
+    for (std::size_t k = s.row_start[i]; k < s.row_start[i + 1]; ++k) sum += s.value[k] * x[s.column[k]];
     dx[i] = sum;
   }
 }
 
-double LinearPropagator::forcing_at(ForcingNodes nodes, const double forcing[4], double tau) const {
-  double c[4];
-  coefficients(nodes, forcing, c);
-  const double u = tau / h_;
-  return c[0] + u * (c[1] + u * (c[2] + u * c[3]));
-}
-
-double LinearPropagator::forcing_rate_at(ForcingNodes nodes, const double forcing[4], double tau) const {
-  double c[4];
-  coefficients(nodes, forcing, c);
-  const double u = tau / h_;
-  return (c[1] + u * (2.0 * c[2] + u * 3.0 * c[3])) / h_;
+void LinearPropagator::reforce(bool in_contact, double df, double d_rate, double* dx, double* d2x) const {
+  const Side& s = side(in_contact);
+  for (std::size_t i = 0; i < n_; ++i) {
+    dx[i] += s.b[i] * df;
+    d2x[i] += s.ab[i] * df + s.b[i] * d_rate;
+  }
 }
 
 }  // namespace chatterlab::dynamics_detail

@@ -27,6 +27,20 @@ namespace chatterlab::dynamics_detail {
 // Which four step-long cells the forcing nodes average over (the header comment).
 enum class ForcingNodes { centred, first_step };
 
+// The forcing over a step: p(tau) = sum c_m (tau / h)^m, tau = t - t_k in [0, h].
+struct ForcingCubic {
+  double c[4] = {0.0, 0.0, 0.0, 0.0};
+  double h = 1.0;
+  double value(double tau) const {
+    const double u = tau / h;
+    return c[0] + u * (c[1] + u * (c[2] + u * c[3]));
+  }
+  double rate(double tau) const {
+    const double u = tau / h;
+    return (c[1] + u * (2.0 * c[2] + u * 3.0 * c[3])) / h;
+  }
+};
+
 class LinearPropagator {
  public:
   // The form's two sides for steps of h; `scales` (the model's state scales for a unit
@@ -39,27 +53,32 @@ class LinearPropagator {
 
   // x_out = x(t_k + h) from x = x(t_k) (x_out may not alias x).
   void step(bool in_contact, ForcingNodes nodes, const double* x, const double forcing[4], double* x_out) const;
-  // x_out = x(t_k + b) from x = x(t_k + a), 0 <= a <= b <= h, with the same forcing cubic.
-  void piece(bool in_contact, ForcingNodes nodes, double a, double b, const double* x, const double forcing[4],
-             double* x_out) const;
+  // The cubic through the cell averages `forcing` over cells of h (once per step: pieces and
+  // slopes use it).
+  static ForcingCubic cubic(ForcingNodes nodes, const double forcing[4], double h);
+  // x_out = x(t_k + b) from x = x(t_k + a), 0 <= a <= b <= h, under the step's forcing cubic.
+  void piece(bool in_contact, const ForcingCubic& forcing, double a, double b, const double* x, double* x_out) const;
   // dx/dt = A x + b f.
   void derivative(bool in_contact, const double* x, double forcing, double* dx) const;
-  // The forcing cubic at t_k + tau and its first derivative (tau in [0, h]).
-  double forcing_at(ForcingNodes nodes, const double forcing[4], double tau) const;
-  double forcing_rate_at(ForcingNodes nodes, const double forcing[4], double tau) const;
+  // The slopes dx/dt and d2x/dt2 of a state after the forcing changes by df and its rate by
+  // d_rate (the next step's cubic meets the previous one's value at their common end only to its
+  // accuracy): dx/dt += b df, d2x/dt2 += A b df + b d_rate, without a matrix product.
+  void reforce(bool in_contact, double df, double d_rate, double* dx, double* d2x) const;
 
  private:
   using Complex = std::complex<double>;
   struct Side {
     std::vector<double> a, b;               // the form's matrix and input
+    // A's nonzero entries row by row (structural matrices are sparse: G1's modal matrix has
+    // n/2 + 2 entries in half its rows), and A b.
+    std::vector<std::size_t> row_start, column;
+    std::vector<double> value, ab;
     std::vector<Complex> lambda, v, v_inv;  // eigenvalues, V and V^-1 (row-major, in x units)
     std::vector<Complex> beta;              // V^-1 b
     std::vector<double> e;                  // E, row-major n x n
     std::vector<double> w[2];               // W per node set, row-major n x 4
   };
   bool decompose(Side& side, std::span<const double> scales, const char* name);
-  // Monomial coefficients c (p(u) = sum c_m u^m, u = tau / h) of the cubic through the nodes.
-  void coefficients(ForcingNodes nodes, const double forcing[4], double c[4]) const;
   void modal_piece(const Side& side, const double c[4], double a, double b, const double* x, double* x_out) const;
   const Side& side(bool in_contact) const { return in_contact ? contact_ : free_; }
 

@@ -114,6 +114,10 @@ double SurfaceMemory::average(double theta_a, double theta_b) const {
     w[2] = -0.5 * (0.25 * u4 - u3 / 3.0 - u2);
     w[3] = (0.25 * u4 - 0.5 * u2) / 6.0;
   };
+  // Samples i-1 .. i+2 of each interval: from the ring directly when all are written (the usual
+  // case: reads one revolution back), else through value() (initial profile).
+  const bool in_ring = first >= 1;
+  const std::size_t mask = capacity_ - 1;
   double integral = 0.0;
   for (std::int64_t i = first; i <= last; ++i) {
     const double u0 = std::max(xa - static_cast<double>(i), 0.0), u1 = std::min(xb - static_cast<double>(i), 1.0);
@@ -121,7 +125,13 @@ double SurfaceMemory::average(double theta_a, double theta_b) const {
     double w0[4], w1[4];
     antiderivatives(u0, w0);
     antiderivatives(u1, w1);
-    for (int j = 0; j < 4; ++j) integral += (w1[j] - w0[j]) * value(i - 1 + j);
+    if (in_ring) {
+      const auto k = static_cast<std::size_t>(i);
+      integral += (w1[0] - w0[0]) * ring_[(k - 1) & mask] + (w1[1] - w0[1]) * ring_[k & mask] +
+                  (w1[2] - w0[2]) * ring_[(k + 1) & mask] + (w1[3] - w0[3]) * ring_[(k + 2) & mask];
+    } else {
+      for (int j = 0; j < 4; ++j) integral += (w1[j] - w0[j]) * value(i - 1 + j);
+    }
   }
   return integral / (xb - xa);
 }
