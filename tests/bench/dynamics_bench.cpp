@@ -1,12 +1,19 @@
 // Simulated time per CPU time of the dynamics engine (chatterlab/dynamics.hpp) on one core, on
-// the path the `simulate` study kind takes: MODELS.md G1 with both regenerative surfaces and one
-// structural mode (250, 500, 750 or 1000 Hz), with the default integrator (ARKODE ERKStep,
-// Dormand-Prince 5(4)) at the growth-rate settings of plunge_time_domain.hpp
-// (apply_growth_rate_settings: rtol 1e-2, largest step 1/(3 f_max), 8 surface samples per wave
-// of f_max), which keep the 1 % root agreement of the growing G1 response. The G1BothSurfaces cases
-// report their own accuracy (counters err_root_pct, err_ref_pct: accuracy_counters below); the
-// engine default stays rtol 1e-6 for decaying responses (docs/dynamics.md). Counter speedup =
-// simulated seconds / CPU seconds of the benchmark thread. Numbers: docs/performance.md.
+// the path the `simulate` study kind takes. Two routes (docs/dynamics.md): the fixed-step engine
+// (the default: exact exponential propagation of G1's linear form, Runge-Kutta for G5) and the
+// adaptive ARKODE reference.
+// - G8Chatter60s: issue 25's case, studies/simulate_g8_chatter.toml stretched to 60 s (seven
+//   modes, one-sided contact, infeed, random initial surfaces), 1 kHz and 10 kHz output, both
+//   routes; the fixed-step cases report their agreement with the reference at rtol 1e-8 over the
+//   study's growth phase (growth_err_pct, freq_err_pct, surface_err_pct).
+// - G1FixedStep / G1BothSurfaces: G1 with one mode (250 .. 1000 Hz), bilateral contact, growing:
+//   the fixed-step engine at its defaults, and ARKODE at the growth-rate settings of
+//   plunge_time_domain.hpp (apply_growth_rate_settings: rtol 1e-2, largest step 1/(3 f_max), 8
+//   surface samples per wave of f_max); both report their accuracy (err_root_pct against the
+//   certified rightmost root, err_ref_pct against a converged ARKODE run).
+// - G1OneSidedContact, G5Torsional: events and restarts, speeds as states; both routes.
+// Counter speedup = simulated seconds / CPU seconds of the benchmark thread. Numbers:
+// docs/performance.md.
 //
 //   build/ci/tests/bench/dynamics_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -86,7 +93,22 @@ void accuracy_counters(benchmark::State& state, const PlungeRegenerativeParamete
   state.counters["ref_vs_root_pct"] = 100.0 * (converged / root - 1.0);
 }
 
-// Linear (bilateral) contact, the growth-rate agreement setting; arg = mode frequency [Hz].
+// Linear (bilateral) contact, the fixed-step engine at its defaults; arg = mode frequency [Hz].
+void G1FixedStep(benchmark::State& state) {
+  const PlungeRegenerativeParameters p = one_mode(static_cast<double>(state.range(0)));
+  PlungeTimeDomain model(p);
+  SimulationSettings s;
+  s.duration_s = 1.0;
+  s.sample_rate_hz = 10000.0;
+  s.one_sided_contact = false;
+  s.divergence_limit_m = 1e6;
+  environment_overrides(s);
+  run(state, model, s);
+  if (!std::getenv("CHAT_NO_ACCURACY")) accuracy_counters(state, p, s);
+}
+BENCHMARK(G1FixedStep)->Arg(250)->Arg(500)->Arg(750)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+// The same on the ARKODE route at its growth-rate settings; arg = mode frequency [Hz].
 void G1BothSurfaces(benchmark::State& state) {
   const PlungeRegenerativeParameters p = one_mode(static_cast<double>(state.range(0)));
   PlungeTimeDomain model(p);
@@ -102,17 +124,20 @@ void G1BothSurfaces(benchmark::State& state) {
 }
 BENCHMARK(G1BothSurfaces)->Arg(250)->Arg(500)->Arg(750)->Arg(1000)->Unit(benchmark::kMillisecond);
 
-// One-sided contact with infeed: contact events and restarts included.
+// One-sided contact with infeed: contact events and restarts included; arg = route (0 fixed
+// step, 1 ARKODE at rtol 1e-3).
 void G1OneSidedContact(benchmark::State& state) {
   PlungeTimeDomain model(one_mode(250.0));
   SimulationSettings s;
   s.duration_s = 2.0;
   s.sample_rate_hz = 10000.0;
   s.infeed_rate_m_per_s = 1e-5;
+  s.integrator = state.range(0) == 0 ? TimeIntegrator::fixed_step : TimeIntegrator::explicit_runge_kutta;
   s.relative_tolerance = kOneSidedRelativeTolerance;
+  state.SetLabel(to_string(s.integrator));
   run(state, model, s);
 }
-BENCHMARK(G1OneSidedContact)->Unit(benchmark::kMillisecond);
+BENCHMARK(G1OneSidedContact)->Arg(0)->Arg(1)->ArgName("reference")->Unit(benchmark::kMillisecond);
 
 }  // namespace
 namespace {
@@ -133,8 +158,9 @@ void G1OneChain(benchmark::State& state) {
 BENCHMARK(G1OneChain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // G5 at its example parameters (speeds as states, one-sided contact, infeed 15 um/s, 1 um random
-// initial waviness); arg = -log10(rtol): 6 (the engine default) and 4 (the force rms and the end
-// state agree with 1e-6 to 1e-4 relative: docs/performance.md).
+// initial waviness); arg = -log10(rtol) of the ARKODE route: 6 (its default) and 4 (the force
+// rms and the end state agree with 1e-6 to 1e-4 relative: docs/performance.md); 0 = the
+// fixed-step engine (Runge-Kutta).
 void G5Torsional(benchmark::State& state) {
   Json params = TorsionalCoupling::info().example_params;
   TorsionalCoupling plugin{ParamValues(params)};
@@ -144,10 +170,14 @@ void G5Torsional(benchmark::State& state) {
   s.sample_rate_hz = 10000.0;
   s.infeed_rate_m_per_s = 15e-6;
   s.initial_waviness_m = 1e-6;
-  s.relative_tolerance = std::pow(10.0, -static_cast<double>(state.range(0)));
+  if (state.range(0) > 0) {
+    s.integrator = TimeIntegrator::explicit_runge_kutta;
+    s.relative_tolerance = std::pow(10.0, -static_cast<double>(state.range(0)));
+  }
+  state.SetLabel(to_string(s.integrator));
   run(state, *model, s);
 }
-BENCHMARK(G5Torsional)->Arg(6)->Arg(4)->Unit(benchmark::kMillisecond);
+BENCHMARK(G5Torsional)->Arg(0)->Arg(6)->Arg(4)->Unit(benchmark::kMillisecond);
 // ------------------------------------------------------------------ G8, 60 s (issue 25)
 
 // The study's [simulation]: plunge infeed 15 um/s from rest, 1 um random initial surfaces

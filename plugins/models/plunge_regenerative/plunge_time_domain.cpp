@@ -49,6 +49,7 @@ PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p
 }
 
 SimulationSettings converged_reference_settings(SimulationSettings settings) {
+  settings.integrator = TimeIntegrator::explicit_runge_kutta;
   settings.relative_tolerance = 1e-8;
   settings.samples_per_wave *= 4.0;
   settings.max_steps_per_wave *= 4.0;

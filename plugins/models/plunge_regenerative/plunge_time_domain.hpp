@@ -25,8 +25,9 @@ namespace chatterlab {
 // of the root agreement (the benchmark and PlungeTimeDomainAccuracy use them). Not for decaying
 // responses (the engine default is for those).
 void apply_growth_rate_settings(SimulationSettings& settings);
-// The same run converged (rtol 1e-8, 4x denser steps and surface samples): the reference against
-// which the benchmark and the tests measure the integration error of `settings`.
+// The same run converged on the ARKODE route (rtol 1e-8, 4x denser steps and surface samples):
+// the reference against which the benchmark and the tests measure the integration error of
+// `settings` (either route).
 SimulationSettings converged_reference_settings(SimulationSettings settings);
 
 // The known-answer cases of the tests and benchmarks (docs/dynamics.md):
