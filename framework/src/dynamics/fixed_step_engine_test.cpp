@@ -321,6 +321,29 @@ TEST(FixedStepEngineAccuracy, G5AgreesWithTheReferenceRoute) {
   expect_agreement(compare_routes(*model, growth_settings(2.0), 1.0, 2.0));
 }
 
+// A duration that is no whole number of steps: the last step is shortened (a piece of a step),
+// the run ends exactly at the duration with its last sample, and the end state agrees with the
+// reference route's.
+TEST(FixedStepEngine, ARunEndsExactlyAtItsDuration) {
+  const PlungeTimeDomain model(reference_g1_case());
+  SimulationSettings s = growth_settings(0.01234567);
+  s.sample_rate_hz = 1000.0;
+  const SimulationResult r = simulate(model, s);
+  ASSERT_EQ(r.status, "completed");
+  EXPECT_EQ(r.end_time_s, 0.01234567);
+  ASSERT_EQ(r.t_s.size(), 13u);
+  EXPECT_DOUBLE_EQ(r.t_s.back(), 0.012);
+  EXPECT_GT(r.fixed_step_s, 0.0);
+  EXPECT_NE(r.method.find("exact exponential"), std::string::npos) << r.method;
+  SimulationSettings reference = s;
+  reference.integrator = TimeIntegrator::explicit_runge_kutta;
+  reference.relative_tolerance = 1e-10;
+  const SimulationResult a = simulate(model, reference);
+  ASSERT_EQ(a.end_state.size(), r.end_state.size());
+  for (std::size_t i = 0; i < r.end_state.size(); i += 2)
+    EXPECT_NEAR(r.end_state[i], a.end_state[i], 1e-6 * std::abs(a.end_state[i]) + 1e-15) << i;
+}
+
 // ------------------------------------------------------------------ faults
 
 // A model whose declared linear form is not its derivatives: refused at the start of the run.
