@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -289,6 +290,11 @@ void EngineCore::take_snapshots_until(double t) {
     take_snapshot(t);
     ++next_snapshot_;
   }
+}
+
+double EngineCore::next_snapshot_time() const {
+  return next_snapshot_ < snapshot_times_.size() ? snapshot_times_[next_snapshot_]
+                                                 : std::numeric_limits<double>::infinity();
 }
 
 void EngineCore::take_snapshot(double t) {

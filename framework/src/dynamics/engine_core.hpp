@@ -79,6 +79,8 @@ class EngineCore {
   // engine's step ends coincide with sample times up to rounding).
   bool record_samples_until(double t, double slack = 0.0);
   void take_snapshots_until(double t);
+  // The time of the next snapshot not yet taken (infinity when none).
+  double next_snapshot_time() const;
   // True if the run must stop: x not finite or displacement beyond the limit (status set).
   bool check_divergence(double t, std::span<const double> x);
   // Contact-loss log (one-sided contact): a switch at t.

@@ -341,8 +341,9 @@ SimulationResult FixedStepEngine::run() {
     return model_.linear_form(0.0).has_value();
   }();
   const double per_wave = settings_.fixed_steps_per_wave > 0.0 ? settings_.fixed_steps_per_wave
-                          : has_form_                           ? kDefaultExponentialStepsPerWave
-                                                                : kDefaultRungeKuttaStepsPerWave;
+                          : !has_form_                          ? kDefaultRungeKuttaStepsPerWave
+                          : settings_.one_sided_contact         ? kDefaultOneSidedStepsPerWave
+                                                                : kDefaultExponentialStepsPerWave;
   double h_max = std::min(1.0 / (per_wave * f_max_), 0.125 * 60.0 / max_rpm_);
   for (std::size_t r = 0; r < rotor_count && settings_.initial_waviness_m > 0.0; ++r) {
     const RotorState& rotor = rotors_[r];
@@ -399,9 +400,12 @@ SimulationResult FixedStepEngine::run() {
     // hands by swapping: no copies of the state per step.)
     std::swap(piece_a_, now);
     for (int piece = 0;; ++piece) {
+      // A piece ends at the step end, at a change of the linear form, or at a snapshot time (the
+      // surfaces are then written exactly up to it).
       const double ta = piece_a_.t;
       const bool form_change = next_form_change_ <= t_next && next_form_change_ > ta;
-      const double tb = form_change ? next_form_change_ : t_next;
+      double tb = form_change ? next_form_change_ : t_next;
+      if (const double snapshot = next_snapshot_time(); snapshot > ta && snapshot < tb) tb = snapshot;
       advance(ta, tb, in_contact_, piece_a_.x.data(), piece_a_.f.data(), piece_b_.x.data());
       piece_b_.t = tb;
       slopes(in_contact_, piece_b_);
@@ -423,7 +427,8 @@ SimulationResult FixedStepEngine::run() {
         stop = true;
         break;
       }
-      const bool at_change = form_change && !switched;
+      take_snapshots_until(piece_b_.t);
+      const bool at_change = form_change && !switched && piece_b_.t == next_form_change_;
       if (switched) contact_switch(piece_b_.t, !in_contact_);
       if (at_change) select_form(tb);
       if (switched || at_change) slopes(in_contact_, piece_b_);

@@ -8,8 +8,11 @@
 namespace chatterlab::dynamics_detail {
 
 // Steps per wave of the model's highest frequency when SimulationSettings::fixed_steps_per_wave
-// is 0 (docs/dynamics.md, "Fixed-step engine: settings and why").
+// is 0 (docs/dynamics.md, "Fixed-step settings and why"): exponential propagation with bilateral
+// contact; with one-sided contact (the surfaces then carry kinks where contact was lost, which
+// the forcing cells must resolve) and for Runge-Kutta.
 inline constexpr double kDefaultExponentialStepsPerWave = 10.0;
+inline constexpr double kDefaultOneSidedStepsPerWave = 40.0;
 inline constexpr double kDefaultRungeKuttaStepsPerWave = 40.0;
 
 // simulate() for settings.integrator = fixed_step.
