@@ -6,8 +6,8 @@
 //   modes, one-sided contact, infeed, random initial surfaces), 1 kHz and 10 kHz output, both
 //   routes; the fixed-step cases report their agreement with the reference at rtol 1e-8 over the
 //   study's growth phase (growth_err_pct, freq_err_pct, surface_err_pct).
-// - G1FixedStep / G1BothSurfaces: G1 with one mode (250 .. 1000 Hz), bilateral contact, growing:
-//   the fixed-step engine at its defaults, and ARKODE at the growth-rate settings of
+// - G1BothSurfaces: G1 with one mode (250 .. 1000 Hz), bilateral contact, growing: the
+//   fixed-step engine at its defaults, and ARKODE at the growth-rate settings of
 //   plunge_time_domain.hpp (apply_growth_rate_settings: rtol 1e-2, largest step 1/(3 f_max), 8
 //   surface samples per wave of f_max); both report their accuracy (err_root_pct against the
 //   certified rightmost root, err_ref_pct against a converged ARKODE run).
@@ -93,22 +93,8 @@ void accuracy_counters(benchmark::State& state, const PlungeRegenerativeParamete
   state.counters["ref_vs_root_pct"] = 100.0 * (converged / root - 1.0);
 }
 
-// Linear (bilateral) contact, the fixed-step engine at its defaults; arg = mode frequency [Hz].
-void G1FixedStep(benchmark::State& state) {
-  const PlungeRegenerativeParameters p = one_mode(static_cast<double>(state.range(0)));
-  PlungeTimeDomain model(p);
-  SimulationSettings s;
-  s.duration_s = 1.0;
-  s.sample_rate_hz = 10000.0;
-  s.one_sided_contact = false;
-  s.divergence_limit_m = 1e6;
-  environment_overrides(s);
-  run(state, model, s);
-  if (!std::getenv("CHAT_NO_ACCURACY")) accuracy_counters(state, p, s);
-}
-BENCHMARK(G1FixedStep)->Arg(250)->Arg(500)->Arg(750)->Arg(1000)->Unit(benchmark::kMillisecond);
-
-// The same on the ARKODE route at its growth-rate settings; arg = mode frequency [Hz].
+// Linear (bilateral) contact, growing; args: mode frequency [Hz], route (0 the fixed-step engine
+// at its defaults, 1 ARKODE at the growth-rate settings).
 void G1BothSurfaces(benchmark::State& state) {
   const PlungeRegenerativeParameters p = one_mode(static_cast<double>(state.range(0)));
   PlungeTimeDomain model(p);
@@ -117,12 +103,16 @@ void G1BothSurfaces(benchmark::State& state) {
   s.sample_rate_hz = 10000.0;
   s.one_sided_contact = false;
   s.divergence_limit_m = 1e6;
-  apply_growth_rate_settings(s);
+  if (state.range(1) == 1) apply_growth_rate_settings(s);
   environment_overrides(s);
+  state.SetLabel(to_string(s.integrator));
   run(state, model, s);
   if (!std::getenv("CHAT_NO_ACCURACY")) accuracy_counters(state, p, s);
 }
-BENCHMARK(G1BothSurfaces)->Arg(250)->Arg(500)->Arg(750)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(G1BothSurfaces)
+    ->ArgsProduct({{250, 500, 750, 1000}, {0, 1}})
+    ->ArgNames({"mode_hz", "reference"})
+    ->Unit(benchmark::kMillisecond);
 
 // One-sided contact with infeed: contact events and restarts included; arg = route (0 fixed
 // step, 1 ARKODE at rtol 1e-3).
