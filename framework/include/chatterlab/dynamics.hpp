@@ -200,9 +200,9 @@ struct SimulationSettings {
   std::vector<double> snapshot_times_s;  // surfaces recorded at these times (<= duration)
   TimeIntegrator integrator = TimeIntegrator::fixed_step;
   // Fixed-step engine: steps per wave at highest_frequency_hz (h <= 1/(this f_max); 0 = the
-  // documented default of the propagator: 10 exponential, 40 Runge-Kutta). With random initial
-  // waviness the step is also at most 3/4 of the time between two surface samples; it is
-  // shortened so that output samples fall on step ends where the sample interval allows.
+  // documented default: 10 exponential, 40 exponential with one-sided contact, 60 Runge-Kutta).
+  // With random initial waviness the step is also at most 3/4 of the time between two surface
+  // samples; it is shortened so that output samples fall on step ends where the interval allows.
   double fixed_steps_per_wave = 0.0;
   double relative_tolerance = 1e-6;  // SUNDIALS routes: growth rate to ~1e-5 relative (docs/dynamics.md)
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz

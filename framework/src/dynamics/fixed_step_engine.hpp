@@ -13,7 +13,7 @@ namespace chatterlab::dynamics_detail {
 // the forcing cells must resolve) and for Runge-Kutta.
 inline constexpr double kDefaultExponentialStepsPerWave = 10.0;
 inline constexpr double kDefaultOneSidedStepsPerWave = 40.0;
-inline constexpr double kDefaultRungeKuttaStepsPerWave = 40.0;
+inline constexpr double kDefaultRungeKuttaStepsPerWave = 60.0;
 
 // simulate() for settings.integrator = fixed_step.
 SimulationResult simulate_fixed_step(const TimeDomainModel& model, const SimulationSettings& settings);

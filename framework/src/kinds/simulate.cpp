@@ -443,7 +443,7 @@ PluginInfo Simulate::info() {
   integrator.default_value = "fixed_step";
   ParamSpec steps_per_wave = real_spec("fixed_steps_per_wave", "1",
                                        "fixed_step: steps per wave at the model's highest frequency (0: the "
-                                       "default, 10 exponential / 40 Runge-Kutta; with initial_waviness_m > 0 never more than 3/4 of the time "
+                                       "default, 10 exponential (40 with one-sided contact) / 60 Runge-Kutta; with initial_waviness_m > 0 never more than 3/4 of the time "
                                        "between surface samples)", 0.0, 0.0, false);
   ParamSpec format = param_spec("timeseries_format", ValueKind::string, "",
                                 "time-series file: csv (timeseries.csv) or npy (timeseries.npy, a NumPy "
