@@ -26,7 +26,7 @@ class _SimulationSettings:
                  initial_velocity_m_per_s: float, initial_waviness_m: float, seed: int,
                  infeed_rate_m_per_s: float, one_sided_contact: bool, wheel_contact_arc_deg: float,
                  work_contact_arc_deg: float, snapshot_times_s: Sequence[float], relative_tolerance: float,
-                 integrator: str, samples_per_wave: float, max_steps_per_wave: float,
+                 integrator: str, fixed_steps_per_wave: float, samples_per_wave: float, max_steps_per_wave: float,
                  divergence_limit_m: float) -> None: ...
 
 def simulate(model: Mapping[str, Any], settings: _SimulationSettings, wheel_speed: Optional[Mapping[str, Any]] = None,

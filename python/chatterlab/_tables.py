@@ -57,3 +57,17 @@ def read_table(path: str | os.PathLike, kind: TableKind = "auto") -> Any:
     if not header:
         return np.rec.array(np.empty(0, dtype=[]))
     return np.rec.fromarrays(columns, names=header)
+
+
+def read_npy_table(path: str | os.PathLike, kind: TableKind = "auto") -> Any:
+    """A NumPy structured array file (one float64 field per column, as a simulation's
+    ``timeseries_format = "npy"`` writes it) as ``read_table`` returns a CSV file."""
+    if kind not in ("auto", "pandas", "numpy"):
+        raise ValueError(f"table kind {kind!r}: expected 'auto', 'pandas' or 'numpy'")
+    array = np.load(path, allow_pickle=False)
+    pandas = _pandas() if kind != "numpy" else None
+    if kind == "pandas" and pandas is None:
+        raise ImportError("table kind 'pandas' needs pandas (Debian: python3-pandas)")
+    if pandas is not None:
+        return pandas.DataFrame({name: array[name] for name in array.dtype.names})
+    return array.view(np.recarray)

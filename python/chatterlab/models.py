@@ -137,6 +137,9 @@ class SimulationResult:
     steps: int
     rhs_evaluations: int
     contact_events: int
+    #: how the run was integrated, e.g. "fixed step 1.6667e-04 s, exact exponential (linear form)"
+    method: str
+    fixed_step_s: float  # the fixed-step engine's step; 0 for the SUNDIALS routes
     model: dict = field(repr=False)
 
     def growth_rate(self, start_s: Optional[float] = None, end_s: Optional[float] = None,
@@ -171,13 +174,16 @@ def simulate(model: Mapping[str, Any], duration_s: float, *,
              snapshot_times_s: Sequence[float] = (),
              relative_tolerance: float = _D["relative_tolerance"],
              integrator: str = _D["integrator"],
+             fixed_steps_per_wave: float = _D["fixed_steps_per_wave"],
              samples_per_wave: float = _D["samples_per_wave"],
              max_steps_per_wave: float = _D["max_steps_per_wave"],
              divergence_limit_m: float = _D["divergence_limit_m"],
              wheel_speed: Optional[Mapping[str, Any]] = None,
              work_speed: Optional[Mapping[str, Any]] = None) -> SimulationResult:
     """Integrates the model's time-domain form (MODELS.md G1, G5-G7) with the dynamics engine:
-    wheel and work surfaces stored by rotation angle, one-sided contact, SUNDIALS integrators.
+    wheel and work surfaces stored by rotation angle, one-sided contact; the fixed-step engine
+    (integrator "fixed_step", the default) or the adaptive SUNDIALS reference routes
+    ("explicit_runge_kutta", "adams"; docs/dynamics.md).
 
     The settings are the engine's (chatterlab/dynamics.hpp SimulationSettings, defaults shown);
     they match the ``simulate`` study kind's [simulation] keys of the same names.
@@ -197,6 +203,6 @@ def simulate(model: Mapping[str, Any], duration_s: float, *,
         infeed_rate_m_per_s=infeed_rate_m_per_s, one_sided_contact=one_sided_contact,
         wheel_contact_arc_deg=wheel_contact_arc_deg, work_contact_arc_deg=work_contact_arc_deg,
         snapshot_times_s=list(snapshot_times_s), relative_tolerance=relative_tolerance, integrator=integrator,
-        samples_per_wave=samples_per_wave, max_steps_per_wave=max_steps_per_wave,
+        fixed_steps_per_wave=fixed_steps_per_wave, samples_per_wave=samples_per_wave, max_steps_per_wave=max_steps_per_wave,
         divergence_limit_m=divergence_limit_m)
     return SimulationResult(**_chatterlab.simulate(model, settings, wheel_speed, work_speed))

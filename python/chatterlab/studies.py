@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 from . import _chatterlab, _progress
-from ._tables import TableKind, read_table
+from ._tables import TableKind, read_npy_table, read_table
 
 __all__ = ["Study", "RunResult", "load_study", "run_study", "init_study", "shipped_studies",
            "feed_plan", "feed_risk"]
@@ -101,13 +101,18 @@ class RunResult:
         return self.out_dir if self.points == 1 else self.out_dir / "points" / f"{point:06d}"
 
     def tables(self, point: int = 0) -> List[str]:
-        """Names of the CSV tables a point wrote (e.g. "timeseries", "pulses", "segments")."""
+        """Names of the tables a point wrote (e.g. "timeseries", "pulses", "segments"): its CSV
+        files and NumPy files (a simulation's ``timeseries_format = "npy"``)."""
         directory = self.point_dir(point)
-        return sorted(p.stem for p in directory.glob("*.csv") if p.name != "results.csv")
+        files = list(directory.glob("*.csv")) + list(directory.glob("*.npy"))
+        return sorted({p.stem for p in files if p.name != "results.csv"})
 
     def table(self, name: str, point: int = 0) -> Any:
-        """A point's CSV file <name>.csv as a DataFrame or record array (as ``results``)."""
-        path = self.point_dir(point) / f"{name}.csv"
+        """A point's table <name>.csv or <name>.npy as a DataFrame or record array (as ``results``)."""
+        directory = self.point_dir(point)
+        if (directory / f"{name}.npy").is_file():
+            return read_npy_table(directory / f"{name}.npy", self.table_kind)
+        path = directory / f"{name}.csv"
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such table; this point wrote: {', '.join(self.tables(point)) or 'none'}")
         return read_table(path, self.table_kind)

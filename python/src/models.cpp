@@ -5,6 +5,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -162,6 +163,8 @@ py::dict simulate(py::handle model, const SimulationSettings& settings_in, py::h
   out["steps"] = r.steps;
   out["rhs_evaluations"] = r.rhs_evaluations;
   out["contact_events"] = r.contact_events;
+  out["method"] = r.method;
+  out["fixed_step_s"] = r.fixed_step_s;
   out["model"] = to_python(validated.table);
   return out;
 }
@@ -204,7 +207,8 @@ py::dict simulation_defaults() {
   out["wheel_contact_arc_deg"] = d.contact_arc_deg[static_cast<std::size_t>(Rotor::wheel)];
   out["work_contact_arc_deg"] = d.contact_arc_deg[static_cast<std::size_t>(Rotor::work)];
   out["relative_tolerance"] = d.relative_tolerance;
-  out["integrator"] = d.integrator == TimeIntegrator::adams ? "adams" : "explicit_runge_kutta";
+  out["integrator"] = to_string(d.integrator);
+  out["fixed_steps_per_wave"] = d.fixed_steps_per_wave;
   out["samples_per_wave"] = d.samples_per_wave;
   out["max_steps_per_wave"] = d.max_steps_per_wave;
   out["divergence_limit_m"] = d.divergence_limit_m;
@@ -226,7 +230,8 @@ void bind_models(py::module_& m) {
                        double initial_velocity_m_per_s, double initial_waviness_m, std::uint64_t seed,
                        double infeed_rate_m_per_s, bool one_sided_contact, double wheel_contact_arc_deg,
                        double work_contact_arc_deg, std::vector<double> snapshot_times_s,
-                       double relative_tolerance, const std::string& integrator, double samples_per_wave,
+                       double relative_tolerance, const std::string& integrator, double fixed_steps_per_wave,
+                       double samples_per_wave,
                        double max_steps_per_wave, double divergence_limit_m) {
              SimulationSettings s;
              s.duration_s = duration_s;
@@ -240,11 +245,12 @@ void bind_models(py::module_& m) {
              s.contact_arc_deg[static_cast<std::size_t>(Rotor::work)] = work_contact_arc_deg;
              s.snapshot_times_s = std::move(snapshot_times_s);
              s.relative_tolerance = relative_tolerance;
-             if (integrator == "adams") s.integrator = TimeIntegrator::adams;
-             else if (integrator == "explicit_runge_kutta") s.integrator = TimeIntegrator::explicit_runge_kutta;
-             else
-               throw InputError("simulate: integrator = \"" + integrator +
-                                "\": expected one of adams, explicit_runge_kutta");
+             try {
+               s.integrator = parse_time_integrator(integrator);
+             } catch (const std::invalid_argument& e) {
+               throw InputError("simulate: integrator = \"" + integrator + "\": " + e.what());
+             }
+             s.fixed_steps_per_wave = fixed_steps_per_wave;
              s.samples_per_wave = samples_per_wave;
              s.max_steps_per_wave = max_steps_per_wave;
              s.divergence_limit_m = divergence_limit_m;
@@ -254,7 +260,7 @@ void bind_models(py::module_& m) {
            py::arg("initial_velocity_m_per_s"), py::arg("initial_waviness_m"), py::arg("seed"),
            py::arg("infeed_rate_m_per_s"), py::arg("one_sided_contact"), py::arg("wheel_contact_arc_deg"),
            py::arg("work_contact_arc_deg"), py::arg("snapshot_times_s"), py::arg("relative_tolerance"),
-           py::arg("integrator"), py::arg("samples_per_wave"), py::arg("max_steps_per_wave"),
+           py::arg("integrator"), py::arg("fixed_steps_per_wave"), py::arg("samples_per_wave"), py::arg("max_steps_per_wave"),
            py::arg("divergence_limit_m"));
   m.def("simulate", &simulate, py::arg("model"), py::arg("settings"), py::arg("wheel_speed") = py::none(),
         py::arg("work_speed") = py::none(), "Time-domain simulation by the dynamics engine; a dict of arrays.");

@@ -170,3 +170,24 @@ def test_init_study_runs(tmp_path):
     assert study.kind == "stability_map" and study.point_count >= 1
     kinds = {kind for _, kind in chatterlab.shipped_studies()}
     assert {"stability_map", "simulate", "feed_plan"} <= kinds
+
+
+def test_simulation_time_series_as_npy_table():
+    # A simulate study writing timeseries.npy (a NumPy structured array): table() reads it, and
+    # its columns are the arrays simulate() returns, bit for bit.
+    model = {"type": "plunge_regenerative", "wheel_speed_rpm": 1450, "work_speed_rpm": 55,
+             "contact_stiffness_n_per_m": 1e8, "wheel_wear_stiffness_n_per_m": 5e9,
+             "work_removal_stiffness_n_per_m": 5e7,
+             "modes": [{"frequency_hz": 184.08, "damping_ratio": 0.05, "stiffness_n_per_m": 5e7}]}
+    settings = {"duration_s": 0.2, "sample_rate_hz": 5000.0, "initial_waviness_m": 1e-6, "seed": 3,
+                "infeed_rate_m_per_s": 15e-6}
+    run = chatterlab.run_study({"study": {"kind": "simulate"}, "model": model,
+                                "simulation": {**settings, "timeseries_format": "npy"}},
+                               plots=False, progress=False, table="numpy")
+    assert "timeseries" in run.tables()
+    series = run.table("timeseries")
+    assert isinstance(series, np.recarray)
+    direct = chatterlab.simulate(model, 0.2, sample_rate_hz=5000.0, initial_waviness_m=1e-6, seed=3,
+                                 infeed_rate_m_per_s=15e-6)
+    for column in ("t_s", "displacement_m", "force_n", "depth_of_cut_m"):
+        np.testing.assert_array_equal(series[column], getattr(direct, column), err_msg=column)
