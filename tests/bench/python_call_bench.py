@@ -27,9 +27,11 @@ CASES = [
     ("window_features", {"window_samples": 10}, "10^6 windows: 4 x 10^6 result values"),
     ("window_features", {"window_samples": 1000}, "10^4 windows"),
     ("rbf_density", {"hop_samples": 10_000}, "10^3 windows of the density criterion"),
-    ("lyapunov", {"delay_samples": 34, "embedding_dimension": 4, "max_reference_points": 2000},
-     "k-d tree over 10^7 delay vectors"),
+    ("rbf_density", {}, "hop 10 (default): 10^6 windows"),
 ]
+# Not here: the phase-space analyses (embedding, lyapunov) on 10^7 samples did not finish within
+# 15-25 minutes on the shared 2-core machine; their cost grows faster than the signal, so the copy
+# is an even smaller part of it.
 
 
 def main() -> None:
