@@ -38,6 +38,7 @@ constexpr std::string_view kTitleFont = ",16";
 // Cells of failed points: a neutral grey that is neither a "stable" blue nor a "chatter" red, nor
 // the near-white of the boundary.
 constexpr std::string_view kFailedGrey = "#969696";
+constexpr std::string_view kNeutralWhite = "#f7f7f7";
 
 // A gnuplot double-quoted string. Not single-quoted: gnuplot 5.4 mis-parses the runs of doubled
 // quotes that a title like "x'' + x = ..." becomes. Inside double quotes a backslash starts an
@@ -490,6 +491,15 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
       "'{}.dat' using (strcol(3) eq 'NaN' ? NaN : $1):2:4:5:6:7:3 with boxxyerror lc palette lw 1 "
       "fillstyle solid 1.0 border notitle",
       stem)};
+  // A diverging palette jumps from blue to red at the level, so a value exactly at it (no effect,
+  // e.g. a modulation of amplitude 0) would take one side's colour: such cells are drawn neutral.
+  if (figure.diverging && figure.contour_level &&
+      std::any_of(figure.z.begin(), figure.z.end(), [&](double z) { return z == *figure.contour_level; }))
+    plots.push_back(fmt::format(
+        "'{}.dat' using ($3 == {} ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
+        "fillstyle solid 1.0 border title {}",
+        stem, number(*figure.contour_level), kNeutralWhite,
+        gp_string(fmt::format("exactly {}", number(*figure.contour_level)))));
   if (figure.contour_level && nx >= 2 && ny >= 2 && crosses_level(figure, *figure.contour_level)) {
     // gnuplot computes the contour itself (set table into a datablock), from the same data file.
     // The table is written with the axes' tick formats: full precision while it is computed, or

@@ -161,6 +161,11 @@ TEST(Plot, HeatmapOnLogAxisAndWithoutCrossingSkipsContour) {
   render(ratio, dir, "ratio");
   EXPECT_NE(read_all(dir / "ratio.gp").find("set cbrange [0.5:1.5]"), std::string::npos)
       << read_all(dir / "ratio.gp");
+  // A cell exactly at the level (no effect) is neither blue nor red.
+  ratio.z[3] = 1.0;
+  render(ratio, dir, "ratio_exact");
+  EXPECT_NE(read_all(dir / "ratio_exact.svg").find("exactly 1"), std::string::npos);
+  EXPECT_EQ(read_all(dir / "ratio.svg").find("exactly 1"), std::string::npos);
 }
 
 // Runs the contour pass of a written heatmap script on its own and returns the boundary points
