@@ -160,9 +160,14 @@ SpeedBandVerdict speed_band_verdict(const Json& model_table, const Model& model,
   ProcessScaling scaling;
   scaling.speed_dependent_stiffness = false;  // the band moves the delays, not the process
   const Json type = {{"type", model_table.at("type")}};
+  // Each rotor's speed across its band with the other at nominal (the regenerative lobes of the
+  // two chains lie mostly along one axis each), and the four corners where both deviate.
+  const int mid_wheel = n_wheel / 2, mid_work = n_work / 2;
   for (int i = 0; i < n_wheel; ++i)
     for (int j = 0; j < n_work; ++j) {
-      if (2 * i + 1 == n_wheel && 2 * j + 1 == n_work) continue;  // the nominal point
+      const bool on_cross = i == mid_wheel || j == mid_work;
+      const bool corner = (i == 0 || i == n_wheel - 1) && (j == 0 || j == n_work - 1);
+      if ((i == mid_wheel && j == mid_work) || !(on_cross || corner)) continue;
       ProcessConditions at = reference;
       at.wheel_speed_rpm = reference.wheel_speed_rpm * (1.0 + tol * (2.0 * i / (n_wheel - 1) - 1.0));
       at.work_speed_rpm = reference.work_speed_rpm * (1.0 + tol * (2.0 * j / (n_work - 1) - 1.0));

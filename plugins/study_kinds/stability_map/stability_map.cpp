@@ -93,7 +93,7 @@ void plot_roots(const std::vector<kit::PlotAxis>& axes, const Study& study, cons
     return;
   const double tol = study.document.at("stability").at("speed_tolerance").get<double>();
   kit::ColumnFigure band{col_band_growth,
-                         fmt::format("{}: worst growth rate over +-{:g} % spindle speed", title, 100.0 * tol),
+                         fmt::format("{}: worst over ±{:g} % speed", title, 100.0 * tol),
                          "worst growth rate in the speed band [1/s]"};
   band.reference = 0.0;
   band.reference_label = map ? "robust stability boundary" : "stability limit (Re s = 0)";

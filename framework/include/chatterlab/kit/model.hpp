@@ -68,9 +68,10 @@ RootSearchOptions root_search_options(const StabilitySettings& settings,
 RightmostRoot rightmost_root(const Model& model, const StabilitySettings& settings);
 
 // The rightmost root over the speed-tolerance band: the worst (largest) growth rate among the
-// nominal root and roots at speeds sampled across the band of each rotor (wheel and work speed
-// independently: a grid of odd sample counts per rotor, four samples per regenerative lobe the
-// nominal chatter frequency passes through in the band, at least 3, at most 33).
+// nominal root and roots at speeds sampled across the band: each rotor's speed swept with the
+// other at nominal (odd sample counts, four per regenerative lobe the nominal chatter frequency
+// passes through in the band, at least 3, at most 33) and the four corners where both deviate.
+// A sampled worst case: a lobe narrower than the sampling can still be missed.
 struct SpeedBandVerdict {
   bool applies = false;  // the model declares process conditions and the tolerance is > 0
   double worst_growth_rate_per_s = 0.0;
