@@ -326,9 +326,12 @@ double final_amplitude(const SimulationResult& r, double revolution_s) {
   return 0.5 * (hi - lo);
 }
 
-std::unique_ptr<TimeDomainModel> time_domain(const Model& model, const Settings& s, SuppressionTarget target) {
+// Without feed modulation the stiffness scale is 1: the plain model (the constant run's, so a zero
+// amplitude reproduces it exactly with the same integration).
+std::unique_ptr<TimeDomainModel> time_domain(const Model& model, const Settings& s, SuppressionTarget target,
+                                             bool modulated) {
   auto td = model.time_domain();
-  if (target != SuppressionTarget::feed || s.thickness_exponent == 0.0) return td;
+  if (target != SuppressionTarget::feed || s.thickness_exponent == 0.0 || !modulated) return td;
   return std::make_unique<FeedDependentStiffness>(std::move(td), *model.stiffness_chain(),
                                                   s.infeed_rate_m_per_s, s.thickness_exponent);
 }
@@ -404,6 +407,7 @@ struct PointSetup {
   std::shared_ptr<const ModulationLaw> law;
   std::shared_ptr<const ModulationLaw> constant = std::make_shared<const ConstantLevel>();
   std::vector<double> boundaries;  // wheel revolutions
+  bool modulated = false;          // a non-zero modulation amplitude
 };
 
 PointSetup setup(const Json& document) {
@@ -411,6 +415,7 @@ PointSetup setup(const Json& document) {
   p.settings = settings_of(document);
   p.plugin = build_suppression(document.at("suppression"));
   p.target = p.plugin->target();
+  p.modulated = document.at("suppression").value("amplitude_ratio", 0.0) != 0.0;
   p.table = growth_table(document, p.target);
   p.ref = reference(document, *p.table);
   p.duration_s = run_duration(p.settings, p.ref.wheel_rpm);
@@ -423,7 +428,7 @@ PointSetup setup(const Json& document) {
 
 // Simulated: log10(A_n modulated / A_n constant); null when either run diverged.
 std::pair<Json, bool> simulated_log_ratio(const Model& model, const PointSetup& p) {
-  auto td = time_domain(model, p.settings, p.target);
+  auto td = time_domain(model, p.settings, p.target, p.modulated);
   SimulationSettings settings = base_settings(p.settings, p.duration_s);
   try {
     apply_modulation(p.target, p.law, *td, settings);
