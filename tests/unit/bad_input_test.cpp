@@ -52,7 +52,7 @@ TEST_F(BadInput, UnknownKeysListTheValidOnes) {
                    "valid keys: damping_ratio, frequency_hz"});
   expect_mentions(error(fake_study("[stability]\nmax_frequency_hz = 100.0\n")),
                   {"study.toml:10:", "unknown top-level key 'stability'",
-                   "valid: fake_settings, grid, model, plugins, study"});
+                   "valid: fake_settings, grid, model, plugins, run, study"});
   expect_mentions(error("title = \"x\"\n" + fake_study()), {"study.toml:1:", "unknown top-level key 'title'"});
   expect_mentions(error(with_line(2, "kind = \"test_fake_kind\"\nkinds = 1")),
                   {"study.toml:3:", "unknown key 'study.kinds'", "valid keys: description, kind, name"});

@@ -34,6 +34,11 @@ struct Registries {
 // failure, missing entry symbol, API version mismatch, duplicate plugin name).
 void load_plugin_library(const std::string& path);
 
+// The out-of-tree plugins a study document chooses (every `type = "<name>"`, at any depth, that
+// names a plugin loaded from a library), as "model plugin 'x' (library /p/libx.so)", comma
+// separated; "" when it uses built-in plugins only. Failure messages name them.
+std::string out_of_tree_plugins_in(const Json& document);
+
 }  // namespace chatterlab
 
 extern "C" {

@@ -7,6 +7,7 @@
 //   [stability] ...                    # kind settings
 //   [grid]   "model.modes.0.damping_ratio" = [0.01, 0.02]      # parameter paths -> values
 //            wheel_speed_rpm = { from = 1000, to = 2000, steps = 21, log = false }
+//   [run]    point_timeout_s = 600, isolate = false              # optional, how points run
 #include <cstddef>
 #include <filesystem>
 #include <memory>
@@ -31,6 +32,8 @@ struct LoadOptions {
   bool allow_large = false;  // permit grids over max_grid_points points
 };
 
+class InputSnapshot;  // chatterlab/input_files.hpp
+
 struct Study {
   std::filesystem::path file;
   std::string kind;                      // [study] kind
@@ -38,12 +41,15 @@ struct Study {
   std::vector<GridAxis> grid;            // empty: a single point
   std::vector<std::string> plugin_libraries;  // resolved absolute paths
   std::shared_ptr<const SourceMap> sources;
+  // The input files as load_study read them (study file, plugin libraries, data files), with
+  // their hashes: run_study reads through this snapshot, so every point sees the same bytes.
+  std::shared_ptr<InputSnapshot> inputs;
 
   std::size_t point_count() const;  // product of axis sizes (1 without a grid)
   // Index -> per-axis value indices; the LAST axis varies fastest (row-major, "grid order").
   std::vector<std::size_t> point_indices(std::size_t point) const;
-  // The document with that point's grid values written at their paths, without the [grid]
-  // table (a point is one set of values; this also keeps the copy cheap for long grids).
+  // The document with that point's grid values written at their paths, without the [grid] and
+  // [run] tables (a point is one set of values; this also keeps the copy cheap for long grids).
   Json point_document(std::size_t point) const;
 };
 

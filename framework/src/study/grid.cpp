@@ -125,6 +125,9 @@ class GridBuilder {
       if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
       fail(axis, "[grid] {}, value {} of {} ({}): {}", axis.key, first_bad + 1, count,
            messages::show(axis.values[first_bad]), reason);
+    } catch (...) {  // a plugin's constructor or check threw something else: still bad input
+      fail(axis, "[grid] {}, value {} of {} ({}): {}", axis.key, first_bad + 1, count,
+           messages::show(axis.values[first_bad]), describe_current_exception());
     }
   }
 
