@@ -25,6 +25,7 @@
 #include "chatterlab/plugin_api.hpp"
 #include "chatterlab/detail/mpi_env.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
 
@@ -53,6 +54,15 @@ int report_error(const std::string& message) {
 // Numbers in shortest form (1450, not 1450.0), anything else as JSON.
 std::string show(const Json& value) {
   return value.is_number_float() ? fmt::format("{}", value.get<double>()) : value.dump();
+}
+
+// 1.2 GiB, 340 MiB, 12 KiB, 800 bytes.
+std::string bytes_text(std::uint64_t bytes) {
+  const double b = static_cast<double>(bytes);
+  if (b >= 1 << 30) return fmt::format("{:.1f} GiB", b / (1 << 30));
+  if (b >= 1 << 20) return fmt::format("{:.0f} MiB", b / (1 << 20));
+  if (b >= 1 << 10) return fmt::format("{:.0f} KiB", b / (1 << 10));
+  return fmt::format("{} bytes", bytes);
 }
 
 // One line per axis for `validate`: "wheel_speed_rpm  21 values from 1000 to 2000".
@@ -90,6 +100,20 @@ void print_summary(const chatterlab::Study& study) {
   if (study.grid.empty()) out << "  grid        (none: a single point)\n";
   out << fmt::format("  points      {}{}\n", study.point_count(),
                      study.grid.size() > 1 ? " (" + shape + ", last key varies fastest)" : "");
+  const chatterlab::GridCost cost =
+      chatterlab::grid_cost(study.point_count(), study.grid.size(), study.output_columns.size());
+  out << fmt::format(
+      "  estimate    memory {} at rank 0, disk {} for the journal, results.csv and grid plots\n"
+      "              ({} points x {} and {} bytes; a kind's own per-point files come on top)\n"
+      "              limit on this machine: {} points (half of {} of memory){}\n",
+      bytes_text(cost.memory_bytes()), bytes_text(cost.disk_bytes()), cost.points,
+      cost.memory_bytes_per_point, cost.disk_bytes_per_point, cost.default_max_points,
+      bytes_text(2 * cost.memory_budget_bytes),
+      cost.points > cost.default_max_points ? "; this grid needs --allow-large" : "");
+  if (study.inputs)
+    for (const auto& file : study.inputs->files())
+      out << fmt::format("  input       {} ({}, {} bytes, sha256 {})\n", file.path.string(),
+                         chatterlab::input_role_name(file.role), file.bytes, file.sha256);
   std::cout << out.str();
 }
 
@@ -182,7 +206,8 @@ int main(int argc, char** argv) {
     command->add_option("STUDY", args.study_file, "Study file (TOML), see docs/studies.md")
         ->required();
     command->add_flag("--allow-large", args.allow_large,
-                      fmt::format("Accept grids of more than {} points", chatterlab::max_grid_points));
+                      "Accept grids larger than this machine's default limit (`chatterlab "
+                      "validate` prints it: half the memory over the results' bytes per point)");
   };
   auto* validate = app.add_subcommand("validate", "Check a study file without running it");
   add_study_arguments(validate);

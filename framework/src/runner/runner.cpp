@@ -21,6 +21,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <iostream>
 #include <stdexcept>
 
 #include "chatterlab/detail/mpi_env.hpp"
@@ -93,6 +94,23 @@ void check_ranks_read_the_same_inputs(const Study& study) {
   if (!message.empty()) throw InputError(message);
 }
 
+// A warning (not a refusal: the estimate is for the heaviest kind per cell, and a resume needs
+// less) when the output file system has less room than the grid's results are estimated to take.
+void warn_if_the_disk_is_too_small(const fs::path& out_dir, const GridCost& cost) {
+  fs::path existing = fs::absolute(out_dir);
+  while (!existing.empty() && !fs::exists(existing) && existing != existing.parent_path())
+    existing = existing.parent_path();
+  std::error_code ec;
+  const fs::space_info space = fs::space(existing, ec);
+  if (ec || space.available >= cost.disk_bytes()) return;
+  std::cerr << fmt::format(
+      "chatterlab: warning: {} has {:.1f} MiB free, and this grid's results are estimated to take "
+      "{:.1f} MiB ({} points x {} bytes): the run may end with exit code 3 (output could not be "
+      "written)\n",
+      existing.string(), static_cast<double>(space.available) / (1 << 20),
+      static_cast<double>(cost.disk_bytes()) / (1 << 20), cost.points, cost.disk_bytes_per_point);
+}
+
 // What rank 0 learns before the computation and every rank needs.
 struct Preparation {
   int session = 1;
@@ -104,6 +122,8 @@ struct Preparation {
 Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expected,
                             const Study& study, const Json& running_meta) {
   Preparation prep;
+  warn_if_the_disk_is_too_small(
+      options.out_dir, grid_cost(expected.points, study.grid.size(), expected.columns.size()));
   prep.lock = runner::prepare_output_dir(options.out_dir, options.resume, study.file.string());
   prep.done.assign(expected.points, '0');
   if (options.resume) {
@@ -227,11 +247,11 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
         plot_errors.push_back(e.what());
     }
   }
-  if (written.output_error.empty() && stats.output_failures > 0)
+  if (stats.output_failures > 0)  // first: the points' own files come before the plots
     written.output_error = fmt::format(
         "{} point(s) could not write their files (recorded as failed: run again with --resume "
-        "--retry-failed once the disk has room)",
-        stats.output_failures);
+        "--retry-failed once the disk has room){}{}",
+        stats.output_failures, written.output_error.empty() ? "" : "; ", written.output_error);
 
   Json failed = runner::failed_points(in.study, table, elapsed);
   written.failed = failed.size();

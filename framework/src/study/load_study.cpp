@@ -192,7 +192,9 @@ Study load_study(const std::filesystem::path& file, const LoadOptions& options) 
   Json validated = without_grid(document);
   with_plugin_errors_as_input_errors(document, sources, file, [&] {
     kind->validate(validated, sources);
-    study.grid = build_grid(grid, validated, *kind, sources, options);
+    study.output_columns = kind->output_columns(validated);
+    study.grid =
+        build_grid(grid, validated, *kind, sources, options, study.output_columns.size());
   });
 
   // The resolved study in the order the file was written; [grid] as written (flat).
