@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -25,6 +26,7 @@
 #include "runner/progress.hpp"
 #include "runner/results_io.hpp"
 #include "runner/resume.hpp"
+#include "runner/worker_protocol.hpp"
 
 namespace chatterlab {
 namespace {
@@ -428,6 +430,39 @@ TEST(RunnerJournalWriter, LinesReachTheFileWithinTheFlushIntervalWithoutAnotherP
   EXPECT_EQ(runner::read_file(file), "header\none\ntwo\n");
   EXPECT_EQ(writer.error(), "");
   EXPECT_THROW(runner::JournalWriter(file, "again\n"), std::runtime_error);  // never reused
+}
+
+TEST(RunnerWorkerProtocol, FramesAndTheStudyCrossTheSocketUnchanged) {
+  int sockets[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM, 0, sockets), 0);
+  const std::string big(200000, 'x');  // larger than a socket buffer: sent in pieces
+  std::thread sender([&] {
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], "first"));
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], ""));
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], big));
+    ::close(sockets[0]);
+  });
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), "first");
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), "");
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), big);
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), std::nullopt);  // the peer is gone
+  sender.join();
+  ::close(sockets[1]);
+  EXPECT_FALSE(runner::worker::write_frame(sockets[1], "x"));  // never a SIGPIPE
+
+  Study study = two_axis_study();
+  study.document["model"]["a"] = 0.1 + 0.2;  // a double that must survive exactly
+  study.plugin_libraries = {"/p/libx.so"};
+  const Study back = runner::worker::study_from_json(
+      Json::parse(runner::json_text(runner::worker::study_to_json(study))));
+  EXPECT_EQ(back.kind, study.kind);
+  EXPECT_EQ(back.file, study.file);
+  EXPECT_EQ(back.plugin_libraries, study.plugin_libraries);
+  EXPECT_EQ(back.point_count(), study.point_count());
+  for (std::size_t p = 0; p < study.point_count(); ++p)
+    EXPECT_EQ(back.point_document(p), study.point_document(p)) << p;
+  const double a = back.document["model"]["a"].get<double>(), want = 0.1 + 0.2;
+  EXPECT_EQ(std::memcmp(&a, &want, sizeof a), 0);
 }
 
 TEST(RunnerOutputDir, JournalSessionsCount) {
