@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <iostream>
 #include <thread>
 
 #include "chatterlab/errors.hpp"
@@ -61,9 +62,12 @@ OutputLock::OutputLock(const fs::path& dir, const std::string& study_file) {
   if (rc != 0) {
     const int error = errno;
     if (error != EWOULDBLOCK) {
-      ::close(fd_);
-      throw InputError(fmt::format("output directory {}: cannot lock {}: {}", dir.string(),
-                                   file.string(), std::strerror(error)));
+      // A file system without locks (some network and FUSE mounts): run, but say what is lost.
+      std::cerr << fmt::format(
+          "chatterlab: warning: output directory {}: cannot lock {} ({}): a second run into "
+          "this directory at the same time would not be stopped\n",
+          dir.string(), file.string(), std::strerror(error));
+      return;
     }
     // Held. A holder that has only just taken the lock may not have written its details yet:
     // wait up to a second for them.

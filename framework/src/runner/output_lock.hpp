@@ -16,7 +16,8 @@ class OutputLock {
  public:
   // Locks `dir` (an existing directory), creating the lock file if needed. Throws InputError
   // naming the holder ("... is in use by another chatterlab run: PID 1234 on host x, running
-  // /path/study.toml since ...") when another process holds it; then nothing was changed.
+  // /path/study.toml since ...") when another process holds it; then nothing was changed. On a
+  // file system without locks it warns on stderr and goes on unlocked.
   OutputLock(const std::filesystem::path& dir, const std::string& study_file);
   ~OutputLock();  // releases the lock
   OutputLock(const OutputLock&) = delete;
