@@ -139,6 +139,10 @@ Json without_grid(const Json& document) {
 // "<file>:<line>" of the table that chose `plugin` (type = "<plugin>"), or the file alone.
 std::string plugin_table_location(const Json& document, const std::string& plugin,
                                   const SourceMap& sources, const std::filesystem::path& file) {
+  // A study kind from a library (plugin API 2) is chosen by [study] kind.
+  if (const auto study = document.find("study"); study != document.end() && study->is_object() &&
+                                                  study->value("kind", Json()) == Json(plugin))
+    return sources.locate("study.kind").str();
   for (const auto& [key, value] : document.items())
     if (value.is_object() && value.value("type", Json()) == Json(plugin))
       return sources.locate(key + ".type").str();
