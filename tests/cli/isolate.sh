@@ -69,6 +69,16 @@ expect_exit 0 "$work/surface.iso" "$bin" run "$src/studies/surface_roundness.tom
 cmp "$work/surface.in/results.csv" "$work/surface.iso/results.csv" || fail "surface: --isolate changed results.csv"
 cmp "$work/surface.in/summary.json" "$work/surface.iso/summary.json" || fail "surface: --isolate changed summary.json"
 
+# A library given as `--plugin` instead of `plugins = [...]`: hashed like a listed one (meta.json,
+# the workers' check before they load it), and the workers load it too.
+misbehaving_study "$work/cmdline.toml" "$plugin" '["ok"]'
+sed -i '/^plugins = /d' "$work/cmdline.toml"
+expect_exit 0 "$work/cmdline" "$bin" run "$work/cmdline.toml" --plugin "$plugin" --out "$work/cmdline" --isolate --threads 2
+[ "$(grep -c ',ok$' "$work/cmdline/results.csv")" = 3 ] || fail "--plugin --isolate: not 3 ok rows"
+plugin_sha=$(sha256sum "$plugin" | cut -d' ' -f1)
+grep -q "\"sha256\": \"$plugin_sha\"" "$work/cmdline/meta.json" ||
+  fail "--plugin: meta.json lacks the library's sha256 $plugin_sha"
+
 # In-process, a crash says which point and how to go on, and dies by its signal.
 misbehaving_study "$work/segv.toml" "$plugin" '["ok", "segfault"]'
 # (in a subshell: the test's own shell would report the crash on stderr)

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <filesystem>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -102,8 +103,31 @@ class MisbehavingModel final : public chatterlab::Model {
   double sleep_s_;
 };
 
+// A study kind from a library whose constructor throws a non-standard exception: loading a
+// study of this kind must be bad input at its `[study] kind` line, naming the kind and library.
+class ThrowingStudyKind final : public chatterlab::StudyKind {
+ public:
+  ThrowingStudyKind() { throw 7; }
+  static chatterlab::PluginInfo info() {
+    chatterlab::PluginInfo info;
+    info.name = "throwing_study_kind";
+    info.description = "test study kind whose constructor throws an int";
+    return info;
+  }
+  void validate(chatterlab::Json&, const chatterlab::SourceMap&) const override {}
+  std::vector<std::string> output_columns(const chatterlab::Json&) const override { return {}; }
+  std::vector<chatterlab::Json> run_point(const chatterlab::Json&,
+                                          const chatterlab::PointContext&) const override {
+    return {};
+  }
+  void write_artifacts(const chatterlab::Study&, const chatterlab::ResultTable&,
+                       const std::filesystem::path&) const override {}
+};
+
 }  // namespace misbehaving
 
 CHATTERLAB_PLUGIN_ENTRY(registries) {
   chatterlab::add_plugin<misbehaving::MisbehavingModel>(registries.models, registries.origin);
+  chatterlab::add_study_kind<misbehaving::ThrowingStudyKind>(registries.study_kinds,
+                                                             registries.origin);
 }

@@ -318,6 +318,18 @@ TEST(StudyLoad, WhateverAPluginConstructorThrowsIsBadInputAtItsTablesLine) {
     EXPECT_NE(message.find(part), std::string::npos) << message;
 }
 
+TEST(StudyLoad, AStudyKindConstructorThrowingAnythingIsBadInputAtTheKindsLine) {
+  TempDir dir;
+  const std::string plugin = "plugins = [\"" CHATTERLAB_MISBEHAVING_PLUGIN "\"]\n";
+  const std::string message = load_error(dir, plugin + "[study]\nkind = \"throwing_study_kind\"\n");
+  for (const std::string& part :
+       {std::string("study.toml:3: study kind plugin 'throwing_study_kind' (library "),
+        std::string(CHATTERLAB_MISBEHAVING_PLUGIN),
+        std::string("its constructor threw an exception of type 'int' (not derived from "
+                    "std::exception)")})
+    EXPECT_NE(message.find(part), std::string::npos) << message;
+}
+
 TEST(GridCost, GrowsWithTheRowAndKeepsTheDefaultGridWithinHalfTheMemory) {
   const GridCost small = grid_cost(1000, 2, 3), wide = grid_cost(1000, 2, 13);
   EXPECT_EQ(small.cells_per_point, 6u);

@@ -1,6 +1,7 @@
 // load_study: the generic part of reading a study (plugins, [study], top-level keys, [grid]);
 // the kind validates its own tables.
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -187,7 +188,10 @@ Study load_study(const std::filesystem::path& file, const LoadOptions& options) 
   study.inputs = snapshot;
   study.plugin_libraries = load_plugins(document, file, sources);
   study.kind = validate_study_table(document, file, sources);
-  auto kind = study_kind_registry().at(study.kind).create(ParamValues());
+  std::unique_ptr<StudyKind> kind;  // from a library, its constructor is plugin code too
+  with_plugin_errors_as_input_errors(document, sources, file, [&] {
+    kind = study_kind_registry().at(study.kind).create(ParamValues());
+  });
   check_top_level(document, *kind, sources);
   if (document.contains("run"))
     document["run"] = validate_params(document["run"], run_table_specs(), "run", sources);
