@@ -24,6 +24,9 @@
 
 #include <fmt/format.h>
 
+#include "chatterlab/errors.hpp"
+#include "chatterlab/output_files.hpp"
+
 extern char** environ;
 
 namespace chatterlab::plot {
@@ -64,13 +67,6 @@ std::string gp_string(std::string_view text) {
 // broken there (a failed point is not bridged) and a heatmap cell is not drawn.
 std::string number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "NaN"; }
 
-void write_text_file(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) throw PlotError(fmt::format("cannot write {}", file.string()));
-}
-
 void check_stem(const std::string& stem) {
   if (stem.empty() || stem.find('/') != std::string::npos || stem == "." || stem == "..")
     throw PlotError(fmt::format("plot file stem '{}' must be a plain file name", stem));
@@ -83,6 +79,9 @@ std::string script_preamble(const std::string& stem, std::string_view what,
   return fmt::format(
       "# {} written by chatterlab from {}.dat.\n"
       "# Re-render after editing: cd into this directory and run `gnuplot {}.gp`.\n"
+      "# (chatterlab renders into temporary names, output_suffix, and renames the finished\n"
+      "# images, so no reader ever sees half a PNG.)\n"
+      "if (!exists(\"output_suffix\")) output_suffix = \"\"\n"
       "set encoding utf8\n"
       "set title {} font '{}'\n"
       "set xlabel {}\nset ylabel {}\n"
@@ -126,19 +125,21 @@ std::string log_axis(char axis, double low, double high) {
 // for the SVG. The SVG gets a white background so it reads the same as the PNG on dark pages.
 std::string script_png_terminal(const std::string& stem) {
   return fmt::format(
-      "set terminal pngcairo size {},{} noenhanced font '{}' linewidth 1.5\nset output {}\n",
+      "set terminal pngcairo size {},{} noenhanced font '{}' linewidth 1.5\n"
+      "set output {}.output_suffix\n",
       kWidthPx, kHeightPx, kFont, gp_string(stem + ".png"));
 }
 std::string script_svg_replot(const std::string& stem) {
   return fmt::format(
       "set terminal svg size {},{} noenhanced font '{}' linewidth 1.5 background rgb 'white'\n"
-      "set output {}\nreplot\nunset output\n",
+      "set output {}.output_suffix\nreplot\nunset output\n",
       kWidthPx, kHeightPx, kFont, gp_string(stem + ".svg"));
 }
 
-// Runs `gnuplot <script>` inside `dir` without a shell (file names never meet a command line
-// parser), capturing its diagnostics. gnuplot exits non-zero on any script error.
-void run_gnuplot(const fs::path& dir, const std::string& script) {
+// Runs `gnuplot -e "output_suffix='<suffix>'" <script>` inside `dir` without a shell (file names
+// never meet a command line parser), capturing its diagnostics. gnuplot exits non-zero on any
+// script error.
+void run_gnuplot(const fs::path& dir, const std::string& script, const std::string& suffix) {
   std::array<int, 2> pipe_fds{};
   if (pipe(pipe_fds.data()) != 0)
     throw PlotError(fmt::format("cannot run gnuplot: pipe: {}", std::strerror(errno)));
@@ -153,9 +154,11 @@ void run_gnuplot(const fs::path& dir, const std::string& script) {
   posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
   posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
 
-  std::string program = "gnuplot";
+  std::string program = "gnuplot", option = "-e";
+  std::string define = fmt::format("output_suffix='{}'", suffix);  // digits and dots only
   std::string script_arg = script;
-  std::array<char*, 3> argv{program.data(), script_arg.data(), nullptr};
+  std::array<char*, 5> argv{program.data(), option.data(), define.data(), script_arg.data(),
+                            nullptr};
   pid_t pid = 0;
   int spawn_error = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
@@ -192,20 +195,78 @@ void run_gnuplot(const fs::path& dir, const std::string& script) {
   }
 }
 
-// Writes data and script, runs gnuplot, and checks that both images exist.
+// True when `file` is a whole image: a PNG ends with its IEND chunk, an SVG with </svg>. A
+// gnuplot that ran out of disk space may still exit 0 after writing part of one.
+bool complete_image(const fs::path& file, bool png) {
+  std::error_code ec;
+  const auto size = fs::file_size(file, ec);
+  if (ec || size < 12) return false;
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(size) - 12);
+  std::string tail(12, '\0');
+  if (!in.read(tail.data(), 12)) return false;
+  if (png) return tail == std::string("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+  return tail.find("</svg>") != std::string::npos;
+}
+
+// Why no image came out: a disk that takes no more data (full, read-only, I/O errors) is an
+// output failure (OutputError, exit 3); anything else (gnuplot missing, a script error) a plot
+// failure that meta.json records. Judged by writing a probe of a typical image's size.
+[[noreturn]] void image_failure(const fs::path& out_dir, const std::string& what) {
+  try {
+    const fs::path probe = out_dir / ".chatterlab-write-probe";
+    write_file_atomically(probe, std::string(256 * 1024, '\0'));
+    std::error_code ignored;
+    fs::remove(probe, ignored);
+  } catch (const OutputError& e) {
+    throw OutputError(fmt::format("{} ({})", what, e.what()));
+  }
+  throw PlotError(what);
+}
+
+// Writes data and script (atomically), runs gnuplot into temporary image names, checks that both
+// images are complete and renames them into place: readers never see a partial image, and a
+// failure leaves no temporary file behind.
 void produce(const fs::path& out_dir, const std::string& stem, const std::string& data,
              const std::string& script) {
   check_stem(stem);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
-  if (ec) throw PlotError(fmt::format("cannot create {}: {}", out_dir.string(), ec.message()));
-  write_text_file(out_dir / (stem + ".dat"), data);
-  write_text_file(out_dir / (stem + ".gp"), script);
-  run_gnuplot(out_dir, stem + ".gp");
-  for (const char* ext : {".png", ".svg"}) {
-    fs::path image = out_dir / (stem + ext);
-    if (!fs::exists(image) || fs::file_size(image) == 0)
-      throw PlotError(fmt::format("gnuplot reported success but wrote no {}", image.string()));
+  if (ec) {
+    note_failed_output_write();
+    throw OutputError(fmt::format("cannot create {}: {}", out_dir.string(), ec.message()));
+  }
+  write_file_atomically(out_dir / (stem + ".dat"), data);
+  write_file_atomically(out_dir / (stem + ".gp"), script);
+  const fs::path png = out_dir / (stem + ".png"), svg = out_dir / (stem + ".svg");
+  const fs::path png_tmp = temporary_path_for(png);
+  const std::string suffix = png_tmp.string().substr(png.string().size());
+  const fs::path svg_tmp = svg.string() + suffix;
+  auto remove_temporaries = [&] {
+    std::error_code ignored;
+    fs::remove(png_tmp, ignored);
+    fs::remove(svg_tmp, ignored);
+  };
+  try {
+    run_gnuplot(out_dir, stem + ".gp", suffix);
+  } catch (const PlotError& e) {
+    remove_temporaries();
+    image_failure(out_dir, e.what());
+  }
+  for (const auto& [image, is_png] : {std::pair{&png_tmp, true}, std::pair{&svg_tmp, false}}) {
+    if (!complete_image(*image, is_png)) {
+      remove_temporaries();
+      image_failure(out_dir, fmt::format("gnuplot reported success but wrote no complete {}",
+                                         (is_png ? png : svg).string()));
+    }
+  }
+  for (const auto& [from, to] : {std::pair{&png_tmp, &png}, std::pair{&svg_tmp, &svg}}) {
+    fs::rename(*from, *to, ec);
+    if (ec) {
+      remove_temporaries();
+      note_failed_output_write();
+      throw OutputError(fmt::format("cannot replace {}: {}", to->string(), ec.message()));
+    }
   }
 }
 

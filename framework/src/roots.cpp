@@ -464,7 +464,7 @@ RightmostRoot find_rightmost_root(const CharacteristicFunction& characteristic,
   } catch (const std::exception& e) {
     throw PointFailure(std::string("root search failed: ") + e.what());
   } catch (...) {
-    throw PointFailure("root search failed: unknown error");
+    throw PointFailure("root search failed: " + describe_current_exception());
   }
 }
 

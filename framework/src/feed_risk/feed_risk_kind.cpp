@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
@@ -176,7 +177,7 @@ PlanSource plan_source(const Json& document) {
     src.part = saved.part;
     src.wheel = saved.wheel;
     // The saved [plan] table (planner settings) for re-planning; read_saved_plan checked the file.
-    std::ifstream in(fs::path(fr["plan_dir"].get<std::string>()) / "summary.json");
+    InputFileStream in(fs::path(fr["plan_dir"].get<std::string>()) / "summary.json");
     src.plan = Json::parse(in).at("plan");
     src.segments = std::move(saved.segments);
     return src;

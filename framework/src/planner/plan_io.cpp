@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
@@ -302,7 +303,7 @@ SavedPlan read_saved_plan(const fs::path& dir) {
   SavedPlan out;
   Json summary;
   {
-    std::ifstream in(summary_path);
+    InputFileStream in(summary_path);  // the run's snapshot (chatterlab/input_files.hpp)
     if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs summary.json)", summary_path.string()));
     try {
       summary = Json::parse(in);
@@ -331,7 +332,7 @@ SavedPlan read_saved_plan(const fs::path& dir) {
     out.plan.initial_position_mm.push_back(initial[position_key(m)].get<double>());
   }
 
-  std::ifstream in(pulses_path);
+  InputFileStream in(pulses_path);
   if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs pulses.csv)", pulses_path.string()));
   std::string line;
   std::getline(in, line);
