@@ -1,5 +1,7 @@
 #include "planner/replay.hpp"
 
+#include "planner/controller_export.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -43,13 +45,16 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   std::vector<double> exact(motors);
   double area = 0.0, last_x = 0.0, last_e = 0.0;
   bool first = true;
-  double lo = 1e300, hi = -1e300;
+  double lo = 1e300, hi = -1e300, lin = 0.0, quant = 0.0;
   auto close_segment = [&](std::size_t k) {
     out.segment_x_mm.push_back(0.5 * (schedule.knots_mm[k] + schedule.knots_mm[k + 1]));
     out.segment_min_mm.push_back(lo);
     out.segment_max_mm.push_back(hi);
+    out.segment_linearisation_mm.push_back(lin);
+    out.segment_quantisation_mm.push_back(quant);
     lo = 1e300;
     hi = -1e300;
+    lin = quant = 0.0;
   };
   for_each_pulse_state(plan, [&](std::size_t k, double u, const std::vector<double>& position) {
     if (u == 0.0 && k > 0) close_segment(k - 1);
@@ -67,6 +72,8 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
     quantisation.add(e - e_linear);
     lo = std::min(lo, e);
     hi = std::max(hi, e);
+    lin = std::max(lin, std::abs(e_linear));
+    quant = std::max(quant, std::abs(e - e_linear));
     if (!first) area += 0.5 * (std::abs(e) + std::abs(last_e)) * std::abs(tool.x_mm - last_x);
     first = false;
     last_x = tool.x_mm;
@@ -88,6 +95,17 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   out.quantisation = quantisation.stats();
   out.states = total.n;
   return out;
+}
+
+StepTableReplay replay_step_events(const Schedule& schedule, const std::vector<StepEvent>& events,
+                                   double tick_hz, const Generatrix& generatrix, const Kinematics& kinematics) {
+  Accumulator total;
+  for_each_step_state(schedule.plan, events, tick_hz, [&](std::size_t k, double u, const std::vector<double>& position) {
+    const double zeta = schedule.contact_on_tool_mm[k] +
+                        u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
+    total.add(tool_deviation_mm(kinematics.forward(position, schedule.contact_at(zeta)), generatrix));
+  });
+  return {total.stats(), total.n};
 }
 
 }  // namespace chatterlab::planner

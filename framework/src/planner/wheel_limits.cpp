@@ -24,29 +24,47 @@ Frame frame_at(const Generatrix& g, double x) {
 
 }  // namespace
 
-EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples) {
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, const GeometryAnalysis& geometry,
+                                    std::size_t samples) {
   const double a = generatrix.x_min_mm(), b = generatrix.x_max_mm();
   std::vector<Frame> frames(samples);
   for (std::size_t i = 0; i < samples; ++i)
     frames[i] = frame_at(generatrix, a + (b - a) * static_cast<double>(i) / static_cast<double>(samples - 1));
-  EdgeRadiusLimit best{std::numeric_limits<double>::infinity(), 0.0, false};
+  const double inf = std::numeric_limits<double>::infinity();
+  EdgeRadiusLimit best{inf, 0.0, false, inf};
+  if (geometry.max_concave_curvature_per_mm > 0)
+    best = {1.0 / geometry.max_concave_curvature_per_mm, geometry.max_concave_curvature_at_x_mm, true, inf};
+  if (geometry.max_concave_curvature_bound_per_mm > 0)
+    best.curvature_bound_radius_mm = 1.0 / geometry.max_concave_curvature_bound_per_mm;
+  double distant = inf, distant_x = 0.0;
   for (std::size_t i = 0; i < samples; ++i) {
     const Frame& p = frames[i];
-    const GeneratrixValue v = generatrix.evaluate(p.x);
-    if (v.d2 > 0) {
-      const double rho = std::pow(1.0 + v.d1 * v.d1, 1.5) / v.d2;
-      if (rho < best.radius_mm) best = {rho, p.x, true};
-    }
     for (std::size_t j = 0; j < samples; ++j) {
-      if (j + 1 >= i && j <= i + 1) continue;  // neighbours: the local term above is exact
+      if (j + 1 >= i && j <= i + 1) continue;  // neighbours: the local term is exact
       const double dx = frames[j].x - p.x, dy = frames[j].y - p.y;
       const double along_normal = dx * p.nx + dy * p.ny;
       if (along_normal <= 0) continue;
       const double r = (dx * dx + dy * dy) / (2 * along_normal);
-      if (r < best.radius_mm) best = {r, p.x, false};
+      if (r < distant) {
+        distant = r;
+        distant_x = p.x;
+      }
     }
   }
+  // A chord between nearby samples only approximates the local curvature, which the analysis
+  // has exactly: the limit is "distant" only where a point beats the local radius by 0.1 %.
+  if (distant < best.radius_mm * (1 - 1e-3)) {
+    best.radius_mm = distant;
+    best.x_mm = distant_x;
+    best.local = false;
+  } else {
+    best.radius_mm = std::min(best.radius_mm, distant);
+  }
   return best;
+}
+
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples) {
+  return largest_edge_radius(generatrix, generatrix.analyse(default_geometry_resolution_mm), samples);
 }
 
 double wheel_geometry_edge_radius_mm(const WheelSection& wheel) {

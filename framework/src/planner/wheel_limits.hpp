@@ -19,12 +19,20 @@ struct EdgeRadiusLimit {
   double radius_mm = 0.0;  // +inf when no part of the profile limits it
   double x_mm = 0.0;       // contact position that sets the limit
   bool local = false;      // set by the local curvature (concave part) rather than a distant point
+  // The local term's certified bound: no concave radius of curvature anywhere is below it
+  // (GeometryAnalysis::max_concave_curvature_bound_per_mm); +inf for a convex part.
+  double curvature_bound_radius_mm = 0.0;
 };
 
 // For every contact point P (outward normal n, towards the wheel) a circle of radius r tangent at
 // P stays outside the part iff r <= |Q-P|^2 / (2 (Q-P).n) for every profile point Q with
 // (Q-P).n > 0 (seed 000's normal-line condition, 5.21-5.23); near P this tends to the radius of
-// curvature (1+f'^2)^1.5 / f'' of a concave part (f'' > 0). Minimised over P on `samples` points.
+// curvature (1+f'^2)^1.5 / f'' of a concave part (f'' > 0). The local term is the true smallest
+// concave radius of curvature from the geometry analysis (every point of the range, spline knots
+// included); the distant term is minimised over P and Q on `samples` points.
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, const GeometryAnalysis& geometry,
+                                    std::size_t samples = 2001);
+// Analyses the generatrix at the default resolution first.
 EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples = 2001);
 
 // Largest edge radius the wheel itself can carry: an arc of opening alpha is 2 r sin(alpha/2)
