@@ -162,6 +162,7 @@ Json tolerance_json(const PlanRun& run) {
           {"note", t.met ? Json() : Json(t.limit_note)},
           {"rounds", t.rounds},
           {"segments_split", t.segments_split},
+          {"first_knot_chosen", t.first_knot_chosen},
           {"shortest_segment_mm", t.shortest_segment_mm},
           {"longest_segment_mm", t.longest_segment_mm},
           {"min_segment_length_mm", run.tolerance_settings.min_segment_length_mm},

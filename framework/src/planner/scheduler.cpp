@@ -77,7 +77,8 @@ ExactTarget exact_target(const Generatrix& generatrix, const Kinematics& kinemat
 Schedule plan_feed_on_knots(const Generatrix& generatrix, const Kinematics& kinematics,
                             const FeedConstraints& constraints, const std::vector<double>& nominal,
                             const std::function<double(double)>& contact_on_tool, bool choose_knots,
-                            const std::function<ToolContact(double)>& tool_contact) {
+                            const std::function<ToolContact(double)>& tool_contact,
+                            bool keep_first_segment) {
   if (nominal.size() < 2 || !(nominal.back() > nominal.front()))
     throw std::invalid_argument("plan_feed: fewer than two knots");
   const std::size_t segment_count = nominal.size() - 1;
@@ -103,7 +104,7 @@ Schedule plan_feed_on_knots(const Generatrix& generatrix, const Kinematics& kine
   for (std::size_t k = 1; k <= segment_count; ++k) {
     // x_1 stays nominal: the first segment is then the seed's (0.2 mm in 1 s at the bound),
     // comparable row for row with seed 000's table (MODELS.md P8).
-    if (k == 1 || k == segment_count || !choose_knots) {
+    if ((k == 1 && keep_first_segment) || k == segment_count || !choose_knots) {
       place(k, nominal[k]);
       continue;
     }

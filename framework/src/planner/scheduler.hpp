@@ -78,13 +78,15 @@ struct Schedule {
 // tool_contact(s) where that is on the tool (nullptr: s along the rails, no tilt: a cylindrical
 // wheel's face). choose_knots: place each interior knot within +-25 % of its local nominal
 // spacing where the axes' rounding residues move the tool least off the profile (false: the
-// nominal knots). Throws std::domain_error when the constraints admit no plan (naming the
-// constraint and where).
+// nominal knots). keep_first_segment: x_1 stays nominal (the seed's first segment, MODELS.md P8)
+// even when knots are chosen. Throws std::domain_error when the constraints admit no plan (naming
+// the constraint and where).
 Schedule plan_feed_on_knots(const Generatrix& generatrix, const Kinematics& kinematics,
                             const FeedConstraints& constraints, const std::vector<double>& nominal_knots_mm,
                             const std::function<double(double)>& contact_on_tool = nullptr,
                             bool choose_knots = true,
-                            const std::function<ToolContact(double)>& tool_contact = nullptr);
+                            const std::function<ToolContact(double)>& tool_contact = nullptr,
+                            bool keep_first_segment = true);
 
 // Knots a = x_0 < ... < x_N = b equally spaced, at most segment_length_mm apart.
 std::vector<double> uniform_knots(double a, double b, double segment_length_mm);

@@ -202,9 +202,10 @@ EndTrend end_trend(const std::vector<double>& x, const std::vector<double>& y) {
 
 }  // namespace
 
-SmoothingSpline smoothing_spline(const std::vector<double>& x, const std::vector<double>& y, double lambda) {
+SmoothingSpline smoothing_spline(const std::vector<double>& x, const std::vector<double>& y, double lambda,
+                                 bool keep_end_curvature) {
   check_point_table(x, y);
-  const EndTrend trend = end_trend(x, y);
+  const EndTrend trend = keep_end_curvature ? end_trend(x, y) : EndTrend{x.front(), x.back(), 0.0, 0.0};
   std::vector<double> detrended(y);
   for (std::size_t i = 0; i < y.size(); ++i) detrended[i] -= trend.value(x[i]);
   const ReinschSystem system(x, detrended);

@@ -46,8 +46,10 @@ SmoothingSpline cross_validated_spline(const std::vector<double>& x, const std::
 SmoothingSpline tolerance_spline(const std::vector<double>& x, const std::vector<double>& y,
                                  double tolerance_mm);
 // The smoothing spline for a given lambda (exposed for tests: lambda -> 0 interpolates,
-// lambda -> infinity gives the least-squares line).
+// lambda -> infinity gives the least-squares line about the end trend). keep_end_curvature
+// false: plain Reinsch (natural ends; effective_parameters is then the trace of the linear map
+// y -> g).
 SmoothingSpline smoothing_spline(const std::vector<double>& x, const std::vector<double>& y,
-                                 double lambda);
+                                 double lambda, bool keep_end_curvature = true);
 
 }  // namespace chatterlab::planner

@@ -77,9 +77,10 @@ TolerancePlan plan_to_tolerance(const Generatrix& generatrix, const Kinematics& 
                       settings.linearisation_share * tol, settings.segment_length_mm,
                       settings.min_segment_length_mm);
   TolerancePlan out;
+  bool keep_first = true;  // x_1 nominal (the seed's first segment) unless the tolerance needs it
   for (int round = 1;; ++round) {
     out.schedule = plan_feed_on_knots(generatrix, kinematics, constraints, knots, contact_on_tool,
-                                      true, tool_contact);
+                                      true, tool_contact, keep_first);
     out.errors = replay_errors(out.schedule, generatrix, kinematics);
     out.nominal_knots_mm = knots;
     out.rounds = round;
@@ -106,6 +107,15 @@ TolerancePlan plan_to_tolerance(const Generatrix& generatrix, const Kinematics& 
       }
       refined.push_back(knots[k + 1]);
     }
+    // The first segment's end is kept where the seed has it; its rounding residues then are
+    // arbitrary. Where that segment breaks the tolerance by the motor steps, its end is chosen
+    // like every other knot.
+    if (keep_first && e.segment_max_abs_mm(0) > tol && e.segment_linearisation_mm[0] <= 0.1 * tol &&
+        knots.size() > 2) {
+      keep_first = false;
+      out.first_knot_chosen = true;
+      ++splits;  // a change worth another round
+    }
     const double x_worst = e.x_at_max_mm;
     if (splits == 0 || round >= settings.max_rounds) {
       if (splits == 0 && !too_short) {
@@ -128,7 +138,7 @@ TolerancePlan plan_to_tolerance(const Generatrix& generatrix, const Kinematics& 
       }
       break;
     }
-    out.segments_split += splits;
+    out.segments_split += refined.size() - knots.size();
     knots = std::move(refined);
   }
   const std::vector<double>& k = out.schedule.knots_mm;

@@ -38,6 +38,7 @@ struct TolerancePlan {
   bool met = false;
   int rounds = 0;                    // schedule + replay rounds run
   std::size_t segments_split = 0;    // by the replay rounds
+  bool first_knot_chosen = false;    // x_1 moved off the seed's place for the tolerance
   std::string limited_by;            // when not met: motor_step, min_segment_length, rounds
   std::string limit_note;            // what that means here (achieved error, where)
   double shortest_segment_mm = 0.0, longest_segment_mm = 0.0;

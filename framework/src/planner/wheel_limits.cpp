@@ -122,12 +122,18 @@ struct Deepest {
 // deeper of them (`sampling_bound_mm`).
 class SectionProbe {
  public:
-  explicit SectionProbe(const WheelSection& wheel, double part_curvature) : wheel_(wheel) {
+  // Samples: enough that the sampling bound is at most half the tolerance (at least 64, at most
+  // 4096), so that the golden-section refinement is needed only where a sample itself comes
+  // within half the tolerance of interfering (the contact's own point lies on the section and
+  // sits exactly at its own cut: with a coarser sampling every state would be refined).
+  SectionProbe(const WheelSection& wheel, double part_curvature, double tolerance_mm) : wheel_(wheel) {
     half_angle_ = 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0;
-    for (int i = 0; i <= samples; ++i) points_.push_back(tool_point(-1.0 + 2.0 * i / samples));
-    const double spacing = wheel.profiled ? wheel.edge_radius_mm * 2 * half_angle_ / samples
-                                          : wheel.thickness_mm / samples;
+    const double width = wheel.profiled ? wheel.edge_radius_mm * 2 * half_angle_ : wheel.thickness_mm;
     const double k = (wheel.profiled ? 1.0 / wheel.edge_radius_mm : 0.0) + part_curvature;
+    const double wanted = k > 0 ? width / std::sqrt(8.0 * 0.5 * tolerance_mm / k) : 0.0;
+    samples_ = static_cast<int>(std::clamp(std::ceil(wanted), 64.0, 4096.0));
+    for (int i = 0; i <= samples_; ++i) points_.push_back(tool_point(-1.0 + 2.0 * i / samples_));
+    const double spacing = width / samples_;
     sampling_bound_mm_ = k * spacing * spacing / 8.0;
   }
   double sampling_bound_mm() const { return sampling_bound_mm_; }
@@ -140,7 +146,7 @@ class SectionProbe {
     };
     Deepest best{-std::numeric_limits<double>::infinity(), 0.0};
     int best_i = 0;
-    for (int i = 0; i <= samples; ++i) {
+    for (int i = 0; i <= samples_; ++i) {
       const Deepest d = at(points_[static_cast<std::size_t>(i)]);
       if (d.depth_mm > best.depth_mm) {
         best = d;
@@ -148,8 +154,8 @@ class SectionProbe {
       }
     }
     if (!std::isfinite(best.depth_mm) || best.depth_mm <= refine_above_mm) return best;
-    double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples;
-    double hi = -1.0 + 2.0 * std::min(samples, best_i + 1) / samples;
+    double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples_;
+    double hi = -1.0 + 2.0 * std::min(samples_, best_i + 1) / samples_;
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     for (int it = 0; it < 24; ++it) {
       const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
@@ -160,7 +166,7 @@ class SectionProbe {
   }
 
  private:
-  static constexpr int samples = 64;
+  int samples_ = 64;
   std::array<double, 2> tool_point(double t) const {  // t in [-1, 1] along the section
     if (!wheel_.profiled) return {0.5 * wheel_.thickness_mm * t, 0.0};
     const double phi = half_angle_ * t, r = wheel_.edge_radius_mm;
@@ -178,7 +184,7 @@ constexpr std::size_t table_intervals = 20000;
 Interference check_interference(const Generatrix& generatrix, const WheelSection& wheel,
                                 const std::vector<double>& contacts_mm, double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
-  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm(), tolerance_mm);
   Interference out;
   out.tolerance_mm = tolerance_mm;
   for (double x : contacts_mm) {
@@ -202,7 +208,7 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
                                            const Kinematics& kinematics, const WheelSection& wheel,
                                            double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
-  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm(), tolerance_mm);
   const FeedPlan& plan = schedule.plan;
   Interference out;
   out.tolerance_mm = tolerance_mm;
@@ -216,7 +222,9 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
     const ToolInPart contact = kinematics.forward(position, schedule.contact_at(zeta));
-    const double own_cut = std::max(0.0, profile.depth(contact.x_mm, contact.y_mm));
+    // A contact a rounding step beyond the part's end still has its own cut (the depth there).
+    const double contact_x = std::clamp(contact.x_mm, generatrix.x_min_mm(), generatrix.x_max_mm());
+    const double own_cut = std::max(0.0, profile.depth(contact_x, contact.y_mm));
     const Deepest d = probe.deepest(profile, frame, own_cut + tolerance_mm - probe.sampling_bound_mm());
     ++out.states_checked;
     const double excess = d.depth_mm - own_cut;

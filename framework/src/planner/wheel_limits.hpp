@@ -60,7 +60,9 @@ Interference check_interference(const Generatrix& generatrix, const WheelSection
 // through the forward kinematics; the tool frame in the part (nominal point O, along-rails U,
 // across W) follows from forward() at tool points (0,0), (1,0), (0,1); the section (face
 // [-a/2, a/2] x {0}, or edge arc (r sin phi, r (1 - cos phi)), |phi| <= alpha/2) is probed for
-// its deepest point below the generatrix (64 samples, then golden-section refinement; the
+// its deepest point below the generatrix (samples dense enough that a point between two of them
+// lies at most half the tolerance deeper, 64 to 4096, then golden-section refinement where a
+// sample comes that close; the
 // generatrix tabulated as a cubic Hermite on 20000 intervals). Interference at a state: the
 // deepest penetration minus the contact's own cut-in (the profile error, reported separately),
 // beyond tolerance_mm (default 1 um: a nut step tilts a 20 mm half face by 0.2 um).
