@@ -18,6 +18,7 @@
 #include "chatterlab/study_kind.hpp"
 #include "planner/controller_export.hpp"
 #include "planner/plan_io.hpp"
+#include "planner/planner_test_support.hpp"
 #include "planner/setup.hpp"
 #include "planner/tolerance.hpp"
 #include "planner/wheel_limits.hpp"
@@ -98,49 +99,25 @@ TEST(FeedPlanTolerance, ATolerancePastTheMotorStepsIsReportedWithItsLimit) {
   EXPECT_LE(p.rounds, 2);
 }
 
-constexpr const char* study_text = R"(
-[study]
-kind = "feed_plan"
-[machine]
-type = "three_table_revolution"
-pivot_to_nut_mm = 300.0
-fixture_to_pivot_mm = 250.0
-screw_pitch_mm = 12.0
-gear_ratio = 10.0
-step_angle_deg = 1.0
-max_pulse_rate_hz = 100.0
-max_relative_rate_change = 0.1
-spindle_speed_rpm = { from = 250.0, to = 300.0 }
-max_axial_advance_mm_per_100_rev = 4.0
-[part]
-generatrix = "GENERATRIX"
-x_range_mm = [0.0, 600.0]
-[wheel]
-type = "profiled"
-diameter_mm = 400.0
-thickness_mm = 40.0
-edge_radius_mm = 20.0
-)";
-
-std::string with(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  return at == std::string::npos ? text : text.replace(at, from.size(), to);
+// Problem 2's study with the generatrix replaced by `expression`.
+std::string study_of(const std::string& expression) {
+  return testing::replace(testing::problem2_study_text, "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130", expression);
 }
+using testing::replace;
 
 // The audit's kink (certified with a 16.7 mm gouge) and near-step (a 43-day plan with 33.8 mm
 // error) are refused at validation, exit 2, with the place.
 TEST(FeedPlanTolerance, KinkAndNearStepPartsAreRefusedWithTheirPlace) {
   TempDir dir;
-  std::string m = chatterlab::testing::load_error(dir, with(study_text, "GENERATRIX", "100 + abs(x-300)*1.0"));
+  std::string m = chatterlab::testing::load_error(dir, study_of("100 + abs(x-300)*1.0"));
   EXPECT_NE(m.find("part.generatrix = \"100 + abs(x-300)*1.0\""), std::string::npos) << m;
   EXPECT_NE(m.find("the slope f' jumps by 2 at x = 300 (a kink"), std::string::npos) << m;
-  m = chatterlab::testing::load_error(dir, with(study_text, "GENERATRIX", "100 + 5*tanh((x-300)/0.001)"));
+  m = chatterlab::testing::load_error(dir, study_of("100 + 5*tanh((x-300)/0.001)"));
   EXPECT_NE(m.find("a feature narrower than the resolution 0.01 mm at x = 299.99"), std::string::npos) << m;
   // A coarser resolution refuses a gentler feature (radius of curvature 6.25 mm, turning
   // 0.16 rad/mm): the key is the user's.
   m = chatterlab::testing::load_error(
-      dir, with(with(study_text, "GENERATRIX", "130 - 8*exp(-((x-150)/10)^2)"), "x_range_mm = [0.0, 600.0]",
+      dir, replace(study_of("130 - 8*exp(-((x-150)/10)^2)"), "x_range_mm = [0.0, 600.0]",
                 "x_range_mm = [0.0, 300.0]\ngeometry_resolution_mm = 10.0"));
   EXPECT_NE(m.find("narrower than the resolution 10 mm at x = 1"), std::string::npos) << m;
 }
@@ -164,9 +141,9 @@ Json summary_of(const fs::path& dir) {
 // the point fails; its files say why.
 TEST(FeedPlanTolerance, APlanWithInterferenceIsNeverOk) {
   TempDir dir;
-  std::string text = with(study_text, "GENERATRIX", "120 + 40*sin(x/15)");
-  text = with(text, "x_range_mm = [0.0, 600.0]", "x_range_mm = [64.0, 76.0]");
-  text = with(text, "edge_radius_mm = 20.0", "edge_radius_mm = 5.0");
+  std::string text = study_of("120 + 40*sin(x/15)");
+  text = replace(text, "x_range_mm = [0.0, 600.0]", "x_range_mm = [64.0, 76.0]");
+  text = replace(text, "edge_radius_mm = 20.0", "edge_radius_mm = 5.0");
   text += "[plan]\nsegment_length_mm = 1.0\nmax_profile_error_mm = 0.5\n";
   const Study study = chatterlab::testing::load_text(dir, text);
   std::string failure;
@@ -198,7 +175,7 @@ TEST(FeedPlanTolerance, NoisyPointTablePlansFromItsSmoothedCurve) {
           << "\n";
   }
   dir.write("measured.csv", table.str());
-  std::string text = with(study_text, "generatrix = \"GENERATRIX\"\nx_range_mm = [0.0, 600.0]",
+  std::string text = replace(testing::problem2_study_text, "generatrix = \"30*exp(-x/400)*sin((x + 25*_pi)/100) + 130\"\nx_range_mm = [0.0, 600.0]",
                           "points_file = \"measured.csv\"\nsmoothing = \"tolerance\"\nsmoothing_tolerance_mm = 0.002");
   const auto row = run(chatterlab::testing::load_text(dir, text), dir.path() / "out");
   EXPECT_EQ(row.back(), Json(true));
