@@ -450,20 +450,22 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
   const std::size_t n = sep.profile.size();
   const std::vector<double> angle = angles_deg_of(n);
   std::vector<std::pair<std::string, std::function<void()>>> figures;
-  // Every profile figure says what it cannot show.
-  const std::string lost_note =
-      d.degraded() ? fmt::format(" - DEGRADED: {} harmonics lost ({:.1f} % of the probe power)",
+  // Every profile figure says what it cannot show: "DEGRADED" in the title, what is lost in the
+  // key (the title has no room for it).
+  const std::string lost_note = d.degraded() ? " - DEGRADED" : "";
+  const std::string lost_detail =
+      d.degraded() ? fmt::format(", without its {} lost harmonics ({:.1f} % of the probe power)",
                                  d.lost.harmonics.size(), 100.0 * d.lost.lost_share)
                    : std::string();
 
   figures.emplace_back("profile_linear", [&] {
     pl::Curves f;
     f.title =
-        fmt::format("{}: separated profile, RONt = {:.4g} um (LS centre){}", title, sep.roundness(), lost_note);
+        fmt::format("{}: profile, RONt {:.4g} um (LS centre){}", title, sep.roundness(), lost_note);
     f.x_label = "angle [deg]";
     f.y_label = "radius deviation [um]";
     f.series.push_back(
-        {"profile r(theta) - mean, 1st harmonic removed", angle, sep.profile, "lines"});
+        {"profile r(theta) - mean, 1st harmonic removed" + lost_detail, angle, sep.profile, "lines"});
     f.reference_y = 0.0;
     f.reference_label = "least-squares circle";
     pl::render(f, dir, "profile_linear");
@@ -472,11 +474,11 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
     const double rng = std::max(sep.roundness(), 1e-12);
     const double base = 2.0 * rng;  // deviation drawn around a base circle of twice its P-V
     pl::Curves f;
-    f.title = fmt::format("{}: polar profile (base circle {:.3g} um + deviation){}", title, base, lost_note);
-    f.x_label = "x = (base + deviation) cos(theta) [um]";
+    f.title = fmt::format("{}: polar profile{}", title, lost_note);
+    f.x_label = fmt::format("x = (base circle {:.3g} + deviation) cos(theta) [um]", base);
     f.y_label = "y [um]";
     f.equal_aspect = true;  // a round part must look round
-    pl::Series profile{"separated profile", {}, {}, "lines"},
+    pl::Series profile{"separated profile" + lost_detail, {}, {}, "lines"},
         circle{"least-squares circle", {}, {}, "lines"};
     for (std::size_t i = 0; i <= n; ++i) {
       const double th = 2 * std::numbers::pi * static_cast<double>(i % n) / static_cast<double>(n);
@@ -499,7 +501,7 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
   });
   figures.emplace_back("transfer_g", [&] {
     pl::Curves f;
-    f.title = fmt::format("{}: weight function |G(l)| ({} lost harmonics)", title, sep.suppressed.size());
+    f.title = fmt::format("{}: |G(l)|, {} lost harmonics", title, sep.suppressed.size());
     f.x_label = "harmonic l [undulations per revolution]";
     f.y_label = "|G(l)|";
     pl::Series g{"|G(l)|", {}, {}, "impulses"},
@@ -540,8 +542,8 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
       lost.y.push_back(2.0 * top);
     }
     if (q.x.empty() && lost.x.empty()) return;
-    f.title = fmt::format("{}: amplitude transfer W(l) = 1/|G| and error transfer Q(l) (worst Q {}){}", title,
-                          std::isfinite(d.worst.q) ? fmt::format("{:.3g}", d.worst.q) : "infinite", lost_note);
+    f.title = fmt::format("{}: transfer W = 1/|G|, Q (worst Q {})", title,
+                          std::isfinite(d.worst.q) ? fmt::format("{:.3g}", d.worst.q) : "infinite");
     if (!q.x.empty()) f.series = {q, w};
     if (!lost.x.empty()) f.series.push_back(lost);
     pl::render(f, dir, "transfer_q");
@@ -549,11 +551,12 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
   figures.emplace_back("probe_spectrum", [&] {
     // What the probes measured per harmonic, and which of it the layout cannot separate.
     pl::Curves f;
-    f.title = fmt::format("{}: probe signal amplitude per harmonic{}", title, lost_note);
+    f.title = fmt::format("{}: probe amplitude per harmonic{}", title, lost_note);
     f.x_label = "harmonic l [undulations per revolution]";
     f.y_label = "mean probe amplitude [um]";
     pl::Series seen{"amplitude (mean over the probes)", {}, {}, "impulses"},
-        lost{"lost harmonic (not separable from spindle motion)", {}, {}, "points"};
+        lost{fmt::format("lost harmonic (not separable from spindle motion): {:.1f} % of the band's power",
+                         100.0 * d.lost.lost_share), {}, {}, "points"};
     for (std::size_t l = 2; l < d.lost.amplitude.size(); ++l) {
       seen.x.push_back(static_cast<double>(l));
       seen.y.push_back(d.lost.amplitude[l]);
