@@ -90,14 +90,18 @@ TolerancePlan plan_to_tolerance(const Generatrix& generatrix, const Kinematics& 
       break;
     }
     // Split the segments over the tolerance where the linearisation part still matters (a
-    // segment half as long has a quarter of it); the motor steps' part does not shrink.
+    // segment half as long has a quarter of it). The motor steps' part does not shrink with the
+    // length, but a new knot, placed where the axes round well, can cut it: segments over the
+    // tolerance by their motor steps are split once, in the first round (the first segment's
+    // remedy is to release its end, below).
     std::vector<double> refined{knots.front()};
     std::size_t splits = 0, worst = 0;
     bool too_short = false;
     for (std::size_t k = 0; k + 1 < knots.size(); ++k) {
       if (e.segment_max_abs_mm(k) > e.segment_max_abs_mm(worst)) worst = k;
       const double length = knots[k + 1] - knots[k];
-      if (e.segment_max_abs_mm(k) > tol && e.segment_linearisation_mm[k] > 0.1 * tol) {
+      const bool quantised = e.segment_linearisation_mm[k] <= 0.1 * tol;
+      if (e.segment_max_abs_mm(k) > tol && (!quantised || (round == 1 && k > 0))) {
         if (0.5 * length >= settings.min_segment_length_mm) {
           refined.push_back(0.5 * (knots[k] + knots[k + 1]));
           ++splits;

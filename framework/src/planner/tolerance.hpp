@@ -10,7 +10,8 @@
 //    L(x) = sqrt(share * tolerance / c(x)), clamped to [min_segment_length, segment_length], and
 //    the knots are placed with density 1/L(x) (equally spaced where nothing binds).
 // 2. Replay (MODELS.md P7) of the quantised, scheduled plan: every segment whose replayed error
-//    exceeds the tolerance is split in two while its linearisation part still matters, and the
+//    exceeds the tolerance is split in two while its linearisation part still matters (and once,
+//    in the first round, where its motor steps dominate: the new knot may round better), and the
 //    plan is scheduled and replayed again.
 // 3. The result is met, or not met with the achieved error and what limits it: the motor steps
 //    (the quantisation part alone exceeds the tolerance: no segmentation helps), the shortest

@@ -93,10 +93,9 @@ TEST(FeedPlanTolerance, ATolerancePastTheMotorStepsIsReportedWithItsLimit) {
   EXPECT_EQ(p.limited_by, "motor_step");
   EXPECT_GT(p.errors.total.max_abs_mm, 0.002);
   EXPECT_NE(p.limit_note.find("motor steps' own"), std::string::npos) << p.limit_note;
-  // Nothing to split (quantisation dominates every segment over it); at most the seed's first
-  // knot was released for one more round.
-  EXPECT_EQ(p.segments_split, 0u);
-  EXPECT_LE(p.rounds, 2);
+  // Quantisation dominates every segment over it: one round of splits (new knots may round
+  // better) and the seed's first knot released, then the limit.
+  EXPECT_LE(p.rounds, 3);
 }
 
 // Problem 2's study with the generatrix replaced by `expression`.
