@@ -98,6 +98,14 @@ class TabulatedProfile {
     const double d1 = (1 - t) * d1_[i] + t * d1_[i + 1];
     return (f - qy) / std::sqrt(1.0 + d1 * d1);
   }
+  // The same, with the profile continued along its end tangents beyond the part's ends: for the
+  // contact's own cut when the replayed contact lies a rounding step past an end.
+  double depth_continued(double qx, double qy) const {
+    if (qx >= a_ && qx <= b_) return depth(qx, qy);
+    const bool before = qx < a_;
+    const double x0 = before ? a_ : b_, f0 = before ? f_.front() : f_.back(), d0 = before ? d1_.front() : d1_.back();
+    return (f0 + d0 * (qx - x0) - qy) / std::sqrt(1.0 + d0 * d0);
+  }
   double max_curvature_per_mm() const { return max_curvature_; }  // max |f''| (bounds curvature)
 
  private:
@@ -222,9 +230,9 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
     const ToolInPart contact = kinematics.forward(position, schedule.contact_at(zeta));
-    // A contact a rounding step beyond the part's end still has its own cut (the depth there).
-    const double contact_x = std::clamp(contact.x_mm, generatrix.x_min_mm(), generatrix.x_max_mm());
-    const double own_cut = std::max(0.0, profile.depth(contact_x, contact.y_mm));
+    // A contact a rounding step beyond the part's end still has its own cut (the profile
+    // continued along its end tangent).
+    const double own_cut = std::max(0.0, profile.depth_continued(contact.x_mm, contact.y_mm));
     const Deepest d = probe.deepest(profile, frame, own_cut + tolerance_mm - probe.sampling_bound_mm());
     ++out.states_checked;
     const double excess = d.depth_mm - own_cut;
