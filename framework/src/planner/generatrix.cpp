@@ -92,8 +92,10 @@ std::string Singularity::describe(double resolution_mm) const {
       return fmt::format("the slope f' is not finite (a vertical tangent) at x = {:.6g}", x_mm);
     case Kind::jump: return fmt::format("f jumps by {:.4g} mm at x = {:.6g} (must be continuous)", size, x_mm);
     case Kind::kink:
-      return fmt::format("the slope f' jumps by {:.4g} at x = {:.6g} (a kink: the slope must be continuous)",
-                         size, x_mm);
+      return fmt::format("the slope f' jumps by {:.4g} at x = {:.6g} (a kink: the slope must be continuous; {})",
+                         size, x_mm,
+                         concave ? "a concave corner, where no wheel edge radius fits: limit 0 mm"
+                                 : "a convex corner, where the work would have to turn at once");
     case Kind::narrow_feature:
       return fmt::format(
           "a feature narrower than the resolution {} mm at x = {:.6g}: the tangent turns at {:.4g} "

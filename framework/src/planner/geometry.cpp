@@ -78,7 +78,9 @@ GeometryAnalysis analyse_expression(const Expression& e, double a, double b, dou
   for (int k = 0; k <= 4096; ++k) point(a + span * k / 4096.0);
 
   std::vector<Singularity> sites;
-  auto site = [&](Singularity::Kind kind, double x, double size) { sites.push_back({kind, x, size}); };
+  auto site = [&](Singularity::Kind kind, double x, double size, bool concave = false) {
+    sites.push_back({kind, x, size, concave});
+  };
   // A tiny interval that may switch or leave the domain: exact one-sided jets just outside it
   // (clamped to the range) tell a jump, a kink or a smooth junction apart.
   auto classify = [&](const Interval& x, bool switching) {
@@ -98,7 +100,7 @@ GeometryAnalysis analyse_expression(const Expression& e, double a, double b, dou
     if (std::abs(jump) > 1e-9 * std::max(1.0, std::abs(jl.v)))
       site(Singularity::Kind::jump, x.mid(), std::abs(jump));
     else if (std::abs(kink) > 1e-8 * std::max(1.0, std::abs(jl.d1)))
-      site(Singularity::Kind::kink, x.mid(), std::abs(kink));
+      site(Singularity::Kind::kink, x.mid(), std::abs(kink), kink > 0);
   };
 
   std::vector<Interval> stack;
@@ -167,6 +169,14 @@ GeometryAnalysis analyse_expression(const Expression& e, double a, double b, dou
   for (const Singularity& s : merge_sites(std::move(narrow), resolution_mm)) merged.push_back(s);
   std::sort(merged.begin(), merged.end(), [](const Singularity& p, const Singularity& q) { return p.x_mm < q.x_mm; });
   out.singularities = std::move(merged);
+  // A concave kink is a corner of infinite curvature: no edge radius fits there.
+  for (const Singularity& s : out.singularities)
+    if (s.kind == Singularity::Kind::kink && s.concave) {
+      out.max_concave_curvature_per_mm = out.max_concave_curvature_bound_per_mm =
+          std::numeric_limits<double>::infinity();
+      out.max_concave_curvature_at_x_mm = s.x_mm;
+      break;
+    }
   return out;
 }
 

@@ -99,6 +99,16 @@ TEST(GeometryAnalysis, KinksAreFoundWhereverTheyAre) {
     EXPECT_NEAR(found[0].x_mm, c, 1e-6) << c;
     EXPECT_NEAR(found[0].size, 2.0, 1e-6) << c;
   }
+  // 100 + |x - c| is a valley corner: concave, infinite curvature, edge-radius limit 0 there;
+  // 100 - |x - c| a ridge: convex.
+  const GeometryAnalysis valley = expression_generatrix("100 + abs(x - 300)", 0, 600)->analyse(0.01);
+  EXPECT_TRUE(valley.singularities.at(0).concave);
+  EXPECT_TRUE(std::isinf(valley.max_concave_curvature_per_mm));
+  EXPECT_NEAR(valley.max_concave_curvature_at_x_mm, 300.0, 1e-6);
+  EXPECT_NE(valley.singularities[0].describe(0.01).find("no wheel edge radius fits: limit 0 mm"), std::string::npos);
+  const GeometryAnalysis ridge = expression_generatrix("100 - abs(x - 300)", 0, 600)->analyse(0.01);
+  EXPECT_FALSE(ridge.singularities.at(0).concave);
+  EXPECT_EQ(ridge.max_concave_curvature_per_mm, 0.0);
   // A kink inside a ternary (two lines meeting), a slope jump of 0.75.
   const auto v = singularities("x < 200 ? 100 + 0.5*x : 200 - 0.25*(x - 200)", 0, 600);
   ASSERT_EQ(v.size(), 1u);

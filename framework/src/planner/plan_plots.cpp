@@ -146,8 +146,17 @@ void draw_plan_plots(const PlanRun& run, const Json& document, const std::filesy
     curvature.title = "curvature of the spline through the table and of the smoothing spline";
     curvature.x_label = "axial position x [mm]";
     curvature.y_label = "curvature f''/(1+f'^2)^1.5 [1/m] (+ concave)";
-    plot::Series raw{"interpolating spline (raw points)", {}, {}, "lines"};
-    plot::Series smooth{"smoothing spline (planned)", {}, {}, "lines"};
+    // The key carries what each curve costs when ground: the effect of the noise on time and
+    // reversals (the raw spline planned the same way, summary.json point_table).
+    const NoiseEffect& raw_plan = run.noise;
+    const std::string raw_cost =
+        raw_plan.planned ? fmt::format(": plan {:.0f} s, {} reversals, edge radius <= {:.4g} mm", raw_plan.total_time_s,
+                                       raw_plan.reversals, raw_plan.max_edge_radius_mm)
+                         : ": no plan (" + raw_plan.failure + ")";
+    plot::Series raw{"spline through the raw points" + raw_cost, {}, {}, "lines"};
+    plot::Series smooth{fmt::format("smoothing spline (planned): {:.0f} s, {} reversals, edge radius <= {:.4g} mm",
+                                    s.plan.total_time_s(), s.certificate.reversals, run.max_edge_radius_mm),
+                        {}, {}, "lines"};
     const double a = run.generatrix->x_min_mm(), b = run.generatrix->x_max_mm();
     const std::size_t samples = std::min<std::size_t>(4000, 8 * part.table_x_mm.size());
     for (std::size_t i = 0; i <= samples; ++i) {

@@ -28,6 +28,7 @@ struct Singularity {
   Kind kind = Kind::not_finite;
   double x_mm = 0.0;
   double size = 0.0;  // jump: |delta f| (mm); kink: |delta f'|; narrow feature: |theta'| (rad/mm)
+  bool concave = false;  // kink: the slope increases (a valley corner: no edge radius fits there)
   std::string describe(double resolution_mm) const;
 };
 
@@ -36,7 +37,8 @@ struct GeometryAnalysis {
   double resolution_mm = 0.0;
   std::vector<Singularity> singularities;  // sorted by x; empty: plannable at this resolution
   // Largest concave curvature kappa = f'' / (1 + f'^2)^1.5 > 0 (a valley: the edge radius may not
-  // exceed 1/kappa): the value attained at x, and a bound no point of the range exceeds.
+  // exceed 1/kappa): the value attained at x, and a bound no point of the range exceeds. A
+  // concave kink is infinite curvature: edge-radius limit 0 there.
   double max_concave_curvature_per_mm = 0.0;  // 0: convex (or straight) everywhere
   double max_concave_curvature_at_x_mm = 0.0;
   double max_concave_curvature_bound_per_mm = 0.0;
