@@ -137,6 +137,17 @@ Json validate_part(const Json& document, const SourceMap& sources) {
   if (has_points && part["smoothing"] == "tolerance" && !part["smoothing_tolerance_mm"].is_number())
     throw InputError(fmt::format("{}: part.smoothing = \"tolerance\" needs part.smoothing_tolerance_mm "
                                  "(the RMS residual, mm)", sources.locate("part.smoothing").str()));
+  // A smoothing key that would be ignored is a mistake worth saying (checked on the validated
+  // table, so that a validated document validates again unchanged).
+  if (part["smoothing_tolerance_mm"].is_number() && (!has_points || part["smoothing"] != "tolerance"))
+    throw InputError(fmt::format(
+        "{}: part.smoothing_tolerance_mm = {}: only used with points_file and smoothing = \"tolerance\" "
+        "(here {})", sources.locate("part.smoothing_tolerance_mm").str(), part["smoothing_tolerance_mm"].dump(),
+        has_points ? "smoothing = \"" + part["smoothing"].get<std::string>() + "\"" : "a generatrix expression"));
+  if (!has_points && part["smoothing"] != "cross_validated")
+    throw InputError(fmt::format("{}: part.smoothing = {}: smoothing applies to a points_file, not to a "
+                                 "generatrix expression", sources.locate("part.smoothing").str(),
+                                 part["smoothing"].dump()));
   const double resolution = part["geometry_resolution_mm"].get<double>();
   // The geometry analysis (docs/planner.md): jumps, kinks, values that are not finite and
   // features narrower than the resolution are refused with where they are.

@@ -113,6 +113,11 @@ TEST(FeedPlanTolerance, KinkAndNearStepPartsAreRefusedWithTheirPlace) {
   EXPECT_NE(m.find("the slope f' jumps by 2 at x = 300 (a kink"), std::string::npos) << m;
   m = chatterlab::testing::load_error(dir, study_of("100 + 5*tanh((x-300)/0.001)"));
   EXPECT_NE(m.find("a feature narrower than the resolution 0.01 mm at x = 299.99"), std::string::npos) << m;
+  // Smoothing keys where they would be ignored are refused.
+  m = chatterlab::testing::load_error(dir, replace(study_of("100 + x/100"), "x_range_mm = [0.0, 600.0]",
+                                                   "x_range_mm = [0.0, 600.0]\nsmoothing_tolerance_mm = 0.002"));
+  EXPECT_NE(m.find("part.smoothing_tolerance_mm = 0.002: only used with points_file and smoothing = \"tolerance\""),
+            std::string::npos) << m;
   // A coarser resolution refuses a gentler feature (radius of curvature 6.25 mm, turning
   // 0.16 rad/mm): the key is the user's.
   m = chatterlab::testing::load_error(
