@@ -36,6 +36,31 @@ std::unique_ptr<Kinematics> seed_machine() {
 
 FeedConstraints seed_constraints() { return p2_constraints(); }
 
+// A disc tool's deviation is the signed distance from the profile to its centre minus its
+// radius: centres placed a known distance along the exact normal of problem 1's parabola (and a
+// circle, where the distance to the centre of curvature is known in closed form) read back to
+// 1e-9 mm, where the first-order foot point at the centre's own x errs by millimetres.
+TEST(Generatrix, DiscToolDeviationIsTheDistanceToItsCentreMinusItsRadius) {
+  auto parabola = expression_generatrix(problem1, 0.0, 600.0);
+  for (const double x0 : {0.0, 150.0, 420.0, 600.0})
+    for (const double offset : {-0.01, 0.0, 0.003, 0.5}) {
+      const GeneratrixValue v = parabola->evaluate(x0);
+      const double norm = std::sqrt(1.0 + v.d1 * v.d1), distance = 200.0 + offset;
+      const ToolInPart disc{x0 - distance * v.d1 / norm, v.f + distance / norm, 200.0};
+      EXPECT_NEAR(tool_deviation_mm(disc, *parabola), offset, 1e-9) << "x0 = " << x0;
+      const GeneratrixValue at_centre = parabola->evaluate(disc.x_mm);
+      if (x0 == 420.0) {  // what the first-order foot point would say: millimetres off
+        EXPECT_GT(std::abs((disc.y_mm - at_centre.f) / std::sqrt(1.0 + at_centre.d1 * at_centre.d1) - 200.0 - offset), 1.0);
+      }
+    }
+  // A circle of radius 500 centred at (300, -400): a disc centred at the circle's centre + (0, 700)
+  // stands 700 - 500 - R off it.
+  auto circle = expression_generatrix("sqrt(500^2 - (x - 300)^2) - 400", 100.0, 500.0);
+  EXPECT_NEAR(tool_deviation_mm({300.0 + 700.0 * std::sin(0.3), -400.0 + 700.0 * std::cos(0.3), 150.0}, *circle),
+              50.0, 1e-9);
+  EXPECT_NEAR(tool_deviation_mm({300.0, 100.002, 0.0}, *circle), 0.002, 1e-12);  // a point tool
+}
+
 TEST(Generatrix, DerivativesMatchAnalyticOnes) {
   auto g = expression_generatrix(problem2, 0.0, 600.0);
   for (double x : {0.0, 54.04, 123.4, 368.2, 600.0}) {

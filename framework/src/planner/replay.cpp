@@ -30,10 +30,31 @@ struct Accumulator {
 }  // namespace
 
 double tool_deviation_mm(const ToolInPart& tool, const Generatrix& generatrix) {
-  // First-order foot point: exact for a straight profile; the curvature term is
-  // O(d^2 kappa) ~ 1e-12 mm for micrometre deviations on metre radii.
-  const GeneratrixValue v = generatrix.evaluate(tool.x_mm);
-  return (tool.y_mm - v.f) / std::sqrt(1.0 + v.d1 * v.d1) - tool.radius_mm;
+  GeneratrixValue v = generatrix.evaluate(tool.x_mm);
+  // A point tool (the nominal contact itself, P4): first-order foot point, exact for a straight
+  // profile; the curvature term is O(d^2 kappa) ~ 1e-12 mm for micrometre deviations d on metre
+  // radii of curvature.
+  if (tool.radius_mm == 0.0) return (tool.y_mm - v.f) / std::sqrt(1.0 + v.d1 * v.d1);
+  // A disc: its centre stands a whole radius R off the profile, where the first-order formula
+  // errs by about R^2 kappa / 2 (a 200 mm wheel on a 1300 mm radius of curvature: 15 mm). The
+  // foot point of the normal through the centre c solves g(x) = (x - c_x) + (f(x) - c_y) f'(x) = 0;
+  // Newton from the first-order foot, Gauss-Newton (g' = 1 + f'^2) where the centre lies near or
+  // beyond the centre of curvature and g' is not safely positive.
+  double x = tool.x_mm + (tool.y_mm - v.f) * v.d1 / (1.0 + v.d1 * v.d1);
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    v = generatrix.evaluate(x);
+    const double g = (x - tool.x_mm) + (v.f - tool.y_mm) * v.d1;
+    const double gauss_newton = 1.0 + v.d1 * v.d1;
+    const double newton = gauss_newton + (v.f - tool.y_mm) * v.d2;
+    const double step = g / (newton > 0.1 * gauss_newton ? newton : gauss_newton);
+    if (!std::isfinite(step)) break;
+    x -= step;
+    if (std::abs(step) <= 1e-14 * std::max(1.0, std::abs(x))) break;
+  }
+  v = generatrix.evaluate(x);
+  const double dx = tool.x_mm - x, dy = tool.y_mm - v.f;
+  // The side: the centre's offset along the profile normal (-f', 1) (positive: away from the axis).
+  return std::copysign(std::hypot(dx, dy), dy - v.d1 * dx) - tool.radius_mm;
 }
 
 ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatrix,
