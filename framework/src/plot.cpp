@@ -411,9 +411,9 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
     // "dashes": lines with a dash pattern (after the line style, which would reset it), for a
     // curve drawn over another that may hide it.
     const bool dashes = s.style == "dashes";
-    plots.push_back(fmt::format("'{}.dat' index {} using 1:2 with {} ls {}{} title {}", stem, i,
-                                dashes ? "lines" : s.style, i % 8 + 1, dashes ? " dt 2" : "",
-                                gp_string(s.label)));
+    plots.push_back(fmt::format("'{}.dat' index {} using 1:2{} with {} ls {}{} title {}", stem, i,
+                                s.right_axis ? " axes x1y2" : "", dashes ? "lines" : s.style,
+                                i % 8 + 1, dashes ? " dt 2" : "", gp_string(s.label)));
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
   const bool reference = figure.reference_y && !(figure.log_y && *figure.reference_y <= 0);
@@ -431,6 +431,21 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   }
 
   std::string gp = script_preamble(stem, "Curves", figure.title, figure.x_label, figure.y_label);
+  const bool right_axis = std::any_of(figure.series.begin(), figure.series.end(),
+                                      [](const Series& s) { return s.right_axis; });
+  if (right_axis) {
+    if (figure.equal_aspect || figure.log_y)
+      throw PlotError(fmt::format("plot '{}': a right-hand axis needs a linear, free y axis", stem));
+    // The right axis spans its own data with the same 5 % headroom as the left one.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Series& s : figure.series)
+      if (s.right_axis)
+        for (double v : s.y)
+          if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    const double pad = hi > lo ? 0.05 * (hi - lo) : (std::isfinite(lo) ? std::max(1.0, std::abs(lo)) * 0.05 : 1.0);
+    gp += fmt::format("set y2label {}\nset y2tics out nomirror\nset ytics nomirror\n", gp_string(figure.y2_label));
+    if (std::isfinite(lo)) gp += fmt::format("set y2range [{}:{}]\n", number(lo - pad), number(hi + pad));
+  }
   if (figure.log_x || figure.log_y) {
     // Ticks are chosen over the positive data (gnuplot drops the rest on a log axis).
     auto positive_range = [&](auto member) {

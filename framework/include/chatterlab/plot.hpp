@@ -20,10 +20,14 @@ struct Series {
   std::string label;
   std::vector<double> x, y;
   std::string style = "lines";  // lines, points, linespoints, impulses, steps, dashes (dashed lines)
+  bool right_axis = false;      // drawn against the right-hand y axis (Curves::y2_label)
 };
 
 struct Curves {
   std::string title, x_label, y_label;
+  // A second quantity on its own right-hand axis (e.g. a deviation in um beside a radius in mm):
+  // its label; the series with right_axis = true are drawn against it.
+  std::string y2_label;
   std::vector<Series> series;
   bool log_x = false, log_y = false;
   std::optional<double> reference_y;  // e.g. 0 = stability limit, drawn dashed

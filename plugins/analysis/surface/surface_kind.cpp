@@ -298,22 +298,34 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
     profile.y.push_back(rho * std::sin(th));
   }
   polar.series.push_back(std::move(profile));
-  // The least-squares circle last and dashed: it often lies almost on the minimum-zone circle,
-  // which would hide it.
-  for (const char* name : {"minimum_zone", "minimum_circumscribed", "maximum_inscribed",
-                           "least_squares"}) {
+  auto circle_points = [&](plot::Series& series, const Json& c, double offset_um) {
+    for (int k = 0; k <= 360; ++k) {
+      const double th = k * std::numbers::pi / 180.0;
+      const double rho = base + limacon(c, th) + offset_um - limacon(ls, th);
+      series.x.push_back(rho * std::cos(th));
+      series.y.push_back(rho * std::sin(th));
+    }
+  };
+  for (const char* name : {"minimum_circumscribed", "maximum_inscribed", "least_squares"}) {
     const Json& c = rd.at(name);
     const bool dashed = std::string_view(name) == "least_squares";
     plot::Series circle{fmt::format("{} (RONt {:.3g} um)", name, c.at("RONt_um").get<double>()),
                         {}, {}, dashed ? "dashes" : "lines"};
-    for (int k = 0; k <= 360; ++k) {
-      const double th = k * std::numbers::pi / 180.0;
-      const double rho = base + limacon(c, th) - limacon(ls, th);
-      circle.x.push_back(rho * std::cos(th));
-      circle.y.push_back(rho * std::sin(th));
-    }
+    circle_points(circle, c, 0.0);
     polar.series.push_back(std::move(circle));
   }
+  // The minimum zone is two concentric circles (its centre, radii R -+ RONt/2) holding the whole
+  // profile between them: one series (a NaN breaks the line between the two), drawn last and
+  // dashed because the circumscribed and inscribed circles often lie almost on them.
+  const Json& mz = rd.at("minimum_zone");
+  const double half = 0.5 * mz.at("RONt_um").get<double>();
+  plot::Series zone{fmt::format("minimum zone: two circles {:.3g} um apart (RONt)", 2 * half), {}, {},
+                    "dashes"};
+  circle_points(zone, mz, half);
+  zone.x.push_back(std::nan(""));
+  zone.y.push_back(std::nan(""));
+  circle_points(zone, mz, -half);
+  polar.series.push_back(std::move(zone));
   plot::render(polar, dir, stem);
 }
 
