@@ -409,7 +409,7 @@ PluginInfo SuppressionMap::info() {
                                    "the wheel may leave the work (false: bilateral, linear contact, "
                                    "the setting 5-37 describes)");
   one_sided.default_value = false;
-  ParamSpec tolerance = real_spec("relative_tolerance", "1", "integrator relative tolerance", 1e-4, 0.0, true);
+  ParamSpec tolerance = real_spec("relative_tolerance", "1", "relative tolerance of the adaptive ARKODE route only (the simulations run the fixed-step engine, which has none)", 1e-4, 0.0, true);
   tolerance.max = 1e-3;
   ParamSpec exponent = real_spec("thickness_exponent", "1",
                                  "eps of k = k0 (1 - eps/2 da/a) for kc and kg (5-29); eps = 2 (1 - beta) "
