@@ -50,7 +50,7 @@ ParamSpec param_spec_bool(std::string key, std::string description) {
 std::vector<ParamSpec> simulation_specs() {
   ParamSpec enabled = param_spec("enabled", ValueKind::boolean, "1", "run the simulation along the plan");
   enabled.default_value = true;
-  ParamSpec tolerance = with_default(positive("relative_tolerance", "1", "integrator relative tolerance"), 1e-4);
+  ParamSpec tolerance = with_default(positive("relative_tolerance", "1", "relative tolerance of the adaptive ARKODE route only (the along-plan simulation runs the fixed-step engine, which has none)"), 1e-4);
   tolerance.max = 1e-2;
   ParamSpec seed = param_spec("seed", ValueKind::integer, "1", "seed of the random initial surfaces");
   seed.default_value = 1;
