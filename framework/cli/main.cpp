@@ -137,6 +137,13 @@ int run(CLI::App& app, const Arguments& args) {
     std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
     if (summary.failed > 0)
       std::cout << "failed points: status column of results.csv, reasons in meta.json\n";
+    constexpr std::size_t shown = 5;
+    for (std::size_t i = 0; i < summary.notices.size() && i < shown; ++i)
+      std::cout << fmt::format("notice{}: {}\n",
+                               summary.points > 1 ? fmt::format(" (point {})", summary.notices[i].point) : "",
+                               summary.notices[i].text);
+    if (summary.notices.size() > shown)
+      std::cout << fmt::format("... {} more notices in meta.json\n", summary.notices.size() - shown);
   }
   return summary.exit_code();
 }

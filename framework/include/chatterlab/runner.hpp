@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "chatterlab/study.hpp"
 
@@ -21,6 +23,11 @@ struct RunSummary {
   std::size_t points = 0;
   std::size_t failed = 0;
   std::size_t resumed = 0;  // points taken over from an earlier run
+  struct Notice {
+    std::size_t point = 0;
+    std::string text;
+  };
+  std::vector<Notice> notices;  // the kind's `notice` column, non-empty cells (also meta.json)
   int exit_code() const { return failed == 0 ? 0 : 1; }
 };
 

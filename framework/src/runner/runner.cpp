@@ -292,8 +292,22 @@ Json failed_points(const Study& study, const ResultTable& table) {
   return failed;
 }
 
-// Rank 0 after all points: results.csv, plots, meta.json. Returns the number of failed points.
-std::size_t write_outputs(const StudyKind& kind, const MetaInputs& in, const Preparation& prep,
+// The kind's `notice` column (study_kind.hpp): what the user must read even when every point
+// completed, e.g. "no stable candidate".
+Json point_notices(const ResultTable& table) {
+  Json notices = Json::array();
+  const auto column = std::find(table.output_columns.begin(), table.output_columns.end(), "notice");
+  if (column == table.output_columns.end()) return notices;
+  const std::size_t c = table.grid_columns.size() + static_cast<std::size_t>(column - table.output_columns.begin());
+  for (std::size_t p = 0; p < table.rows.size(); ++p)
+    if (c < table.rows[p].size() && table.rows[p][c].is_string() && !table.rows[p][c].get<std::string>().empty())
+      notices.push_back({{"point", p}, {"notice", table.rows[p][c]}});
+  return notices;
+}
+
+// Rank 0 after all points: results.csv, plots, meta.json. Returns the failed-point count and
+// the points' notices.
+Json write_outputs(const StudyKind& kind, const MetaInputs& in, const Preparation& prep,
                           const std::vector<PointResult>& results, const ComputeStats& stats,
                           Clock::time_point start) {
   const fs::path& out = in.options.out_dir;
@@ -316,6 +330,8 @@ std::size_t write_outputs(const StudyKind& kind, const MetaInputs& in, const Pre
   meta["state"] = "complete";
   meta["points_failed"] = failed_count;
   meta["failed_points"] = std::move(failed);
+  Json notices = point_notices(table);
+  meta["notices"] = notices;
   Json run = run_description(in);
   run["journal_session"] = prep.session;
   run["points_resumed"] = prep.resumed.size();
@@ -335,7 +351,7 @@ std::size_t write_outputs(const StudyKind& kind, const MetaInputs& in, const Pre
   meta["timings"] = std::move(timings);
   meta["plot_errors"] = std::move(plot_errors);
   runner::write_file_atomically(out / "meta.json", runner::json_text(meta, 2) + "\n");
-  return failed_count;
+  return {{"failed", failed_count}, {"notices", std::move(notices)}};
 }
 
 }  // namespace
@@ -414,7 +430,9 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
           throw std::logic_error(fmt::format("runner: garbled results from rank {}", r));
         for (auto& [p, record] : records.records) results[p] = std::move(record);
       }
-      result["failed"] = write_outputs(*kind, meta_in, prep, results, stats, start);
+      const Json outputs = write_outputs(*kind, meta_in, prep, results, stats, start);
+      result["failed"] = outputs["failed"];
+      result["notices"] = outputs["notices"];
     } catch (const std::exception& e) {
       if (ranks == 1) throw;
       result["error"] = e.what();
@@ -429,6 +447,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   RunSummary summary;
   summary.points = n;
   summary.failed = result["failed"].get<std::size_t>();
+  for (const Json& n : result["notices"])
+    summary.notices.push_back({n["point"].get<std::size_t>(), n["notice"].get<std::string>()});
   summary.resumed = static_cast<std::size_t>(std::count(prep.done.begin(), prep.done.end(), '1'));
   return summary;
 }

@@ -285,16 +285,7 @@ std::unique_ptr<TimeDomainModel> PlungeRegenerative::time_domain() const {
   return std::make_unique<PlungeTimeDomain>(parameters_);
 }
 
-// TEMPORARY stand-in (lead's branch only): replaced by the models' owner's implementation.
-std::optional<StiffnessChain> PlungeRegenerative::stiffness_chain() const {
-  StiffnessChain c;
-  const double inf = std::numeric_limits<double>::infinity();
-  c.contact_stiffness_n_per_m = parameters_.contact_stiffness_n_per_m;
-  c.wheel_wear_stiffness_n_per_m = parameters_.wheel_regeneration ? parameters_.wheel_wear_stiffness_n_per_m : inf;
-  c.work_removal_stiffness_n_per_m = parameters_.work_regeneration ? parameters_.work_removal_stiffness_n_per_m : inf;
-  for (const auto& m : parameters_.modes) c.modes.push_back({m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
-  return c;
-}
+// G1 process conditions (process_conditions.hpp) for kinds that vary them (suppression_map).
 ProcessConditions PlungeRegenerative::nominal_conditions() const {
   ProcessConditions c;
   c.wheel_speed_rpm = parameters_.wheel_speed_rpm;

@@ -85,7 +85,6 @@ class PlungeRegenerative final : public Model, public ProcessConditionsModel {
   std::optional<StiffnessChain> stiffness_chain() const override;
   const PlungeRegenerativeParameters& parameters() const { return parameters_; }
   const ProcessConditionsModel* process_conditions() const override { return this; }
-  std::optional<StiffnessChain> stiffness_chain() const override;
   ProcessConditions nominal_conditions() const override;
   Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                      const ProcessScaling& scaling) const override;
