@@ -180,6 +180,13 @@ int run(CLI::App& app, const Arguments& args) {
           "chatterlab: error: output could not be written: {} (meta.json: state output_failed); "
           "make room and run again with --resume\n",
           summary.output_error);
+    constexpr std::size_t shown = 5;
+    for (std::size_t i = 0; i < summary.notices.size() && i < shown; ++i)
+      std::cout << fmt::format("notice{}: {}\n",
+                               summary.points > 1 ? fmt::format(" (point {})", summary.notices[i].point) : "",
+                               summary.notices[i].text);
+    if (summary.notices.size() > shown)
+      std::cout << fmt::format("... {} more notices in meta.json\n", summary.notices.size() - shown);
   }
   return summary.exit_code();
 }

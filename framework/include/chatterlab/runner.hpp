@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "chatterlab/study.hpp"
 
@@ -40,6 +41,11 @@ struct RunSummary {
   // 0 every point ok, 1 some points failed or timed out, 3 an output could not be written.
   // (2, bad input, is thrown as InputError before anything is written.)
   int exit_code() const { return !output_error.empty() ? 3 : failed == 0 ? 0 : 1; }
+  struct Notice {
+    std::size_t point = 0;
+    std::string text;
+  };
+  std::vector<Notice> notices;  // the kind's `notice` column, non-empty cells (also meta.json)
 };
 
 // Throws InputError before writing anything when the study or the output directory is unusable

@@ -214,7 +214,21 @@ struct ComputeStats {
 struct OutputsWritten {
   std::size_t failed = 0, timed_out = 0;
   std::string output_error;
+  Json notices = Json::array();  // [{point, notice}]
 };
+
+// The kind's `notice` column (study_kind.hpp): what the user must read even when every point
+// completed, e.g. "no stable candidate".
+Json point_notices(const ResultTable& table) {
+  Json notices = Json::array();
+  const auto column = std::find(table.output_columns.begin(), table.output_columns.end(), "notice");
+  if (column == table.output_columns.end()) return notices;
+  const std::size_t c = table.grid_columns.size() + static_cast<std::size_t>(column - table.output_columns.begin());
+  for (std::size_t p = 0; p < table.rows.size(); ++p)
+    if (c < table.rows[p].size() && table.rows[p][c].is_string() && !table.rows[p][c].get<std::string>().empty())
+      notices.push_back({{"point", p}, {"notice", table.rows[p][c]}});
+  return notices;
+}
 
 // Rank 0 after all points: results.csv, plots, meta.json. An output that cannot be written (disk
 // full, I/O error) is reported, not thrown: meta.json then says so (state output_failed), using
@@ -261,6 +275,8 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   if (!written.output_error.empty()) meta["output_error"] = written.output_error;
   meta["points_failed"] = written.failed;
   meta["points_timed_out"] = written.timed_out;
+  written.notices = point_notices(table);
+  meta["notices"] = written.notices;
   meta["failed_points"] = std::move(failed);
   Json run = runner::run_description(in);
   run["journal_session"] = prep.session;
@@ -477,6 +493,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         result["failed"] = written.failed;
         result["timed_out"] = written.timed_out;
         result["output_error"] = written.output_error;
+        result["notices"] = written.notices;
       }
     } catch (const std::exception& e) {
       if (ranks == 1) throw;
@@ -495,6 +512,9 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   summary.failed = result["failed"].get<std::size_t>();
   summary.timed_out = result["timed_out"].get<std::size_t>();
   summary.output_error = result["output_error"].get<std::string>();
+  if (result.contains("notices"))
+    for (const Json& n : result["notices"])
+      summary.notices.push_back({n["point"].get<std::size_t>(), n["notice"].get<std::string>()});
   summary.resumed = static_cast<std::size_t>(std::count(prep.done.begin(), prep.done.end(), '1'));
   return summary;
 }
