@@ -309,12 +309,14 @@ std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
   constexpr std::array<std::string_view, 3> reds{"#f4a582", "#d6604d", "#b2182b"};
   std::vector<std::string> stops;
   // Below the level: dark blue far from it, light blue at it; above: light red at it, dark red
-  // far from it. Two stops at the level itself make the jump.
-  const double below = lo < centre ? lo : centre - 1, above = hi > centre ? hi : centre + 1;
-  for (std::size_t k = 0; k < blues.size(); ++k)
-    stops.push_back(fmt::format("{} '{}'", number(below + (centre - below) * double(k) / 2.0), blues[k]));
-  for (std::size_t k = 0; k < reds.size(); ++k)
-    stops.push_back(fmt::format("{} '{}'", number(centre + (above - centre) * double(k) / 2.0), reds[k]));
+  // far from it. Two stops at the level itself make the jump. gnuplot stretches the stops' span
+  // over the colour bar's range, so only a side the range covers gets stops.
+  if (lo < centre)
+    for (std::size_t k = 0; k < blues.size(); ++k)
+      stops.push_back(fmt::format("{} '{}'", number(lo + (centre - lo) * double(k) / 2.0), blues[k]));
+  if (hi > centre)
+    for (std::size_t k = 0; k < reds.size(); ++k)
+      stops.push_back(fmt::format("{} '{}'", number(centre + (hi - centre) * double(k) / 2.0), reds[k]));
   return fmt::format("set palette defined ({})\nset cbrange [{}:{}]\n", fmt::join(stops, ", "),
                      number(lo), number(hi));
 }

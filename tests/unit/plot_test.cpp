@@ -146,8 +146,14 @@ TEST(Plot, HeatmapOnLogAxisAndWithoutCrossingSkipsContour) {
   expect_png(dir / "all_stable.png", 20000);
   EXPECT_EQ(read_all(dir / "all_stable.gp").find("set contour"), std::string::npos);
   EXPECT_EQ(read_all(dir / "all_stable.svg").find("stability boundary"), std::string::npos);
-  // ... and the picture says that every point is on one side.
+  // ... and the picture says that every point is on one side, in blues only: the palette's stops
+  // span just the colour bar's range (gnuplot stretches the stops over it).
   EXPECT_NE(read_all(dir / "all_stable.svg").find("every point &lt; 0: stable"), std::string::npos);
+  EXPECT_EQ(read_all(dir / "all_stable.gp").find("#f4a582"), std::string::npos);
+  for (double& z : map.z) z = std::abs(z) + 1.0;
+  render(map, dir, "all_chatter");
+  EXPECT_EQ(read_all(dir / "all_chatter.gp").find("#92c5de"), std::string::npos);
+  EXPECT_NE(read_all(dir / "all_chatter.svg").find("every point > 0: chatter"), std::string::npos);
 
   // A ratio map centred on 1 with a symmetric colour bar: 0.5 and 1.5 are as far from 1.
   Heatmap ratio;
