@@ -15,6 +15,7 @@
 #include "chatterlab/plot.hpp"
 #include "chatterlab/kit/model.hpp"
 #include "chatterlab/spectrum.hpp"
+#include "chatterlab/time_series_file.hpp"
 
 namespace chatterlab {
 
@@ -260,22 +261,25 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
                                   "wheel_speed_rpm", "work_speed_rpm", "wheel_surface_at_contact_m",
                                   "work_surface_at_contact_m", "in_contact"};
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
-  std::vector<std::vector<double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
-                                           r.speed_rpm[wheel], r.speed_rpm[work],
-                                           r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
-                                           r.in_contact};
+  std::vector<std::span<const double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
+                                               r.speed_rpm[wheel], r.speed_rpm[work],
+                                               r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
+                                               r.in_contact};
+  std::vector<double> measured;
   if (const double noise = sim.at("measurement_noise_m").get<double>(); noise > 0) {
     // A displacement sensor's reading: x plus white Gaussian noise (never fed back to the
     // dynamics). Monitors built for measured signals (C1-C3) need it: a noise-free simulated
     // signal has no stable "texture", and amplitude-normalised criteria flag any pure sine.
     std::mt19937_64 random(sim.at("seed").get<std::uint64_t>() + 0x5eed);
     std::normal_distribution<double> gauss(0.0, noise);
-    std::vector<double> measured = r.displacement_m;
+    measured = r.displacement_m;
     for (double& x : measured) x += gauss(random);
     header.emplace_back("measured_displacement_m");
-    columns.push_back(std::move(measured));
+    columns.push_back(measured);
   }
-  write_file_atomically(dir / "timeseries.csv", csv_text(header, columns));
+  const std::string timeseries_file =
+      write_time_series(dir, "timeseries", header, columns, parse_time_series_format(sim.at("timeseries_format").get<std::string>()),
+                        sim.at("timeseries_decimation").get<std::size_t>());
   Json snapshots = Json::array();
   for (std::size_t i = 0; i < r.snapshots.size(); ++i) {
     const SurfaceSnapshot& s = r.snapshots[i];
@@ -292,6 +296,9 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
   summary["model"] = document.at("model").at("type");
   summary["status"] = r.status;
   summary["end_time_s"] = r.end_time_s;
+  summary["timeseries"] = {{"file", timeseries_file}, {"columns", header},
+                           {"sample_rate_hz", sim.at("sample_rate_hz").get<double>() /
+                                                  sim.at("timeseries_decimation").get<double>()}};
   summary["fitted_growth_rate_per_s"] = a.fit ? Json(a.fit->growth_rate_per_s) : Json();
   if (a.fit)
     summary["fit"] = {{"window_s", {a.fit->start_s, a.fit->end_s}},
@@ -319,6 +326,7 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
                             {"contact_events", r.contact_events},
                             {"wheel_surface_samples_per_rev", r.surface_samples_per_rev[wheel]},
                             {"work_surface_samples_per_rev", r.surface_samples_per_rev[work]},
+                            {"method", r.method},
                             {"relative_tolerance", sim.at("relative_tolerance")}};
   write_json_file(dir / "summary.json", summary);
 
@@ -422,13 +430,31 @@ PluginInfo Simulate::info() {
                                    "times at which wheel and work surfaces are written (default: the end)");
   snapshots.optional = true;
   snapshots.min = 0.0;
-  ParamSpec tolerance = real_spec("relative_tolerance", "1", "integrator relative tolerance", 1e-6, 0.0, true);
+  ParamSpec tolerance = real_spec("relative_tolerance", "1",
+                                  "relative tolerance of the adaptive integrators (explicit_runge_kutta, adams)",
+                                  1e-6, 0.0, true);
   tolerance.max = 1e-3;
   ParamSpec integrator = param_spec("integrator", ValueKind::string, "",
-                                    "time integrator (docs/dynamics.md): explicit_runge_kutta "
-                                    "(ARKODE Dormand-Prince 5(4)) or adams (CVODE Adams)");
-  integrator.choices = {"explicit_runge_kutta", "adams"};
-  integrator.default_value = "explicit_runge_kutta";
+                                    "time integrator (docs/dynamics.md): fixed_step (fixed steps; exact "
+                                    "exponential propagation of linear models, Runge-Kutta otherwise), "
+                                    "explicit_runge_kutta (adaptive ARKODE Dormand-Prince 5(4), the reference) "
+                                    "or adams (CVODE Adams)");
+  integrator.choices = {"fixed_step", "explicit_runge_kutta", "adams"};
+  integrator.default_value = "fixed_step";
+  ParamSpec steps_per_wave = real_spec("fixed_steps_per_wave", "1",
+                                       "fixed_step: steps per wave at the model's highest frequency (0: the "
+                                       "default, 10 exponential (40 with one-sided contact) / 60 Runge-Kutta; with initial_waviness_m > 0 never more than 3/4 of the time "
+                                       "between surface samples)", 0.0, 0.0, false);
+  ParamSpec format = param_spec("timeseries_format", ValueKind::string, "",
+                                "time-series file: csv (timeseries.csv) or npy (timeseries.npy, a NumPy "
+                                "structured array with one float64 field per column: long runs)");
+  format.choices = {"csv", "npy"};
+  format.default_value = "csv";
+  ParamSpec decimation = param_spec("timeseries_decimation", ValueKind::integer, "1",
+                                    "write every k-th output sample to the time-series file (exact samples, "
+                                    "no filter; the fit and spectrum use every sample)");
+  decimation.default_value = 1;
+  decimation.min = 1;
   ParamSpec files = param_spec("write_point_files", ValueKind::boolean, "1",
                                "in a grid, also write each point's files into points/<i>/");
   files.default_value = false;
@@ -452,6 +478,9 @@ PluginInfo Simulate::info() {
       optional_real("fit_end_s", "s", "end of the envelope-fit window (default: the end)"),
       tolerance,
       integrator,
+      steps_per_wave,
+      format,
+      decimation,
       real_spec("min_frequency_hz", "Hz",
                 "spectral peaks below this are not the dominant (chatter) frequency: the infeed "
                 "transient and work-revolution waviness live there", 10.0, 0.0, false),
@@ -586,8 +615,8 @@ SimulationSettings Simulate::settings(const Json& document, const TimeDomainMode
   s.contact_arc_deg[static_cast<std::size_t>(Rotor::work)] = sim.at("work_contact_arc_deg").get<double>();
   for (const Json& t : sim.at("snapshot_times_s")) s.snapshot_times_s.push_back(t.get<double>());
   s.relative_tolerance = sim.at("relative_tolerance").get<double>();
-  s.integrator = sim.at("integrator").get<std::string>() == "adams" ? TimeIntegrator::adams
-                                                                    : TimeIntegrator::explicit_runge_kutta;
+  s.integrator = parse_time_integrator(sim.at("integrator").get<std::string>());
+  s.fixed_steps_per_wave = sim.at("fixed_steps_per_wave").get<double>();
   s.divergence_limit_m = sim.at("divergence_limit_m").get<double>();
   for (Rotor r : {Rotor::wheel, Rotor::work})
     if (!model.angle_state(r))
