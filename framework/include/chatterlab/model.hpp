@@ -8,6 +8,8 @@
 //   ClosedFormIndicators (closed_form.hpp)    closed-form criteria reported beside the roots
 //   ProcessConditionsModel (process_conditions.hpp)  parameters that follow the process conditions
 //   StiffnessChain (below)                    the G1 stiffness chain, for the closed forms
+//   LinearisedModel (linearised_model.hpp)    the linearisation derived from the physics written
+//                                             once (derived_model.hpp): roots, Floquet
 #include <limits>
 #include <memory>
 #include <optional>
@@ -20,6 +22,7 @@
 namespace chatterlab {
 
 class ClosedFormIndicators;
+class LinearisedModel;
 class ProcessConditionsModel;
 
 // A structural mode as the closed forms of MODELS.md G1/G3/S1 see it.
@@ -60,6 +63,8 @@ class Model {
   virtual const ProcessConditionsModel* process_conditions() const { return nullptr; }
   // The G1 stiffness chain, for models of the Snoeys family (plunge_regenerative, thompson, ...).
   virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
+  // The linearisation of a model written once (DerivedModel provides it).
+  virtual const LinearisedModel* linearised() const { return nullptr; }
 };
 
 }  // namespace chatterlab
