@@ -572,58 +572,132 @@ Curve curve(const CorrelationSums& sums, int d, const std::vector<double>& weigh
   return c;
 }
 
-struct DimensionFit {
+constexpr std::size_t slope_half_window = 4;  // local slopes over a factor 2 in r
+// Points where more than half of all pairs are within r are not used: there the finite extent of
+// the attractor bends every curve (the upper end of the scaling region is detected below it).
+constexpr double max_correlation_sum = 0.5;
+constexpr double min_scaling_slope = 0.05;
+// Embedding dimensions whose local slopes must agree for a scaling region: the saturation
+// dimension and the next two.
+constexpr int consistent_dimensions = 3;
+// A scale is noise-dominated where the local slope in the highest of them exceeds that in the
+// saturation dimension by this much (noise fills every added dimension).
+constexpr double noise_slope_excess = 0.5;
+// "good" needs a scaling region of a decade and an interval within +-5 % of the value.
+constexpr double good_decades = 1.0;
+constexpr double good_relative_half_width = 0.05;
+
+// Local slopes d ln C / d ln r of dimension d at the bin edges: NaN where a point of the slope
+// window has fewer than min_pairs pairs, C above max_correlation_sum, or where ln C is flat (a
+// gap between the points of a finite or lattice-like set, not scaling).
+struct DimensionSlopes {
   int dimension = 0;
-  bool found = false;
-  std::size_t begin = 0, end = 0;
-  double d2 = nan, stderr_ = nan;
   Curve curve;
   std::vector<double> slopes;
 };
-
-constexpr std::size_t slope_half_window = 4;  // local slopes over a factor 2 in r
-// Scaling holds at small r only: where more than 10 % of all pairs are within r, the finite
-// extent of the attractor bends ln C down.
-constexpr double max_correlation_sum = 0.1;
-constexpr double min_scaling_slope = 0.05;
-
-std::vector<bool> usable_points(const Curve& c, double min_pairs, double min_log_r) {
-  std::vector<bool> usable(c.log_r.size());
-  for (std::size_t k = 0; k < c.log_r.size(); ++k)
-    usable[k] = c.count[k] >= min_pairs && std::isfinite(c.log_c[k]) &&
-                c.log_c[k] <= std::log(max_correlation_sum) && c.log_r[k] >= min_log_r;
-  return usable;
-}
-
-DimensionFit fit_dimension(const CorrelationSums& sums, int d, double min_pairs,
-                           double min_log_r, double tolerance, double min_span) {
-  DimensionFit f;
+DimensionSlopes dimension_slopes(const CorrelationSums& sums, int d, double min_pairs) {
+  DimensionSlopes f;
   f.dimension = d;
   f.curve = curve(sums, d, std::vector<double>(CorrelationSums::blocks, 1.0));
-  const auto usable = usable_points(f.curve, min_pairs, min_log_r);
+  std::vector<bool> usable(f.curve.log_r.size());
+  for (std::size_t k = 0; k < usable.size(); ++k)
+    usable[k] = f.curve.count[k] >= min_pairs && std::isfinite(f.curve.log_c[k]) &&
+                f.curve.log_c[k] <= std::log(max_correlation_sum);
   f.slopes = nonlinear::local_slopes(f.curve.log_r, f.curve.log_c, usable, slope_half_window);
-  // A flat ln C (slope < 0.05) is a gap between the points of a finite or lattice-like set (an
-  // exactly periodic or quantised signal), not scaling.
-  for (double& s : f.slopes)
-    if (s < min_scaling_slope) s = nan;
+  for (double& v : f.slopes)
+    if (v < min_scaling_slope) v = nan;
+  return f;
+}
+
+// Binned maximum-likelihood dimension between the bin edges `begin` and `end` (Takens 1985,
+// Theiler 1988, with Judd's (1992) treatment of binned distances and a lower cut-off): pair
+// distances in [r_begin, r_end) distributed as r^D, bin probabilities
+// (r_{k+1}^D - r_k^D) / (r_end^D - r_begin^D); D maximises sum n_k ln p_k (golden section).
+double ml_dimension(const Curve& c, std::size_t begin, std::size_t end, double max_d) {
+  if (end <= begin + 1) return nan;
+  std::vector<double> n;
+  for (std::size_t k = begin; k + 1 <= end - 1; ++k) n.push_back(c.count[k + 1] - c.count[k]);
+  const double r0 = c.log_r[begin];
+  auto likelihood = [&](double d) {
+    // Work with u_k = exp(d (ln r_k - ln r_begin)) to stay in range.
+    const double top = std::expm1(d * (c.log_r[end - 1] - r0));
+    double l = 0;
+    for (std::size_t j = 0; j < n.size(); ++j) {
+      if (n[j] <= 0) continue;
+      const double a = std::exp(d * (c.log_r[begin + j] - r0));
+      const double b = std::exp(d * (c.log_r[begin + j + 1] - r0));
+      l += n[j] * std::log((b - a) / top);
+    }
+    return l;
+  };
+  double lo = 0.01, hi = max_d;
+  const double golden = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = hi - golden * (hi - lo), x2 = lo + golden * (hi - lo);
+  double f1 = likelihood(x1), f2 = likelihood(x2);
+  for (int it = 0; it < 80 && hi - lo > 1e-6; ++it) {
+    if (f1 < f2) {
+      lo = x1, x1 = x2, f1 = f2;
+      x2 = lo + golden * (hi - lo);
+      f2 = likelihood(x2);
+    } else {
+      hi = x2, x2 = x1, f2 = f1;
+      x1 = hi - golden * (hi - lo);
+      f1 = likelihood(x1);
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
+// A scaling region: local slopes of dimensions saturation .. saturation + 2 agree with each other
+// (within the saturation tolerance) and form a plateau (within the slope tolerance) spanning
+// at least min_span in ln r; the one reaching the largest r (small-scale artefacts lie below).
+// Indices are bins; [begin, end) are the curve points of the fit (the plateau's slope windows).
+struct ScalingRegion {
+  bool found = false;
+  int saturation = 0, top = 0;
+  std::size_t plateau_begin = 0, plateau_end = 0, begin = 0, end = 0;
+  std::vector<double> mean_slope;  // per bin, NaN where the dimensions disagree
+};
+ScalingRegion scaling_region(const std::vector<DimensionSlopes>& dims, int saturation,
+                             double dimension_tolerance, double slope_tolerance,
+                             double min_span) {
+  ScalingRegion out;
+  out.saturation = saturation;
+  out.top = std::min<int>(saturation + consistent_dimensions - 1, int(dims.size()));
+  const std::size_t bins = dims.front().slopes.size();
+  out.mean_slope.assign(bins, nan);
   std::vector<double> finite;
-  for (double s : f.slopes)
-    if (std::isfinite(s)) finite.push_back(s);
-  if (finite.empty()) return f;
+  for (std::size_t k = 0; k < bins; ++k) {
+    double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    bool all = true;
+    for (int d = saturation; d <= out.top; ++d) {
+      const double v = dims[std::size_t(d - 1)].slopes[k];
+      all = all && std::isfinite(v);
+      sum += v;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    if (!all) continue;
+    const double mean = sum / double(out.top - saturation + 1);
+    if (hi - lo <= dimension_tolerance * mean) {
+      out.mean_slope[k] = mean;
+      finite.push_back(mean);
+    }
+  }
+  if (finite.empty()) return out;
   std::nth_element(finite.begin(), finite.begin() + std::ptrdiff_t(finite.size() / 2),
                    finite.end());
   const double scale = std::max(1.0, finite[finite.size() / 2]);
+  const auto& log_r = dims.front().curve.log_r;
   const auto region =
-      nonlinear::find_plateau(f.curve.log_r, f.slopes, tolerance * scale, min_span);
-  if (!region.found) return f;
-  // The fit uses the curve points whose slope windows formed the plateau.
-  f.found = true;
-  f.begin = region.begin - slope_half_window;
-  f.end = region.end + slope_half_window;
-  const auto line = nonlinear::fit_line(f.curve.log_r, f.curve.log_c, f.begin, f.end);
-  f.d2 = line.slope;
-  f.stderr_ = line.slope_stderr;
-  return f;
+      nonlinear::find_plateau(log_r, out.mean_slope, slope_tolerance * scale, min_span, true);
+  if (!region.found) return out;
+  out.found = true;
+  out.plateau_begin = region.begin;
+  out.plateau_end = region.end;
+  out.begin = region.begin - slope_half_window;
+  out.end = region.end + slope_half_window;
+  return out;
 }
 
 }  // namespace
@@ -658,13 +732,14 @@ PluginInfo CorrelationDimension::info() {
                    "(statistical floor of the scaling region)",
                    2000, 1),
       numeric_spec("slope_tolerance", ValueKind::real, "1",
-                   "the scaling region is the longest range of r whose local slopes stay within "
-                   "this fraction of their median",
-                   0.05, 0, 1, true),
+                   "a scaling region is a range of r whose local slopes (mean of the consistent "
+                   "dimensions) stay within this fraction of their median",
+                   0.1, 0, 1, true),
       numeric_spec("saturation_tolerance", ValueKind::real, "1",
-                   "D2 has saturated when three successive embedding dimensions agree within "
-                   "this fraction",
-                   0.05, 0, 1, true),
+                   "D2 has saturated from the first embedding dimension whose local slopes agree "
+                   "with those of the next two within this fraction, scale by scale (the "
+                   "lacunarity of fractal sets moves them by a few per cent)",
+                   0.1, 0, 1, true),
       nonlinear::bootstrap_spec(),
       nonlinear::seed_spec(),
   };
@@ -677,7 +752,13 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
   const auto given_max = nonlinear::given_integer(params_, "max_dimension");
-  const int max_dimension = given_max ? int(*given_max) : std::max(8, 2 * embedding.dimension + 2);
+  // The sweep goes to max(8, 2 m + 2) dimensions, as far as the series holds minimum_vectors
+  // vectors (a short series with a long delay would otherwise have none).
+  int max_dimension = given_max ? int(*given_max) : std::max(8, 2 * embedding.dimension + 2);
+  if (!given_max)
+    while (max_dimension > 2 &&
+           x.size() < nonlinear::minimum_samples(max_dimension, embedding.delay))
+      --max_dimension;
   const std::string name = series.name.empty() ? std::string("series") : series.name;
   nonlinear::check_series(x, max_dimension, embedding.delay, name);
 
@@ -690,152 +771,247 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
                              std::size_t(params_.integer("max_reference_points")));
   const double min_pairs = double(params_.integer("min_pairs"));
   const double tolerance = params_.real("slope_tolerance");
+  const double dimension_tolerance = params_.real("saturation_tolerance");
   const double min_span = std::log(4.0);  // at least a factor 4 in r
 
-  // Noise level: at scales below it the highest-dimensional local slopes approach the embedding
-  // dimension (noise fills every direction). It is the largest r where the slope exceeds 3/4 of
-  // the top dimension; the scaling windows of every dimension start above twice that.
-  double noise_log_r = -std::numeric_limits<double>::infinity();
-  std::string noise_note = "no noise scale detected";
-  if (max_dimension >= 4) {
-    const auto top = fit_dimension(sums, max_dimension, min_pairs, noise_log_r, tolerance, min_span);
-    double top_usable = -std::numeric_limits<double>::infinity();
-    for (std::size_t k = 0; k < top.slopes.size(); ++k)
-      if (std::isfinite(top.slopes[k])) {
-        top_usable = std::max(top_usable, top.curve.log_r[k]);
-        if (top.slopes[k] > 0.75 * max_dimension)
-          noise_log_r = std::max(noise_log_r, top.curve.log_r[k]);
-      }
-    if (std::isfinite(noise_log_r)) {
-      if (noise_log_r + std::log(2.0) + min_span < top_usable) {
-        noise_note = fmt::format("noise level {:.3g}: scaling windows start above {:.3g}",
-                                 std::exp(noise_log_r), 2 * std::exp(noise_log_r));
-      } else {
-        noise_note = fmt::format("noise-like at every resolved scale (local slopes near the "
-                                 "embedding dimension up to r = {:.3g})",
-                                 std::exp(noise_log_r));
-      }
-    }
+  std::vector<DimensionSlopes> dims;
+  for (int d = 1; d <= max_dimension; ++d) dims.push_back(dimension_slopes(sums, d, min_pairs));
+  const auto& log_r = dims.front().curve.log_r;
+  const std::size_t bins = log_r.size();
+  auto decades = [&](std::size_t a, std::size_t b) { return (log_r[b] - log_r[a]) / std::log(10.0); };
+
+  // Saturation: the dimension from 2 on whose local slopes agree with those of the next two
+  // over the longest plateau of at least min_span (the first of equally long ones). A dimension
+  // below the embedding one may agree over a short range (Lorenz: d = 2 folds the attractor
+  // only at large scales); the longest plateau is where all agree.
+  std::vector<ScalingRegion> candidates;
+  double longest_span = 0;
+  for (int d = 2; d + consistent_dimensions - 1 <= max_dimension; ++d) {
+    candidates.push_back(scaling_region(dims, d, dimension_tolerance, tolerance, min_span));
+    const auto& c = candidates.back();
+    if (c.found)
+      longest_span = std::max(longest_span, log_r[c.plateau_end - 1] - log_r[c.plateau_begin]);
   }
-  const double min_log_r = std::isfinite(noise_log_r) &&
-                                   noise_note.rfind("noise level", 0) == 0
-                               ? noise_log_r + std::log(2.0)
-                               : -std::numeric_limits<double>::infinity();
-
-  std::vector<DimensionFit> fits;
-  for (int d = 1; d <= max_dimension; ++d)
-    fits.push_back(fit_dimension(sums, d, min_pairs, min_log_r, tolerance, min_span));
-
-  // Saturation: the first d >= 2 where D2(d), D2(d+1), D2(d+2) agree within the tolerance.
-  const double sat_tol = params_.real("saturation_tolerance");
-  int saturated = 0;
-  for (int d = 2; d + 2 <= max_dimension; ++d) {
-    const auto& a = fits[std::size_t(d - 1)];
-    const auto& b = fits[std::size_t(d)];
-    const auto& c = fits[std::size_t(d + 1)];
-    if (!(a.found && b.found && c.found)) continue;
-    const double hi = std::max({a.d2, b.d2, c.d2}), lo = std::min({a.d2, b.d2, c.d2});
-    if (hi - lo <= sat_tol * hi) {
-      saturated = d;
+  // The lowest dimension whose plateau is nearly (3/4) as long as the longest.
+  ScalingRegion region;
+  for (const auto& c : candidates)
+    if (c.found && log_r[c.plateau_end - 1] - log_r[c.plateau_begin] >= 0.75 * longest_span) {
+      region = c;
       break;
+    }
+  // Without one: the longest consistent stretch of any span, reported but not fitted.
+  ScalingRegion longest;
+  if (!region.found)
+    for (int d = 2; d + consistent_dimensions - 1 <= max_dimension; ++d) {
+      auto candidate = scaling_region(dims, d, dimension_tolerance, tolerance, 0.0);
+      // At least three bins (a tenth of a decade): a lone point is no range.
+      if (candidate.found && candidate.plateau_end - candidate.plateau_begin >= 3 &&
+          (!longest.found || candidate.plateau_end - candidate.plateau_begin >
+                                 longest.plateau_end - longest.plateau_begin))
+        longest = candidate;
+    }
+
+  // Noise scale: below the region, the largest r whose local slope in the highest swept
+  // dimension with data exceeds that of the saturation (or second) dimension by
+  // noise_slope_excess. Upper (curvature) scale: the first r above the region where the slopes
+  // leave it.
+  const int low_d = region.found ? region.saturation : longest.found ? longest.saturation : 2;
+  const std::size_t below = region.found    ? region.plateau_begin
+                            : longest.found ? longest.plateau_begin
+                                            : bins;
+  double noise_r = nan;
+  for (std::size_t k = 0; k < below && max_dimension > low_d; ++k) {
+    const double base = dims[std::size_t(low_d - 1)].slopes[k];
+    double highest = nan;
+    for (int d = max_dimension; d > low_d; --d)
+      if (std::isfinite(dims[std::size_t(d - 1)].slopes[k])) {
+        highest = dims[std::size_t(d - 1)].slopes[k];
+        break;
+      }
+    if (std::isfinite(base) && std::isfinite(highest) && highest - base > noise_slope_excess)
+      noise_r = std::exp(log_r[k]);
+  }
+  std::string noise_note = std::isfinite(noise_r)
+                               ? fmt::format("noise scale {:.3g} (local slopes grow with the "
+                                             "embedding dimension below it)",
+                                             noise_r)
+                               : "no noise scale detected";
+  if (!region.found && !longest.found) noise_note = "local slopes grow with the dimension at every scale";
+  // Plateau ranges in r and decades (the slope points; the fit adds half a window each side).
+  auto plateau_text = [&](const ScalingRegion& g) {
+    return fmt::format("r = {:.3g}..{:.3g} ({:.2f} decades)", std::exp(log_r[g.plateau_begin]),
+                       std::exp(log_r[g.plateau_end - 1]),
+                       decades(g.plateau_begin, g.plateau_end - 1));
+  };
+  // Another stretch of consistent slopes (at least a factor 2 in r) whose level differs from the
+  // region's by more than 15 %: the data show two scaling behaviours (e.g. the strands of a
+  // finite trajectory below the scale of a quasi-periodic torus), and D2 is not settled.
+  std::size_t other_begin = 0, other_end = 0;
+  double other_level = nan;
+  if (region.found) {
+    const double level = region.mean_slope[(region.plateau_begin + region.plateau_end) / 2];
+    for (std::size_t k = 0; k < bins;) {
+      if (!std::isfinite(region.mean_slope[k]) ||
+          (k >= region.plateau_begin && k < region.plateau_end)) {
+        ++k;
+        continue;
+      }
+      std::size_t e = k;
+      std::vector<double> run;
+      while (e < bins && std::isfinite(region.mean_slope[e]) &&
+             !(e >= region.plateau_begin && e < region.plateau_end))
+        run.push_back(region.mean_slope[e++]);
+      const double median = run[run.size() / 2];
+      // Above the region, slopes that still grow with the dimension beyond it are the bend at
+      // the attractor's extent, not a second scaling behaviour.
+      bool bend = false;
+      if (k >= region.plateau_end) {
+        const std::size_t mid = (k + e) / 2;
+        for (int d = max_dimension; d > region.saturation; --d)
+          if (std::isfinite(dims[std::size_t(d - 1)].slopes[mid])) {
+            bend = dims[std::size_t(d - 1)].slopes[mid] -
+                       dims[std::size_t(region.saturation - 1)].slopes[mid] >
+                   0.05 * median;
+            break;
+          }
+      }
+      if (!bend && log_r[e - 1] - log_r[k] >= std::log(2.0) &&
+          std::abs(median - level) > 0.15 * level &&
+          (!std::isfinite(other_level) || e - k > other_end - other_begin)) {
+        other_begin = k;
+        other_end = e;
+        other_level = median;
+      }
+      k = e;
     }
   }
 
   Json out;
-  Json by_dimension = Json::array();
-  for (const auto& f : fits) {
-    Json entry{{"dimension", f.dimension}, {"d2", f.found ? Json(f.d2) : Json()},
-               {"d2_stderr", f.found ? Json(f.stderr_) : Json()}};
-    entry["r_low"] = f.found ? Json(std::exp(f.curve.log_r[f.begin])) : Json();
-    entry["r_high"] = f.found ? Json(std::exp(f.curve.log_r[f.end - 1])) : Json();
-    std::vector<double> r, c, slope;
-    for (std::size_t k = 0; k < f.curve.log_r.size(); ++k)
-      if (std::isfinite(f.curve.log_c[k])) {
-        r.push_back(std::exp(f.curve.log_r[k]));
-        c.push_back(std::exp(f.curve.log_c[k]));
-        slope.push_back(f.slopes[k]);
-      }
-    entry["r"] = r;
-    entry["correlation_sum"] = c;
-    Json slopes_json = Json::array();
-    for (double s : slope) slopes_json.push_back(std::isfinite(s) ? Json(s) : Json());
-    entry["local_slope"] = slopes_json;
-    by_dimension.push_back(entry);
-  }
-
-  std::vector<int> used;
-  if (saturated > 0) used = {saturated, saturated + 1, saturated + 2};
-  double value = nan;
+  double value = nan, ml = nan;
   nonlinear::Interval ci{nan, nan};
+  double low = nan, high = nan;
   std::string quality = "failed", reason;
-  if (!used.empty()) {
-    // One scaling region for the saturated dimensions: the plateau of their mean local slope
-    // (per-dimension plateaus wander with the lacunarity wiggles of the slopes).
-    const std::size_t bins = CorrelationSums::bins;
-    std::vector<double> mean_slope(bins, nan);
-    for (std::size_t k = 0; k < bins; ++k) {
-      double sum = 0;
-      bool all = true;
-      for (int d : used) {
-        const double v = fits[std::size_t(d - 1)].slopes[k];
-        all = all && std::isfinite(v);
-        sum += v;
-      }
-      if (all) mean_slope[k] = sum / double(used.size());
-    }
-    const auto& log_r = fits[std::size_t(saturated - 1)].curve.log_r;
-    const double scale = std::max(1.0, fits[std::size_t(saturated - 1)].d2);
-    const auto common = nonlinear::find_plateau(log_r, mean_slope, tolerance * scale, min_span);
-    std::size_t begin = 0, end = 0;
-    bool joint = common.found;
-    if (joint) {
-      begin = common.begin - slope_half_window;
-      end = common.end + slope_half_window;
-    }
-    auto estimate_with = [&](const std::vector<double>& w) {
+  std::vector<double> per_dimension(std::size_t(max_dimension), nan);
+  if (region.found) {
+    const std::vector<double> ones(CorrelationSums::blocks, 1.0);
+    auto slope_over = [&](const std::vector<double>& w, int d, std::size_t b, std::size_t e) {
+      const Curve c = curve(sums, d, w);
+      for (std::size_t k = b; k < e; ++k)
+        if (!std::isfinite(c.log_c[k])) return nan;
+      return nonlinear::fit_line(c.log_r, c.log_c, b, e).slope;
+    };
+    auto mean_over = [&](const std::vector<double>& w, std::size_t b, std::size_t e) {
       double mean = 0;
-      for (int d : used) {
-        const auto& f = fits[std::size_t(d - 1)];
-        const std::size_t b = joint ? begin : f.begin, e = joint ? end : f.end;
-        const Curve c = curve(sums, d, w);
-        for (std::size_t k = b; k < e; ++k)
-          if (!std::isfinite(c.log_c[k])) return nan;
-        mean += nonlinear::fit_line(c.log_r, c.log_c, b, e).slope / double(used.size());
-      }
+      for (int d = region.saturation; d <= region.top; ++d)
+        mean += slope_over(w, d, b, e) / double(region.top - region.saturation + 1);
       return mean;
     };
-    value = estimate_with(std::vector<double>(CorrelationSums::blocks, 1.0));
-    // Bootstrap over blocks of reference points with the scaling region held fixed.
-    ci = nonlinear::block_bootstrap(CorrelationSums::blocks,
-                                    std::size_t(params_.integer("bootstrap_replicates")),
-                                    std::uint64_t(params_.integer("seed")), estimate_with);
-    const auto& f = fits[std::size_t(saturated - 1)];
-    if (!joint) {
-      begin = f.begin;
-      end = f.end;
+    value = mean_over(ones, region.begin, region.end);
+    ci = nonlinear::block_bootstrap(
+        CorrelationSums::blocks, std::size_t(params_.integer("bootstrap_replicates")),
+        std::uint64_t(params_.integer("seed")),
+        [&](const std::vector<double>& w) { return mean_over(w, region.begin, region.end); });
+    for (int d = 1; d <= max_dimension; ++d)
+      per_dimension[std::size_t(d - 1)] = slope_over(ones, d, region.begin, region.end);
+    // Maximum likelihood over the same scales, mean of the consistent dimensions.
+    ml = 0;
+    for (int d = region.saturation; d <= region.top; ++d)
+      ml += ml_dimension(dims[std::size_t(d - 1)].curve, region.begin, region.end,
+                         2.0 * max_dimension) /
+            double(region.top - region.saturation + 1);
+    // The interval spans what the data leave open: the bootstrap interval, each consistent
+    // dimension's slope, the lower and upper halves of the region, and the ML estimate.
+    const std::size_t mid = (region.begin + region.end) / 2;
+    std::vector<double> alternatives{ml, mean_over(ones, region.begin, mid + 1),
+                                     mean_over(ones, mid, region.end)};
+    for (int d = region.saturation; d <= region.top; ++d)
+      alternatives.push_back(per_dimension[std::size_t(d - 1)]);
+    if (std::isfinite(other_level)) alternatives.push_back(other_level);
+    low = ci.low, high = ci.high;
+    for (double v : alternatives)
+      if (std::isfinite(v)) {
+        low = std::isfinite(low) ? std::min(low, v) : v;
+        high = std::isfinite(high) ? std::max(high, v) : v;
+      }
+    const double span = decades(region.plateau_begin, region.plateau_end - 1);
+    const double half_width = 0.5 * (high - low) / value;
+    std::vector<std::string> doubts;
+    if (span < good_decades)
+      doubts.push_back(fmt::format("the scaling region spans only {:.2f} decades", span));
+    if (std::isfinite(other_level))
+      doubts.push_back(fmt::format(
+          "the slopes level off at {:.3g} over r = {:.3g}..{:.3g} as well (two scaling "
+          "behaviours; the interval spans both)",
+          other_level, std::exp(log_r[other_begin]), std::exp(log_r[other_end - 1])));
+    else if (!(half_width <= good_relative_half_width))
+      doubts.push_back(fmt::format("the interval is +-{:.1f} % wide", 100 * half_width));
+    quality = doubts.empty() ? "good" : "uncertain";
+    // What lies below and above the region.
+    std::string upper;
+    if (region.plateau_end < bins && std::isfinite(region.mean_slope[region.plateau_end - 1])) {
+      std::size_t k = region.plateau_end;
+      while (k < bins && !std::isfinite(dims[std::size_t(region.saturation - 1)].slopes[k])) ++k;
+      upper = k < bins ? fmt::format("; above r = {:.3g} the slopes leave the plateau "
+                                     "(curvature or finite extent of the attractor)",
+                                     std::exp(log_r[region.end - 1]))
+                       : "";
     }
-    const double decades = (log_r[end - 1] - log_r[begin]) / std::log(10.0);
-    quality = joint && decades >= 1.0 ? "good" : "uncertain";
     reason = fmt::format(
-        "D2 saturates from embedding dimension {} (mean of dimensions {}-{}); {} scaling region "
-        "{:.3g}..{:.3g} ({:.2f} decades); {}",
-        saturated, saturated, saturated + 2,
-        joint ? "common" : "no common plateau: per-dimension", std::exp(log_r[begin]),
-        std::exp(log_r[end - 1]), decades, noise_note);
-    out["scaling_region"] = {std::exp(log_r[begin]), std::exp(log_r[end - 1])};
+        "local slopes of dimensions {}-{} agree over {}: D2 = mean least-squares slope of ln C "
+        "over r = {:.3g}..{:.3g}, maximum-likelihood estimate {:.4g}; {}{}; interval: "
+        "bootstrap, dimensions, halves of the region and ML estimate",
+        region.saturation, region.top, plateau_text(region), std::exp(log_r[region.begin]),
+        std::exp(log_r[region.end - 1]), ml, noise_note, upper);
+    if (!doubts.empty()) reason += fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
+    out["scaling_region"] = {std::exp(log_r[region.begin]), std::exp(log_r[region.end - 1])};
+  } else if (longest.found) {
+    reason = fmt::format(
+        "no scaling region: the longest range where the local slopes of dimensions {}-{} agree "
+        "(about {:.3g}) is {}, shorter than the {:.2f} decades needed: not fitted; {}",
+        longest.saturation, longest.top,
+        longest.mean_slope[(longest.plateau_begin + longest.plateau_end) / 2],
+        plateau_text(longest), min_span / std::log(10.0), noise_note);
+    out["scaling_region"] = Json();
   } else {
-    reason = fmt::format("no saturation of D2 up to embedding dimension {} (noise-like, "
-                         "high-dimensional or too short a series); {}",
+    reason = fmt::format("no saturation: the local slopes grow with the embedding dimension at "
+                         "every resolved scale up to dimension {} (noise-like, high-dimensional "
+                         "or too short a series); {}",
                          max_dimension, noise_note);
+    out["scaling_region"] = Json();
   }
-  out["correlation_dimension"] = nonlinear::estimate(value, ci.low, ci.high, quality, reason);
-  out["saturation_dimension"] = saturated;
-  out["noise_level"] = std::isfinite(noise_log_r) ? Json(std::exp(noise_log_r)) : Json();
+  out["correlation_dimension"] = nonlinear::estimate(value, low, high, quality, reason);
+  out["correlation_dimension_ml"] = nonlinear::estimate(
+      ml, nan, nan, std::isfinite(ml) ? quality : "failed",
+      std::isfinite(ml) ? "binned maximum likelihood (Takens-Theiler-Judd) over the scaling region"
+                        : "no scaling region");
+  out["bootstrap_ci"] = {std::isfinite(ci.low) ? Json(ci.low) : Json(),
+                         std::isfinite(ci.high) ? Json(ci.high) : Json()};
+  out["saturation_dimension"] = region.found ? region.saturation : 0;
+  out["noise_level"] = std::isfinite(noise_r) ? Json(noise_r) : Json();
   out["delay_samples"] = embedding.delay;
   out["theiler_window_samples"] = embedding.theiler;
   out["embedding_source"] = embedding.source;
   out["reference_points"] = params_.integer("max_reference_points");
   if (all_pairs_within) out["all_pairs_within"] = *all_pairs_within;
+  Json by_dimension = Json::array();
+  for (const auto& f : dims) {
+    const double d2 = per_dimension[std::size_t(f.dimension - 1)];
+    Json entry{{"dimension", f.dimension}, {"d2", std::isfinite(d2) ? Json(d2) : Json()}};
+    entry["r_low"] = region.found ? Json(std::exp(log_r[region.begin])) : Json();
+    entry["r_high"] = region.found ? Json(std::exp(log_r[region.end - 1])) : Json();
+    std::vector<double> r, c;
+    Json slopes_json = Json::array();
+    for (std::size_t k = 0; k < f.curve.log_r.size(); ++k)
+      if (std::isfinite(f.curve.log_c[k])) {
+        r.push_back(std::exp(f.curve.log_r[k]));
+        c.push_back(std::exp(f.curve.log_c[k]));
+        slopes_json.push_back(std::isfinite(f.slopes[k]) ? Json(f.slopes[k]) : Json());
+      }
+    entry["r"] = r;
+    entry["correlation_sum"] = c;
+    entry["local_slope"] = slopes_json;
+    by_dimension.push_back(entry);
+  }
   out["by_dimension"] = by_dimension;
   return out;
 }

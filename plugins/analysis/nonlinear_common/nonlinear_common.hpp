@@ -153,14 +153,16 @@ std::vector<double> local_slopes(const std::vector<double>& x, const std::vector
 
 // The longest run [begin, end) of usable points whose local slopes stay within
 // `tolerance` (absolute) of the run's median slope, spanning at least `min_span` in x.
-// found = false when no run qualifies. Ties go to the run starting at smaller x.
+// found = false when no run qualifies. Ties go to the run starting at smaller x. With
+// `furthest`, the qualifying run that reaches the largest x instead (the longest of those):
+// a scaling region above small-scale artefacts (noise, the strands of a finite trajectory).
 struct Region {
   bool found = false;
   std::size_t begin = 0, end = 0;
   double median_slope = 0;
 };
 Region find_plateau(const std::vector<double>& x, const std::vector<double>& slopes,
-                    double tolerance, double min_span);
+                    double tolerance, double min_span, bool furthest = false);
 
 // ---------------------------------------------------------------- bootstrap
 // Percentile interval (2.5 %, 97.5 %) of statistic(weights) over `replicates` resamplings of
