@@ -334,6 +334,28 @@ double CorrelationSums::edge(std::size_t bin) {
   return std::ldexp(1.0 + double(bin % 8) / 8.0, int(bin / 8) - octaves);
 }
 
+std::vector<double> CorrelationSums::log_correlation(int d) const {
+  std::vector<double> out(bins, nan);
+  const std::size_t dims = std::size_t(max_dimension);
+  double total = 0;
+  for (double p : pairs) total += p;
+  std::vector<double> cumulative(bins, 0.0);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::uint64_t* h = counts.data() + (b * dims + std::size_t(d - 1)) * bins;
+    double running = 0;
+    for (std::size_t k = 0; k < bins; ++k) cumulative[k] += (running += double(h[k]));
+  }
+  for (std::size_t k = 0; k < bins; ++k)
+    if (edge(k) <= cut && cumulative[k] > 0) out[k] = std::log(cumulative[k] / total);
+  return out;
+}
+
+std::vector<double> CorrelationSums::log_radii() const {
+  std::vector<double> out(bins);
+  for (std::size_t k = 0; k < bins; ++k) out[k] = std::log(range * edge(k));
+  return out;
+}
+
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references) {
   CorrelationSums out = empty_sums(x, max_dimension);

@@ -199,9 +199,12 @@ Choice choose_all(const std::vector<double>& x, std::size_t max_lag, int bins, i
   const std::size_t provisional =
       nonlinear::space_time_theiler(plane, theiler_range(c.delay.delay)).window;
   c.dimension = choose_dimension(x, c.delay.delay, max_dimension, provisional, ratio, threshold);
+  // Neither criterion settled: the largest dimension examined (FNN stops where the series no
+  // longer holds minimum_vectors vectors, so a short series never gets an infeasible dimension).
+  const int examined = std::max(1, int(c.dimension.fnn_fraction.size()));
   c.chosen_dimension = c.dimension.fnn_dimension > 0   ? c.dimension.fnn_dimension
                        : c.dimension.cao_dimension > 0 ? c.dimension.cao_dimension
-                                                       : max_dimension;
+                                                       : std::min(max_dimension, examined);
   const Embedding chosen(x, c.chosen_dimension, c.delay.delay);
   c.theiler = nonlinear::space_time_theiler(chosen, theiler_range(c.delay.delay));
   return c;

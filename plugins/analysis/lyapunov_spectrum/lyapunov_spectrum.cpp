@@ -122,12 +122,29 @@ SpectrumEstimate lyapunov_spectrum(const std::vector<double>& x, int dimension, 
   return out;
 }
 
+namespace {
+// Exponents within this fraction of |lambda_1| of zero have no reliable sign (the zero exponent
+// of a flow); a genuine exponent reappears in one more embedding dimension within this fraction
+// of max(|lambda_1|, |lambda_i|) (local fits underestimate strongly negative exponents, which
+// therefore move more).
+constexpr double zero_band = 0.2;
+constexpr double dimension_tolerance = 0.2;
+// An exponent within this fraction of max(|lambda_i|, |lambda_1|) of the sum of two others (or
+// twice another) is a combination exponent: local linear fits of a map embedded in too many
+// dimensions produce 2 lambda_1, lambda_1 + lambda_2, ... (Sauer, Tempkin and Yorke 1998).
+constexpr double combination_tolerance = 0.03;
+// The spectrum's largest exponent and the divergence estimate of `lyapunov` agree when they are
+// within this fraction of each other (or the spectrum's value lies inside the other interval).
+constexpr double divergence_agreement = 0.25;
+}  // namespace
+
 PluginInfo LyapunovSpectrum::info() {
   PluginInfo info;
   info.name = "lyapunov_spectrum";
   info.description =
       "Lyapunov spectrum from local Jacobian least-squares fits with QR re-orthonormalisation; "
-      "spurious exponents rejected by time reversal";
+      "spurious exponents flagged by one more embedding dimension and by time reversal; "
+      "Kaplan-Yorke dimension and the sum of the exponents";
   info.models_md_ids = "N3";
   using nonlinear::numeric_spec;
   ParamSpec reversal = param_spec("time_reversal_check", ValueKind::boolean, "",
@@ -153,21 +170,52 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
   const auto embedding = resolve_embedding(params_, series, context);
   const std::size_t m = std::size_t(
       nonlinear::given_integer(params_, "evolution_steps").value_or(embedding.delay));
-  const std::size_t k = std::size_t(nonlinear::given_integer(params_, "neighbours")
-                                        .value_or(std::max(20, 4 * embedding.dimension)));
+  const auto neighbours_given = nonlinear::given_integer(params_, "neighbours");
+  auto neighbours_for = [&](int dimension) {
+    return std::size_t(neighbours_given.value_or(std::max(20, 4 * dimension)));
+  };
+  const std::size_t k = neighbours_for(embedding.dimension);
   const auto refs = std::size_t(params_.integer("max_reference_points"));
-  const auto forward = lyapunov_spectrum(series.values, embedding.dimension, embedding.delay,
-                                         embedding.theiler, m, k, refs);
+  const int dim = embedding.dimension;
+  const auto forward = lyapunov_spectrum(series.values, dim, embedding.delay, embedding.theiler,
+                                         m, k, refs);
+  // One more dimension: genuine exponents persist, spurious ones (from fitting the local maps in
+  // more dimensions than the attractor needs) move or appear (Parlitz 1992).
+  std::vector<double> higher;
+  if (series.values.size() >= nonlinear::minimum_samples(dim + 1, embedding.delay) + m + 20) {
+    try {
+      higher = lyapunov_spectrum(series.values, dim + 1, embedding.delay, embedding.theiler, m,
+                                 neighbours_for(dim + 1), refs)
+                   .exponents;
+    } catch (const PointFailure&) {
+      higher.clear();
+    }
+  }
   std::vector<double> reversed_exponents;
   if (params_.boolean("time_reversal_check")) {
     std::vector<double> reversed(series.values.rbegin(), series.values.rend());
-    reversed_exponents = lyapunov_spectrum(reversed, embedding.dimension, embedding.delay,
-                                           embedding.theiler, m, k, refs)
+    reversed_exponents = lyapunov_spectrum(reversed, dim, embedding.delay, embedding.theiler, m,
+                                           k, refs)
                              .exponents;
   }
   const double dt = series.sample_interval;
+  const std::string unit = series.sample_unit;
   const std::size_t dims = forward.exponents.size();
+  const double lambda1 = std::max(std::abs(forward.exponents[0]), 1e-12);
+  auto rate = [&](double v) {
+    return unit == "sample" ? fmt::format("{:.4g} per sample", v)
+                            : fmt::format("{:.4g} per {}", v / dt, unit);
+  };
+  // The divergence curves of `lyapunov` (when they show exponential divergence) bound the
+  // spectrum from above: no exponent can exceed the largest one.
+  double divergence_high = nan;
+  if (context.is_object() && context.contains("lyapunov") && context["lyapunov"].is_object() &&
+      context["lyapunov"].value("divergence", "") == "exponential") {
+    const Json& e = context["lyapunov"]["lyapunov_max_per_sample"];
+    if (e["ci_high"].is_number()) divergence_high = e["ci_high"].get<double>();
+  }
   Json exponents = Json::array();
+  std::vector<double> genuine;
   for (std::size_t i = 0; i < dims; ++i) {
     const auto ci = nonlinear::block_bootstrap(
         spectrum_blocks, std::size_t(params_.integer("bootstrap_replicates")),
@@ -184,45 +232,144 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
           return total[i];
         });
     const double lambda = forward.exponents[i];
-    std::string quality = "good", reason = "local Jacobian fits";
-    if (!reversed_exponents.empty()) {
-      // True exponents change sign under time reversal: lambda_i ~ -lambda^rev_{d+1-i}.
-      const double partner = -reversed_exponents[dims - 1 - i];
-      const double scale = std::max(std::abs(forward.exponents[0]), 1e-12);
-      // Spurious exponents keep their sign under reversal, so -lambda_rev has the opposite sign;
-      // exponents near zero (|.| < 10 % of lambda_1) have no reliable sign.
-      const double small = 0.1 * scale;
-      const bool confirmed = (lambda > 0) == (partner > 0) ||
-                             (std::abs(lambda) < small && std::abs(partner) < small);
-      quality = confirmed ? "good" : "uncertain";
-      reason = confirmed
-                   ? fmt::format("confirmed by the reversed series (-lambda_rev = {:.4g})", partner)
-                   : fmt::format("spurious: the reversed series gives -lambda_rev = {:.4g} (no "
-                                 "sign change under time reversal)",
-                                 partner);
+    const bool near_zero_here = std::abs(lambda) < zero_band * lambda1;
+    std::vector<std::string> failed, passed;
+    // Only clearly positive exponents are checked in one more dimension: local fits estimate the
+    // contracting directions of a flow poorly, and differently in every dimension, and the zero
+    // exponent of a flow has no reliable sign (time reversal checks those).
+    if (!higher.empty() && lambda >= zero_band * lambda1) {
+      double closest = higher.front();
+      for (double v : higher)
+        if (std::abs(v - lambda) < std::abs(closest - lambda)) closest = v;
+      const double tol = dimension_tolerance * std::max(lambda1, std::abs(lambda));
+      (std::abs(closest - lambda) <= tol ? passed : failed)
+          .push_back(fmt::format("in dimension {} the nearest exponent is {}", dim + 1,
+                                 rate(closest)));
     }
-    Json e = nonlinear::estimate(lambda, ci.low, ci.high, quality, reason);
-    e["value_per_" + series.sample_unit] = lambda / dt;
-    e["ci_low_per_" + series.sample_unit] = std::isfinite(ci.low) ? Json(ci.low / dt) : Json();
-    e["ci_high_per_" + series.sample_unit] = std::isfinite(ci.high) ? Json(ci.high / dt) : Json();
-    e["spurious"] = quality != "good";
+    if (!reversed_exponents.empty()) {
+      // True exponents change sign under time reversal: lambda_i ~ -lambda^rev_{d+1-i};
+      // spurious ones keep their sign.
+      const double partner = -reversed_exponents[dims - 1 - i];
+      const bool confirmed = (lambda > 0) == (partner > 0) ||
+                             (near_zero_here && std::abs(partner) < zero_band * lambda1);
+      (confirmed ? passed : failed)
+          .push_back(fmt::format("the reversed series gives -lambda_rev = {}", rate(partner)));
+    }
+    // Combinations of two other exponents, neither of them near zero (a flow's zero exponent
+    // would make every exponent a "combination").
+    for (std::size_t j = 0; j < dims && failed.empty(); ++j)
+      for (std::size_t l = j; l < dims; ++l) {
+        const double a = forward.exponents[j], b = forward.exponents[l];
+        if (j == i || l == i || std::abs(a) < zero_band * lambda1 ||
+            std::abs(b) < zero_band * lambda1)
+          continue;
+        if (std::abs(lambda - (a + b)) <=
+            combination_tolerance * std::max(std::abs(lambda), lambda1)) {
+          failed.push_back(fmt::format("it equals the sum of {} and {} (a combination exponent)",
+                                       rate(a), rate(b)));
+          break;
+        }
+      }
+    if (std::isfinite(divergence_high) && lambda > divergence_high + zero_band * lambda1)
+      failed.push_back(fmt::format("it exceeds the largest exponent of the divergence curves (at "
+                                   "most {})",
+                                   rate(divergence_high)));
+    const bool spurious = !failed.empty();
+    if (!spurious) genuine.push_back(lambda);
+    const std::string reason =
+        spurious ? fmt::format("spurious: {}", fmt::join(failed, "; "))
+                 : (passed.empty() ? std::string("local Jacobian fits")
+                                   : fmt::format("confirmed: {}", fmt::join(passed, "; ")));
+    Json e = nonlinear::estimate(lambda, ci.low, ci.high, spurious ? "uncertain" : "good", reason);
+    e["value_per_" + unit] = lambda / dt;
+    e["ci_low_per_" + unit] = std::isfinite(ci.low) ? Json(ci.low / dt) : Json();
+    e["ci_high_per_" + unit] = std::isfinite(ci.high) ? Json(ci.high / dt) : Json();
+    e["spurious"] = spurious;
     exponents.push_back(e);
   }
+
+  // Kaplan-Yorke dimension (defined here only with a positive genuine exponent: chaos) and the
+  // sum of the genuine exponents.
+  double sum = 0, partial = 0, kaplan_yorke = nan;
+  for (double v : genuine) sum += v;
+  if (!genuine.empty() && genuine.front() > zero_band * lambda1)
+    for (std::size_t j = 0; j < genuine.size(); ++j) {
+      if (partial + genuine[j] < 0) {
+        kaplan_yorke = double(j) + partial / std::abs(genuine[j]);
+        break;
+      }
+      partial += genuine[j];
+    }
+  const bool dissipative = !genuine.empty() && sum < 0;
+  // The spectrum's largest exponent: the first genuine one (else the first).
+  std::size_t head = 0;
+  while (head < dims && exponents[head]["spurious"].get<bool>()) ++head;
+  if (head == dims) head = 0;
+  std::vector<std::string> doubts;
+  if (genuine.empty())
+    doubts.push_back("every exponent is spurious");
+  else if (head > 0)
+    doubts.push_back(fmt::format("the {} largest exponents are spurious", head));
+  if (!dissipative)
+    doubts.push_back(fmt::format("the genuine exponents sum to {} (not negative: not the "
+                                 "spectrum of a dissipative attractor)",
+                                 rate(sum)));
+  // Cross-checks with the other methods' results in the study.
+  std::string checks;
+  if (const auto d2 = nonlinear::context_value(context, "correlation_dimension",
+                                               "correlation_dimension")) {
+    if (std::isfinite(kaplan_yorke)) {
+      // D2 <= D1 <= D_KY (Kaplan-Yorke conjecture): a D2 well above D_KY contradicts the
+      // spectrum.
+      const bool consistent = *d2 <= kaplan_yorke + 0.2;
+      checks += fmt::format("; Kaplan-Yorke dimension {:.3g} {} D2 = {:.3g}", kaplan_yorke,
+                            consistent ? "is consistent with (D2 <= D_KY)" : "is below", *d2);
+      if (!consistent)
+        doubts.push_back(fmt::format("D2 = {:.3g} exceeds the Kaplan-Yorke dimension {:.3g}", *d2,
+                                     kaplan_yorke));
+    }
+  }
+  if (context.is_object() && context.contains("lyapunov") && context["lyapunov"].is_object()) {
+    const Json& l = context["lyapunov"];
+    const std::string divergence = l.value("divergence", "");
+    const Json& e = l["lyapunov_max_per_sample"];
+    if (divergence == "exponential" && e["value"].is_number()) {
+      const double v = e["value"].get<double>();
+      const double mine = forward.exponents[head];
+      const bool inside = mine >= e["ci_low"].get<double>() && mine <= e["ci_high"].get<double>();
+      const bool agrees = inside || std::abs(mine - v) <= divergence_agreement * std::abs(v);
+      checks += fmt::format("; the divergence estimate is {}{}", rate(v),
+                            agrees ? " (agrees)" : "");
+      if (!agrees)
+        doubts.push_back(fmt::format("the divergence curves give {}", rate(v)));
+    } else if (divergence == "none" || divergence == "undetermined") {
+      doubts.push_back(divergence == "none"
+                           ? "the divergence curves show no exponential divergence"
+                           : "the divergence curves show no common exponential divergence");
+    }
+  }
+  const Json& first = exponents[head];
+  const std::string quality = doubts.empty() ? "good" : "uncertain";
+  std::string reason = fmt::format("largest genuine exponent of the local-Jacobian spectrum ({} "
+                                   "of {} exponents genuine; their sum {}){}",
+                                   genuine.size(), dims, rate(sum), checks);
+  if (!doubts.empty()) reason += fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
   Json out;
   out["exponents_per_sample"] = exponents;
   out["reversed_exponents_per_sample"] = reversed_exponents;
-  out["lyapunov_max_per_" + series.sample_unit] =
-      nonlinear::estimate(exponents[0]["value_per_" + series.sample_unit].get<double>(),
-                          exponents[0]["ci_low_per_" + series.sample_unit].is_number()
-                              ? exponents[0]["ci_low_per_" + series.sample_unit].get<double>()
-                              : nan,
-                          exponents[0]["ci_high_per_" + series.sample_unit].is_number()
-                              ? exponents[0]["ci_high_per_" + series.sample_unit].get<double>()
-                              : nan,
-                          exponents[0]["quality"], exponents[0]["reason"]);
-  double sum = 0;
-  for (double v : forward.exponents) sum += v;
-  out["sum_per_sample"] = sum;  // < 0 for a dissipative system
+  out["higher_dimension_exponents_per_sample"] = higher;
+  auto largest = [&](double f) {
+    return nonlinear::estimate(first["value"].get<double>() * f,
+                               first["ci_low"].is_number() ? first["ci_low"].get<double>() * f : nan,
+                               first["ci_high"].is_number() ? first["ci_high"].get<double>() * f : nan,
+                               quality, reason);
+  };
+  out["lyapunov_max_per_sample"] = largest(1.0);
+  if (unit != "sample") out["lyapunov_max_per_" + unit] = largest(1.0 / dt);
+  out["genuine_exponents"] = genuine.size();
+  out["sum_per_sample"] = sum;  // of the genuine exponents: < 0 for a dissipative system
+  out["dissipative"] = dissipative;
+  out["kaplan_yorke_dimension"] = std::isfinite(kaplan_yorke) ? Json(kaplan_yorke) : Json();
   out["evolution_steps"] = m;
   out["neighbours"] = k;
   out["delay_samples"] = embedding.delay;
@@ -235,24 +382,39 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
 void LyapunovSpectrum::plot(const Json& result, const SampledSeries& series,
                             const std::filesystem::path& out_dir) const {
   plot::Curves c;
-  c.title = fmt::format("{}: Lyapunov spectrum (forward and -reversed)",
+  c.title = fmt::format("{}: Lyapunov spectrum (forward, -reversed, one dimension more)",
                         series.name.empty() ? std::string("series") : series.name);
   c.x_label = "exponent index i";
   c.y_label = fmt::format("lambda_i [1/{}]", series.sample_unit);
-  plot::Series forward{"lambda_i", {}, {}, "linespoints"}, reversed{"-lambda_rev", {}, {}, "points"};
+  plot::Series forward{"lambda_i (dimension m)", {}, {}, "linespoints"},
+      spurious{"spurious", {}, {}, "points"},
+      reversed{"-lambda_rev (reversed series)", {}, {}, "points"},
+      higher{"lambda_i (dimension m + 1)", {}, {}, "points"};
   const auto& e = result["exponents_per_sample"];
   const auto rev = result["reversed_exponents_per_sample"].get<std::vector<double>>();
+  const auto up = result["higher_dimension_exponents_per_sample"].get<std::vector<double>>();
   const double dt = series.sample_interval;
   for (std::size_t i = 0; i < e.size(); ++i) {
+    const double v = e[i]["value"].get<double>() / dt;
     forward.x.push_back(double(i + 1));
-    forward.y.push_back(e[i]["value"].get<double>() / dt);
+    forward.y.push_back(v);
+    if (e[i]["spurious"].get<bool>()) {
+      spurious.x.push_back(double(i + 1));
+      spurious.y.push_back(v);
+    }
     if (!rev.empty()) {
       reversed.x.push_back(double(i + 1));
       reversed.y.push_back(-rev[e.size() - 1 - i] / dt);
     }
   }
+  for (std::size_t i = 0; i < up.size(); ++i) {
+    higher.x.push_back(double(i + 1));
+    higher.y.push_back(up[i] / dt);
+  }
   c.series.push_back(forward);
+  if (!spurious.x.empty()) c.series.push_back(spurious);
   if (!reversed.x.empty()) c.series.push_back(reversed);
+  if (!higher.x.empty()) c.series.push_back(higher);
   c.reference_y = 0.0;
   c.integer_x = true;
   plot::render(c, out_dir, "lyapunov_spectrum");

@@ -41,6 +41,13 @@ std::optional<double> context_value(const Json& context, const std::string& meth
 // ---------------------------------------------------------------- input checks
 // Vectors an analysis needs at least, beyond the embedding window (neighbour statistics).
 inline constexpr std::size_t minimum_vectors = 100;
+// Samples a series needs before any nonlinear analysis runs on it (a study rejects shorter ones
+// as bad input): FNN and Cao examine embedding dimensions up to 10 with minimum_vectors vectors
+// each, the D2 sweep goes to dimension 8 and needs 2000 pairs inside its scaling region, and
+// the divergence curves follow minimum_vectors references for at least 30 samples in three
+// dimensions. Below 300 samples these leave no statistics worth reporting; every automatic
+// choice (delay, dimensions, horizon) is bounded so that a series of this length runs.
+inline constexpr std::size_t minimum_series_samples = 300;
 // Samples needed to embed in `dimension` with `delay` and still have minimum_vectors vectors.
 std::size_t minimum_samples(int dimension, int delay);
 // Throws InputError when a sample is not finite (naming its index), the series is constant, or

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include "analysis/nonlinear_common/test_signals.hpp"
@@ -55,11 +56,27 @@ TEST_F(SignalAnalysisInput, IntegerColumnIsTheOneBasedIndex) {
   EXPECT_NE(m.find("t_s, displacement_m"), std::string::npos) << m;
 }
 
-TEST_F(SignalAnalysisInput, MissingSampleRateIsNamed) {
+TEST_F(SignalAnalysisInput, WithoutSampleRateEveryRateIsPerSample) {
+  // No sample rate and no WAV header: time is counted in samples, and the exponent's column (and
+  // every rate) says so: lyapunov_max_per_sample, not _per_s.
   write_signal(dir_, "s.csv", test_signals::henon(500));
-  const std::string m = load_error(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));
-  EXPECT_NE(m.find("missing key 'input.sample_rate_hz'"), std::string::npos) << m;
-  EXPECT_NE(m.find("not a WAV file"), std::string::npos) << m;
+  const Study s = testing::load_text(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));
+  const auto columns = SignalAnalysis().output_columns(s.document);
+  EXPECT_NE(std::find(columns.begin(), columns.end(), "lyapunov_max_per_sample"), columns.end());
+  EXPECT_EQ(std::find(columns.begin(), columns.end(), "lyapunov_max_per_s"), columns.end());
+  const SampledSeries series = SignalAnalysis::load_series(s.document.at("input"));
+  EXPECT_EQ(series.sample_unit, "sample");
+  EXPECT_EQ(series.sample_interval, 1.0);
+}
+
+TEST_F(SignalAnalysisInput, ShorterThanTheMinimumIsBadInput) {
+  // 150 samples: exit 2 before anything runs (the minimum is named), not a failed point.
+  write_signal(dir_, "s.csv", test_signals::henon(150));
+  const std::string m = load_error(
+      dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("150 samples are too short"), std::string::npos) << m;
+  EXPECT_NE(m.find("at least 300 samples"), std::string::npos) << m;
+  EXPECT_NE(m.find("study.toml:"), std::string::npos) << m;
 }
 
 TEST_F(SignalAnalysisInput, ConstantSignal) {
