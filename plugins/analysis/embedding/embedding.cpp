@@ -17,8 +17,8 @@ namespace {
 using nonlinear::Embedding;
 using nonlinear::NeighbourSearch;
 
-// Reference vectors used by FNN/Cao at most (evenly spread): enough for fractions of 0.1 %.
-constexpr std::size_t max_fnn_references = 20000;
+// Reference vectors used by FNN/Cao at most (evenly spread): fractions to 0.1 % (10 vectors).
+constexpr std::size_t max_fnn_references = 10000;
 
 std::vector<double> autocorrelation(const std::vector<double>& x, std::size_t max_lag) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());

@@ -159,7 +159,7 @@ PluginInfo LyapunovSpectrum::info() {
       numeric_spec("neighbours", ValueKind::integer, "1",
                    "nearest neighbours per local fit (absent: max(20, 4 x dimension))", Json(), 2),
       numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "local fits along the trajectory at most", 20000, 20),
+                   "local fits along the trajectory at most", 10000, 20),
       reversal, nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_reference_points", 300}};

@@ -320,10 +320,10 @@ Json SignalAnalysis::chaos_verdict(const Json& context) {
   } else if (divergence == "none") {
     verdict = "periodic or quasi-periodic";
     summary = "neighbouring trajectories do not separate exponentially";
-  } else if (any_rejected && (!saturating || divergence == "undetermined") &&
+  } else if (any_rejected && (!saturating || !positive_exponent) &&
              (dimension.value("noise_level", Json()).is_number() ||
               lyapunov.value("noise_dominated_radius", Json()).is_number() ||
-              lyapunov.value("noise_radius", Json()).is_number() || !saturating)) {
+              lyapunov.value("noise_radius", Json()).is_number())) {
     verdict = "noise-dominated";
     summary = "nonlinear structure that noise hides at the scales a dimension or exponent "
               "needs";

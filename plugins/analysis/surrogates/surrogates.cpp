@@ -206,7 +206,7 @@ PluginInfo Surrogates::info() {
       numeric_spec("neighbours", ValueKind::integer, "1",
                    "neighbours of the locally constant predictor", 5, 1),
       numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "predictions per series at most (evenly spread)", 4000, 20),
+                   "predictions per series at most (evenly spread)", 2000, 20),
       nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"surrogates", 4}, {"max_reference_points", 100}};
