@@ -65,12 +65,7 @@ const std::vector<std::pair<std::string, std::function<std::vector<double>()>>>&
       {"mackey_glass", [] { return ts::mackey_glass(samples); }},
       {"torus", [] { return ts::torus(samples); }},
       {"ar2", [] { return ts::ar2(samples, 5); }},
-      {"ar1_cubed",
-       [] {
-         auto x = ts::ar2(samples, 8, 0.95, 0.0);
-         for (double& v : x) v = v * v * v;
-         return x;
-       }},
+      {"ar1_tanh", [] { return ts::saturated(ts::ar2(samples, 8, 0.95, 0.0)); }},
       {"power_law_noise", [] { return ts::power_law_noise(samples, 1.5, 7); }},
       {"white_noise", [] { return ts::white_noise(samples, 3); }},
       {"henon_noise_5", [] { return ts::with_noise(ts::henon(samples), 0.05, 9); }},

@@ -451,22 +451,26 @@ template <std::size_t Radii>
 // `factors`. Returns whether a product approaches under/overflow.
 [[gnu::target_clones("avx2", "default")]] bool multiply_mean_squares(
     const ScanShape& s, std::size_t steps, const double* bins, const double* counts,
-    double* running, double* mean_square, double* product, double* factors) {
+    double* mean_square, double* product, double* factors) {
   bool extreme = false;
   for (std::size_t d = 0; d < s.dims; ++d) {
     const std::size_t m = std::size_t(s.min_dimension) + d;
-    std::fill_n(running, s.padded, 0.0);
     double n = 0;
     for (std::size_t ri = 0; ri < s.radii; ++ri) {
-      // Neighbours within radius r are those of bins 0..r: running sums over the radii.
-      const double* bin = bins + (ri * s.dims + d) * s.padded;
-      for (std::size_t t = 0; t < s.padded; ++t) running[t] += bin[t];
-      n += counts[ri * s.dims + d];
+      // Neighbours within radius r are those of bins 0..r: the m-dimensional sums
+      // sum_j |X_{i+k} - X_{j+k}|^2 of each bin added up over the radii. An empty bin leaves them
+      // as they are (few neighbours: most bins of a reference are empty).
+      const double added = counts[ri * s.dims + d];
+      if (added > 0) {
+        const double* bin = bins + (ri * s.dims + d) * s.padded;
+        if (n == 0) std::fill_n(mean_square, steps, 0.0);
+        for (std::size_t l = 0; l < m; ++l) {
+          const double* shifted = bin + l * s.history_step;
+          for (std::size_t k = 0; k < steps; ++k) mean_square[k] += shifted[k];
+        }
+        n += added;
+      }
       if (n == 0) continue;
-      // < |X_{i+k} - X_{j+k}|^2 >_j in m dimensions
-      std::copy_n(running, steps, mean_square);
-      for (std::size_t l = 1; l < m; ++l)
-        for (std::size_t k = 0; k < steps; ++k) mean_square[k] += running[k + l * s.history_step];
       const double inverse = 1.0 / n;
       double* __restrict p = product + (ri * s.dims + d) * steps;
       double* __restrict f = factors + (ri * s.dims + d) * steps;
@@ -616,7 +620,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     const std::size_t table = nr * dims * shape.padded;
     std::vector<NeighbourSums> group(reference_group);
     std::vector<double> bins(reference_group * table), bin_count(reference_group * nr * dims);
-    std::vector<double> running(shape.padded), mean_square(steps);
+    std::vector<double> mean_square(steps);
     std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
     for (NeighbourSums& sums : group) {
@@ -643,7 +647,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
         const std::size_t block = block_of(window.index[member_own[g]]);
         const bool extreme = multiply_mean_squares(
             shape, steps, bins.data() + g * table, bin_count.data() + g * nr * dims,
-            running.data(), mean_square.data(), product.data() + block * row_size,
+            mean_square.data(), product.data() + block * row_size,
             factors.data() + block * row_size);
         if (extreme || ++pending[block] == flush) log_products(block);
       }

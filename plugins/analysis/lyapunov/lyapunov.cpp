@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "analysis/embedding/embedding.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
@@ -326,67 +328,229 @@ PluginInfo LyapunovAnalysis::info() {
   return info;
 }
 
+namespace {
+
+// The scan's shape: dimensions m0..m_max, the curve points (every `stride` samples), and the
+// neighbourhood sizes with the index into radius_neighbours each came from.
+struct ScanPlan {
+  int m0 = 2, m_max = 2, delay = 1;
+  std::size_t theiler = 0, stride = 1, steps = 0, limit = 0;
+  std::vector<double> radii;
+  std::vector<std::size_t> radius_scale;  // empty for a given radius
+};
+
+ScanPlan plan_scan(const std::vector<double>& x, const EmbeddingParameters& embedding,
+                   std::optional<std::int64_t> given_steps, std::optional<double> given_radius,
+                   const std::string& name) {
+  ScanPlan p;
+  p.m0 = embedding.dimension;
+  p.delay = embedding.delay;
+  p.theiler = embedding.theiler;
+  const std::size_t samples = x.size();
+  // The dimensions the series can hold with a horizon of at least 30 samples: minimum_vectors
+  // vectors beyond the embedding window and four horizons.
+  auto room = [&](int m) {
+    const std::size_t window =
+        std::size_t(m - 1) * std::size_t(p.delay) + nonlinear::minimum_vectors;
+    return samples > window ? samples - window : 0;
+  };
+  p.m_max = p.m0 + scanned_dimensions - 1;
+  while (p.m_max > p.m0 && room(p.m_max) < 4 * 30) --p.m_max;
+  std::size_t horizon = given_steps ? std::size_t(*given_steps)
+                                    : std::min<std::size_t>(std::max(30, 100 * p.delay),
+                                                            room(p.m_max) / 4);
+  if (given_steps && horizon > room(p.m_max))
+    throw InputError(fmt::format(
+        "{}: max_steps = {}: {} samples leave only {} vectors beyond the embedding window of "
+        "dimension {} with delay {} samples; at most {} steps",
+        name, horizon, samples, room(p.m_max), p.m_max, p.delay, room(p.m_max)));
+  horizon = std::max<std::size_t>(horizon, 4);
+  if (!given_steps) horizon = saturation_horizon(x, p.m0, p.delay, p.theiler, horizon);
+  p.stride = curve_stride(p.delay, horizon, min_curve_points);
+  p.steps = horizon / p.stride + 1;
+  const std::size_t history =
+      (p.steps - 1) * p.stride + std::size_t(p.m_max - 1) * std::size_t(p.delay);
+  p.limit = samples - history;
+  if (given_radius) {
+    for (int q = -2; q <= 2; ++q) p.radii.push_back(*given_radius * std::ldexp(1.0, q));
+  } else {
+    const auto distances =
+        neighbour_distances(x, std::min(p.m0 + 1, p.m_max), p.delay, p.theiler, p.limit);
+    for (std::size_t q = 0; q < distances.size(); ++q)
+      if (std::isfinite(distances[q]) && distances[q] > 0 &&
+          (p.radii.empty() || distances[q] > p.radii.back() * 1.05)) {
+        p.radii.push_back(distances[q]);
+        p.radius_scale.push_back(q);
+      }
+  }
+  if (p.radii.empty())
+    throw PointFailure(fmt::format("{}: no neighbours outside the Theiler window ({} samples)",
+                                   name, p.theiler));
+  return p;
+}
+
+// Every curve of the scan, classified.
+struct CurveSet {
+  std::size_t dims = 0, sizes = 0;
+  std::vector<CurveResult> kantz;  // [r * dims + d]
+  std::vector<CurveResult> rosenstein;  // [d]
+  CurveResult& at(std::size_t r, std::size_t d) { return kantz[r * dims + d]; }
+  const CurveResult& at(std::size_t r, std::size_t d) const { return kantz[r * dims + d]; }
+  // The smallest size with a usable curve in dimension d (sizes if none).
+  std::size_t first_usable(std::size_t d) const {
+    for (std::size_t r = 0; r < sizes; ++r)
+      if (at(r, d).usable) return r;
+    return sizes;
+  }
+};
+
+// Parallel pairs, admissible and selected curves (the estimate_radii smallest admissible sizes of
+// each dimension), and the notes of the others.
+void classify(CurveSet& set) {
+  for (std::size_t d = 0; d < set.dims; ++d)
+    for (std::size_t r = 0; r + 1 < set.sizes; ++r) {
+      if (!set.at(r, d).usable || !set.at(r + 1, d).usable) continue;
+      const double kept = separation_kept(set.at(r, d), set.at(r + 1, d));
+      if (kept >= parallel_fraction)
+        set.at(r, d).parallel = set.at(r + 1, d).parallel = true;
+      else if (kept < parallel_fraction)
+        set.at(r, d).collapsed = true;
+    }
+  for (std::size_t d = 0; d < set.dims; ++d) {
+    std::size_t selected = 0;
+    for (std::size_t r = 0; r < set.sizes; ++r) {
+      CurveResult& c = set.at(r, d);
+      if (!c.usable || !c.fit.found) continue;
+      if (!c.fit.diverging) {
+        c.note = "rises by less than ln 2";
+      } else if (!c.parallel) {
+        c.note = c.collapsed ? "joins the curve of the next neighbourhood size (noise scale)"
+                             : "not parallel to the curve of a neighbouring size";
+      } else if (c.fit.end - c.fit.begin < 3) {
+        c.note = "linear region shorter than 3 points";
+      } else {
+        c.admissible = true;
+        c.selected = selected++ < estimate_radii;
+        if (!c.selected) c.note = "admissible; larger than the sizes the estimate uses";
+      }
+    }
+  }
+  // Rosenstein's nearest neighbours are closer than every Kantz size: they count unless a
+  // collapse (noise) lies between them and the admissible sizes.
+  for (std::size_t d = 0; d < set.dims; ++d) {
+    CurveResult& c = set.rosenstein[d];
+    if (!c.usable || !c.fit.found) continue;
+    const std::size_t first = set.first_usable(d);
+    bool floor_below = false;
+    for (std::size_t r = first; r < set.sizes && !set.at(r, d).admissible; ++r)
+      floor_below = floor_below || set.at(r, d).collapsed;
+    if (!c.fit.diverging)
+      c.note = "rises by less than ln 2";
+    else if (first == set.sizes || floor_below)
+      c.note = "nearest neighbours lie below the noise scale of the Kantz curves";
+    else
+      c.admissible = c.selected = true;
+  }
+}
+
+// Slopes and the envelope of the bootstrap intervals of the selected curves.
+struct Envelope {
+  std::vector<double> slopes;
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  double min_references = std::numeric_limits<double>::infinity();
+  void add(const CurveResult& c) {
+    slopes.push_back(c.fit.slope);
+    low = std::min(low, std::isfinite(c.ci.low) ? c.ci.low : c.fit.slope);
+    high = std::max(high, std::isfinite(c.ci.high) ? c.ci.high : c.fit.slope);
+    min_references = std::min(min_references, c.references);
+  }
+};
+
+// An estimate per sample with its reason, written for either unit (per sample, or per unit of
+// the series) so that no reason mixes units.
+struct Estimate {
+  double value = nan, low = nan, high = nan;
+  std::string quality = "failed";
+  std::function<std::string(bool)> reason;
+  Json json(bool in_unit, double dt) const {
+    const double f = in_unit ? 1.0 / dt : 1.0;
+    return nonlinear::estimate(value * f, low * f, high * f, quality,
+                               reason ? reason(in_unit) : std::string());
+  }
+};
+
+Estimate not_determined(std::string why) {
+  Estimate e;
+  e.reason = [why = std::move(why)](bool) { return why; };
+  return e;
+}
+
+}  // namespace
+
 Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
   const std::string name = series.name.empty() ? std::string("series") : series.name;
-  const int m0 = embedding.dimension, tau = embedding.delay;
-  const std::size_t samples = x.size();
-  // The divergence horizon in samples and the dimensions the series can hold with it: at least
-  // minimum_vectors vectors beyond the embedding window and the horizon.
-  const auto given_steps = nonlinear::given_integer(params_, "max_steps");
-  int m_max = m0 + scanned_dimensions - 1;
-  auto room = [&](int m) {  // samples left for references after the embedding window
-    const std::size_t window = std::size_t(m - 1) * std::size_t(tau) + nonlinear::minimum_vectors;
-    return samples > window ? samples - window : 0;
-  };
-  while (m_max > m0 && room(m_max) < 4 * 30) --m_max;
-  std::size_t horizon = given_steps ? std::size_t(*given_steps)
-                                    : std::min<std::size_t>(std::max(30, 100 * tau),
-                                                            room(m_max) / 4);
-  if (given_steps && horizon > room(m_max))
-    throw InputError(fmt::format(
-        "{}: max_steps = {}: {} samples leave only {} vectors beyond the embedding window of "
-        "dimension {} with delay {} samples; at most {} steps",
-        name, horizon, samples, room(m_max), m_max, tau, room(m_max)));
-  horizon = std::max<std::size_t>(horizon, 4);
-  if (!given_steps) horizon = saturation_horizon(x, m0, tau, embedding.theiler, horizon);
-  const std::size_t stride = curve_stride(tau, horizon, min_curve_points);
-  const std::size_t steps = horizon / stride + 1;
+  const ScanPlan plan = plan_scan(x, embedding, nonlinear::given_integer(params_, "max_steps"),
+                                  nonlinear::given_real(params_, "radius"), name);
   const auto references = std::size_t(params_.integer("max_reference_points"));
   const auto replicates = std::size_t(params_.integer("bootstrap_replicates"));
   const auto seed = std::uint64_t(params_.integer("seed"));
   const double dt = series.sample_interval;
   const std::string unit = series.sample_unit;
 
-  // Neighbourhood sizes, then Kantz's curves for all of them and the dimensions at once.
-  const std::size_t history = (steps - 1) * stride + std::size_t(m_max - 1) * std::size_t(tau);
-  const std::size_t limit = samples - history;
-  std::vector<double> radii;
-  std::vector<std::size_t> radius_scale;  // index into radius_neighbours of each radius
-  if (const auto given = nonlinear::given_real(params_, "radius")) {
-    for (int q = -2; q <= 2; ++q) radii.push_back(*given * std::ldexp(1.0, q));
-  } else {
-    const auto distances =
-        neighbour_distances(x, std::min(m0 + 1, m_max), tau, embedding.theiler, limit);
-    for (std::size_t q = 0; q < distances.size(); ++q)
-      if (std::isfinite(distances[q]) && distances[q] > 0 &&
-          (radii.empty() || distances[q] > radii.back() * 1.05)) {
-        radii.push_back(distances[q]);
-        radius_scale.push_back(q);
+  // Kantz's curves for every size and dimension at once, Rosenstein's per dimension.
+  const auto scan = kantz_scan(x, plan.m0, plan.m_max, plan.delay, plan.theiler, plan.steps,
+                               references, plan.radii, plan.stride);
+  const double min_references =
+      std::max(usable_references, usable_reference_share * double(scan.references));
+  CurveSet set;
+  set.dims = std::size_t(plan.m_max - plan.m0 + 1);
+  set.sizes = plan.radii.size();
+  for (std::size_t r = 0; r < set.sizes; ++r)
+    for (int m = plan.m0; m <= plan.m_max; ++m) {
+      CurveResult c;
+      c.method = "Kantz";
+      c.dimension = m;
+      c.radius = plan.radii[r];
+      c.data = scan.block_curve(r, m);
+      fit_curve(c, plan.stride, replicates, seed + set.kantz.size(), min_references);
+      set.kantz.push_back(std::move(c));
+    }
+  for (int m = plan.m0; m <= plan.m_max; ++m) {
+    CurveResult c;
+    c.method = "Rosenstein";
+    c.dimension = m;
+    c.data = rosenstein_curve(x, m, plan.delay, plan.theiler, plan.steps, plan.stride,
+                              std::min(references, rosenstein_references));
+    fit_curve(c, plan.stride, replicates, seed + 1000 + std::size_t(m),
+              std::min(min_references, usable_reference_share * double(rosenstein_references)));
+    set.rosenstein.push_back(std::move(c));
+  }
+  classify(set);
+
+  // Noise: a floor (the smallest sizes of a dimension collapse below an admissible one), or a
+  // noise-dominated scale among those used (local dimensions in m0 and m_max).
+  bool noise_floor = false;
+  double noise_radius = nan;
+  for (std::size_t d = 0; d < set.dims; ++d) {
+    std::size_t first_admissible = set.sizes;
+    for (std::size_t r = 0; r < set.sizes && first_admissible == set.sizes; ++r)
+      if (set.at(r, d).admissible) first_admissible = r;
+    for (std::size_t r = 0; r < first_admissible && first_admissible < set.sizes; ++r)
+      if (set.at(r, d).collapsed) {
+        noise_floor = true;
+        noise_radius = std::isfinite(noise_radius) ? std::max(noise_radius, plan.radii[r])
+                                                   : plan.radii[r];
       }
   }
-  if (radii.empty())
-    throw PointFailure(fmt::format("{}: no neighbours outside the Theiler window ({} samples)",
-                                   name, embedding.theiler));
-  const auto scan =
-      kantz_scan(x, m0, m_max, tau, embedding.theiler, steps, references, radii, stride);
-  // Local dimensions at the scan's scales in the lowest and highest dimension: noise fills every
-  // added dimension (the local dimension grows with m), a deterministic attractor does not.
-  const auto low_dims = local_dimensions(neighbour_distances(x, m0, tau, embedding.theiler, limit));
+  const auto low_dims =
+      local_dimensions(neighbour_distances(x, plan.m0, plan.delay, plan.theiler, plan.limit));
   const auto high_dims =
-      m_max > m0 ? local_dimensions(neighbour_distances(x, m_max, tau, embedding.theiler, limit))
-                 : low_dims;
+      plan.m_max > plan.m0
+          ? local_dimensions(neighbour_distances(x, plan.m_max, plan.delay, plan.theiler,
+                                                 plan.limit))
+          : low_dims;
   // Scale q is noise-dominated when its local dimension grows with the embedding dimension or
   // exceeds that of every larger scale by more than noise_dimension_excess.
   auto noisy_scale = [&](std::size_t q) {
@@ -398,47 +562,24 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
     return growth > noise_dimension_excess ||
            (std::isfinite(larger) && low_dims[q] - larger > noise_dimension_excess);
   };
-  const double min_references =
-      std::max(usable_references, usable_reference_share * double(scan.references));
-
-  std::vector<CurveResult> kantz;  // [r * dims + d]
-  const std::size_t dims = std::size_t(m_max - m0 + 1);
-  for (std::size_t r = 0; r < radii.size(); ++r)
-    for (int m = m0; m <= m_max; ++m) {
-      CurveResult c;
-      c.method = "Kantz";
-      c.dimension = m;
-      c.radius = radii[r];
-      c.data = scan.block_curve(r, m);
-      fit_curve(c, stride, replicates, seed + kantz.size(), min_references);
-      kantz.push_back(std::move(c));
+  bool noise_scale = false;
+  double noise_scale_radius = nan, noise_scale_dimension = nan;
+  for (std::size_t r = 0; r < plan.radius_scale.size() && !noise_scale; ++r) {
+    bool used = false;
+    for (std::size_t d = 0; d < set.dims; ++d) used = used || set.at(r, d).selected;
+    if (used && noisy_scale(plan.radius_scale[r])) {
+      noise_scale = true;
+      noise_scale_radius = plan.radii[r];
+      noise_scale_dimension = low_dims[plan.radius_scale[r]];
     }
-  auto at = [&](std::size_t r, std::size_t d) -> CurveResult& { return kantz[r * dims + d]; };
-  for (std::size_t d = 0; d < dims; ++d)
-    for (std::size_t r = 0; r + 1 < radii.size(); ++r) {
-      if (!at(r, d).usable || !at(r + 1, d).usable) continue;
-      const double kept = separation_kept(at(r, d), at(r + 1, d));
-      if (kept >= parallel_fraction)
-        at(r, d).parallel = at(r + 1, d).parallel = true;
-      else if (kept < parallel_fraction)
-        at(r, d).collapsed = true;
-    }
-  std::vector<CurveResult> rosenstein;
-  for (int m = m0; m <= m_max; ++m) {
-    CurveResult c;
-    c.method = "Rosenstein";
-    c.dimension = m;
-    c.data = rosenstein_curve(x, m, tau, embedding.theiler, steps, stride,
-                              std::min(references, rosenstein_references));
-    fit_curve(c, stride, replicates, seed + 1000 + std::size_t(m),
-              std::min(min_references, usable_reference_share * double(rosenstein_references)));
-    rosenstein.push_back(std::move(c));
   }
 
-  // What the curves show. "none": every usable curve rises by less than ln 2 (no exponential
-  // separation); "exponential": parallel curves with a common slope; else undetermined.
+  auto rate = [&](double per_sample, bool in_unit) {
+    return in_unit ? fmt::format("{:.4g} per {}", per_sample / dt, unit)
+                   : fmt::format("{:.4g} per sample", per_sample);
+  };
   std::size_t usable = 0, diverging = 0;
-  for (const auto& c : kantz) {
+  for (const auto& c : set.kantz) {
     usable += c.usable;
     diverging += c.usable && c.fit.found && c.fit.diverging;
   }
@@ -446,215 +587,94 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
   // less than ln 2 over the whole horizon (larger neighbourhoods may wobble: a too small
   // dimension folds the attractor, and the curvature of a torus moves their mean distance).
   bool flat = usable > 0;
-  for (std::size_t d = 0; d < dims; ++d)
-    for (std::size_t r = 0; r < radii.size(); ++r)
-      if (at(r, d).usable) {
-        flat = flat && at(r, d).fit.found && !at(r, d).fit.diverging;
-        break;
-      }
-  std::vector<double> slopes;  // of the selected curves
-  std::vector<int> admissible_dims;
-  std::size_t admissible_radii_mask = 0;
-  for (std::size_t d = 0; d < dims; ++d) {
-    std::size_t selected = 0;
-    for (std::size_t r = 0; r < radii.size(); ++r) {
-      CurveResult& c = at(r, d);
-      if (!c.usable || !c.fit.found) continue;
-      if (!c.fit.diverging) {
-        c.note = "rises by less than ln 2";
-      } else if (!c.parallel) {
-        c.note = c.collapsed ? "joins the curve of the next neighbourhood size (noise scale)"
-                             : "not parallel to the curve of a neighbouring size";
-      } else if (c.fit.end - c.fit.begin < 3) {
-        c.note = "linear region shorter than 3 points";
-      } else {
-        c.admissible = true;
-        if (selected++ < estimate_radii) {
-          c.selected = true;
-          slopes.push_back(c.fit.slope);
-          if (std::find(admissible_dims.begin(), admissible_dims.end(), c.dimension) ==
-              admissible_dims.end())
-            admissible_dims.push_back(c.dimension);
-          admissible_radii_mask |= std::size_t(1) << r;
-        } else {
-          c.note = "admissible; larger than the sizes the estimate uses";
-        }
-      }
-    }
+  for (std::size_t d = 0; d < set.dims; ++d) {
+    const std::size_t r = set.first_usable(d);
+    if (r < set.sizes) flat = flat && set.at(r, d).fit.found && !set.at(r, d).fit.diverging;
   }
-  // A noise floor: in some dimension the curves of the smallest sizes join those of the next
-  // size, while a larger size shows parallel divergence (neighbours closer than the noise
-  // separate at once).
-  bool noise_floor = false;
-  double noise_radius = nan;
-  // Local dimensions at the selected scales.
-  bool noise_scale = false;
-  double noise_scale_radius = nan, noise_scale_dimension = nan;
-  for (std::size_t r = 0; r < radius_scale.size(); ++r) {
-    bool used = false;
-    for (std::size_t d = 0; d < dims; ++d) used = used || at(r, d).selected;
-    if (used && noisy_scale(radius_scale[r]) && !noise_scale) {
-      noise_scale = true;
-      noise_scale_radius = radii[r];
-      noise_scale_dimension = low_dims[radius_scale[r]];
-    }
-  }
-  for (std::size_t d = 0; d < dims; ++d) {
-    std::size_t first_admissible = radii.size();
-    for (std::size_t r = 0; r < radii.size(); ++r)
-      if (at(r, d).admissible) {
-        first_admissible = r;
-        break;
+  Envelope kantz, rosenstein;
+  std::vector<int> dims_used;
+  std::size_t sizes_used_mask = 0;
+  for (std::size_t r = 0; r < set.sizes; ++r)
+    for (std::size_t d = 0; d < set.dims; ++d)
+      if (set.at(r, d).selected) {
+        kantz.add(set.at(r, d));
+        if (std::find(dims_used.begin(), dims_used.end(), set.at(r, d).dimension) ==
+            dims_used.end())
+          dims_used.push_back(set.at(r, d).dimension);
+        sizes_used_mask |= std::size_t(1) << r;
       }
-    for (std::size_t r = 0; r < first_admissible && first_admissible < radii.size(); ++r)
-      if (at(r, d).collapsed) {
-        noise_floor = true;
-        noise_radius = std::isfinite(noise_radius) ? std::max(noise_radius, radii[r]) : radii[r];
-      }
-  }
-  for (std::size_t d = 0; d < dims; ++d) {
-    CurveResult& c = rosenstein[d];
-    if (!c.usable || !c.fit.found) continue;
-    std::size_t first = radii.size();
-    for (std::size_t r = 0; r < radii.size(); ++r)
-      if (at(r, d).usable) {
-        first = r;
-        break;
-      }
-    bool floor_below = false;
-    for (std::size_t r = first; r < radii.size() && !at(r, d).admissible; ++r)
-      floor_below = floor_below || at(r, d).collapsed;
-    if (!c.fit.diverging)
-      c.note = "rises by less than ln 2";
-    else if (first == radii.size() || floor_below)
-      c.note = "nearest neighbours lie below the noise scale of the Kantz curves";
-    else
-      c.admissible = c.selected = true;
-  }
+  for (const auto& c : set.rosenstein)
+    if (c.selected) rosenstein.add(c);
+  const int sizes_used = std::popcount(sizes_used_mask);
+  const double horizon_samples = double(plan.steps - 1) * double(plan.stride);
 
-  auto per_unit = [&](double v) { return v / dt; };
-  auto rate = [&](double per_sample, bool in_unit) {
-    return in_unit ? fmt::format("{:.4g} per {}", per_unit(per_sample), unit)
-                   : fmt::format("{:.4g} per sample", per_sample);
-  };
-  int admissible_radius_count = 0;
-  for (std::size_t r = 0; r < radii.size(); ++r)
-    admissible_radius_count += (admissible_radii_mask >> r) & 1;
-
-  // The headline and the per-method estimates, each as (value, low, high, quality, reason) per
-  // sample; the reasons are built twice, once per unit, so that no reason mixes units.
-  struct Estimate {
-    double value = nan, low = nan, high = nan;
-    std::string quality = "failed";
-    std::function<std::string(bool)> reason;
-  };
   Estimate head, kantz_estimate, rosenstein_estimate;
   std::string divergence = "undetermined";
-  std::vector<double> rosenstein_slopes;
-  for (const auto& c : rosenstein)
-    if (c.admissible) rosenstein_slopes.push_back(c.fit.slope);
-  const double steps_samples = double(stride);
-  auto region_text = [&](const CurveResult& c) {
-    return fmt::format("samples {:.0f}-{:.0f}", double(c.fit.begin) * steps_samples,
-                       double(c.fit.end - 1) * steps_samples);
-  };
   if (usable == 0) {
-    const std::string why = fmt::format(
+    head = not_determined(fmt::format(
         "not determined: too few neighbours (fewer than {:.0f} of {} reference points have a "
         "neighbour within the largest radius {:.3g})",
-        min_references, scan.references, radii.back());
-    head.reason = [why](bool) { return why; };
+        min_references, scan.references, plan.radii.back()));
     kantz_estimate = rosenstein_estimate = head;
   } else if (flat) {
-    // No exponential separation anywhere: the largest exponent is not positive.
     divergence = "none";
-    std::vector<double> trends;
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    for (const auto& c : kantz)
-      if (c.usable && c.fit.found && !c.fit.diverging) {
-        trends.push_back(c.fit.slope);
-        low = std::min(low, std::isfinite(c.ci.low) ? c.ci.low : c.fit.slope);
-        high = std::max(high, std::isfinite(c.ci.high) ? c.ci.high : c.fit.slope);
-      }
-    head.value = median_of(trends);
-    head.low = std::min(low, 0.0);
-    head.high = std::max(high, 0.0);
+    Envelope trends, rosenstein_trends;
+    for (const auto& c : set.kantz)
+      if (c.usable && c.fit.found && !c.fit.diverging) trends.add(c);
+    for (const auto& c : set.rosenstein)
+      if (c.usable && c.fit.found && !c.fit.diverging) rosenstein_trends.add(c);
+    head.value = median_of(trends.slopes);
+    head.low = std::min(trends.low, 0.0);
+    head.high = std::max(trends.high, 0.0);
     head.quality = "good";
-    const std::size_t n_trends = trends.size();
+    const std::size_t count = trends.slopes.size();
+    const double value = head.value;
     head.reason = [=, &rate](bool in_unit) {
       return fmt::format(
           "no exponential divergence: the curves of the smallest neighbourhoods rise by less "
           "than ln 2 over {:.0f} samples (periodic or quasi-periodic motion: largest exponent "
           "0); mean trend of {} flat curves {}",
-          double(steps - 1) * steps_samples, n_trends, rate(head.value, in_unit));
+          horizon_samples, count, rate(value, in_unit));
     };
-    kantz_estimate = head;
-    rosenstein_estimate = head;
-    std::vector<double> rtrends;
-    for (const auto& c : rosenstein)
-      if (c.usable && c.fit.found) rtrends.push_back(c.fit.slope);
-    rosenstein_estimate.value = median_of(rtrends);
-  } else if (slopes.empty()) {
-    std::string why = "not determined: no exponential divergence common to neighbourhood sizes";
-    why += diverging > 0
-               ? fmt::format(
-                     " ({} of {} usable Kantz curves have a linear region, none stays parallel to "
-                     "the curve of a neighbouring size: neighbours separate within the first "
-                     "steps whatever their distance, as in noise or a linear stochastic process)",
-                     diverging, usable)
-               : fmt::format(" (none of the {} usable Kantz curves has a linear region)", usable);
-    head.reason = [why](bool) { return why; };
+    kantz_estimate = rosenstein_estimate = head;
+    rosenstein_estimate.value = median_of(rosenstein_trends.slopes);
+  } else if (kantz.slopes.empty()) {
+    head = not_determined(
+        "not determined: no exponential divergence common to neighbourhood sizes" +
+        (diverging > 0
+             ? fmt::format(" ({} of {} usable Kantz curves have a linear region, none stays "
+                           "parallel to the curve of a neighbouring size: neighbours separate "
+                           "within the first steps whatever their distance, as in noise or a "
+                           "linear stochastic process)",
+                           diverging, usable)
+             : fmt::format(" (none of the {} usable Kantz curves has a linear region)", usable)));
     kantz_estimate = rosenstein_estimate = head;
   } else {
-    const double median = median_of(slopes);
-    const auto [lo_it, hi_it] = std::minmax_element(slopes.begin(), slopes.end());
-    const double spread = (*hi_it - *lo_it) / std::abs(median);
-    if (admissible_dims.size() < std::min<std::size_t>(2, dims) || spread > max_relative_spread) {
-      const double lo = *lo_it, hi = *hi_it;
-      const std::size_t n_dims = admissible_dims.size();
+    const double median = median_of(kantz.slopes);
+    const auto [lo_it, hi_it] = std::minmax_element(kantz.slopes.begin(), kantz.slopes.end());
+    const double lo = *lo_it, hi = *hi_it;
+    const std::size_t n_slopes = kantz.slopes.size(), n_dims = dims_used.size(),
+                      dims = set.dims;
+    if (n_dims < std::min<std::size_t>(2, dims) || (hi - lo) / std::abs(median) > max_relative_spread) {
       head.reason = [=, &rate](bool in_unit) {
         return fmt::format(
             "not determined: the admissible Kantz slopes range from {} to {} ({} curves in {} "
             "of {} embedding dimensions): no exponent common to dimensions and neighbourhood "
             "sizes",
-            rate(lo, in_unit), rate(hi, in_unit), slopes.size(), n_dims, dims);
+            rate(lo, in_unit), rate(hi, in_unit), n_slopes, n_dims, dims);
       };
       kantz_estimate = rosenstein_estimate = head;
     } else {
       divergence = "exponential";
-      double low = std::numeric_limits<double>::infinity(), high = -low;
-      double min_refs = std::numeric_limits<double>::infinity();
-      std::size_t region_begin = 0, region_end = 0;
-      for (const auto& c : kantz)
-        if (c.selected) {
-          low = std::min(low, std::isfinite(c.ci.low) ? c.ci.low : c.fit.slope);
-          high = std::max(high, std::isfinite(c.ci.high) ? c.ci.high : c.fit.slope);
-          min_refs = std::min(min_refs, c.references);
-        }
-      const CurveResult* central = nullptr;  // the selected curve closest to the median
-      for (const auto& c : kantz)
-        if (c.selected &&
-            (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median)))
-          central = &c;
-      region_begin = central->fit.begin;
-      region_end = central->fit.end;
-      kantz_estimate.value = median;
-      kantz_estimate.low = low;
-      kantz_estimate.high = high;
+      kantz_estimate.value = head.value = median;
+      kantz_estimate.low = kantz.low;
+      kantz_estimate.high = kantz.high;
       // The headline interval also spans Rosenstein's admissible estimates.
-      double all_low = low, all_high = high;
-      for (const auto& c : rosenstein)
-        if (c.admissible) {
-          all_low = std::min(all_low, std::isfinite(c.ci.low) ? c.ci.low : c.fit.slope);
-          all_high = std::max(all_high, std::isfinite(c.ci.high) ? c.ci.high : c.fit.slope);
-        }
-      head.value = median;
-      head.low = all_low;
-      head.high = all_high;
-      // Quality: consistent, precise, noise-free down to the smallest neighbourhood and long
-      // enough a series.
+      head.low = std::min(kantz.low, rosenstein.low);
+      head.high = std::max(kantz.high, rosenstein.high);
+      // Quality: consistent, precise, noise-free at the sizes used and a long enough series.
       std::vector<std::string> doubts;
-      const double half_width = 0.5 * (all_high - all_low) / std::abs(median);
+      const double half_width = 0.5 * (head.high - head.low) / std::abs(median);
       if (!(median > 0)) doubts.push_back("the slope is not positive");
       if (half_width > good_relative_half_width)
         doubts.push_back(fmt::format("the interval is +-{:.0f} % wide", 100 * half_width));
@@ -669,33 +689,35 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
             "embedding dimension or towards smaller scales: noise dominates there, which biases "
             "the slope low",
             noise_scale_radius, noise_scale_dimension));
-      if (min_refs < good_references)
-        doubts.push_back(fmt::format("only {:.0f} reference points have neighbours", min_refs));
-      if (median > 0 && double(samples) * median < good_e_foldings)
+      if (kantz.min_references < good_references)
+        doubts.push_back(fmt::format("only {:.0f} reference points have neighbours",
+                                     kantz.min_references));
+      const double samples = double(x.size());
+      if (median > 0 && samples * median < good_e_foldings)
         doubts.push_back(fmt::format(
             "the series covers only {:.0f} e-folding times 1/lambda (at least {:.0f} wanted)",
-            double(samples) * median, good_e_foldings));
-      if (admissible_dims.size() < dims)
-        doubts.push_back(fmt::format("only {} of {} embedding dimensions show it",
-                                     admissible_dims.size(), dims));
-      head.quality = doubts.empty() ? "good" : "uncertain";
-      kantz_estimate.quality = head.quality;
+            samples * median, good_e_foldings));
+      if (n_dims < dims)
+        doubts.push_back(fmt::format("only {} of {} embedding dimensions show it", n_dims, dims));
+      head.quality = kantz_estimate.quality = doubts.empty() ? "good" : "uncertain";
       const std::string doubt_text =
           doubts.empty() ? "" : fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
-      const std::size_t n_slopes = slopes.size();
-      const double lo = *lo_it, hi = *hi_it;
-      const std::string region = region_text(*central);
-      const int radius_count_admissible = admissible_radius_count;
-      const std::size_t n_dims = admissible_dims.size();
-      const auto r_median = median_of(rosenstein_slopes);
-      const std::size_t n_rosenstein = rosenstein_slopes.size();
+      const CurveResult* central = nullptr;  // the selected curve closest to the median
+      for (const auto& c : set.kantz)
+        if (c.selected &&
+            (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median)))
+          central = &c;
+      const std::string region =
+          fmt::format("samples {:.0f}-{:.0f}", double(central->fit.begin * plan.stride),
+                      double((central->fit.end - 1) * plan.stride));
+      const double r_median = median_of(rosenstein.slopes);
+      const std::size_t n_rosenstein = rosenstein.slopes.size();
       head.reason = [=, &rate](bool in_unit) {
         std::string text = fmt::format(
             "exponential divergence: median slope of {} parallel Kantz curves (the smallest "
             "admissible neighbourhood sizes, {} dimensions x {} sizes; slopes {} to {}; linear "
             "region e.g. {})",
-            n_slopes, n_dims, radius_count_admissible, rate(lo, in_unit), rate(hi, in_unit),
-            region);
+            n_slopes, n_dims, sizes_used, rate(lo, in_unit), rate(hi, in_unit), region);
         text += n_rosenstein > 0
                     ? fmt::format("; Rosenstein {} (median of {} dimensions)",
                                   rate(r_median, in_unit), n_rosenstein)
@@ -706,70 +728,57 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
       };
       kantz_estimate.reason = head.reason;
       if (n_rosenstein > 0) {
-        double rl = std::numeric_limits<double>::infinity(), rh = -rl;
-        for (const auto& c : rosenstein)
-          if (c.admissible) {
-            rl = std::min(rl, std::isfinite(c.ci.low) ? c.ci.low : c.fit.slope);
-            rh = std::max(rh, std::isfinite(c.ci.high) ? c.ci.high : c.fit.slope);
-          }
         rosenstein_estimate.value = r_median;
-        rosenstein_estimate.low = rl;
-        rosenstein_estimate.high = rh;
+        rosenstein_estimate.low = rosenstein.low;
+        rosenstein_estimate.high = rosenstein.high;
         rosenstein_estimate.quality = "uncertain";
         rosenstein_estimate.reason = [=, &rate](bool in_unit) {
           return fmt::format("median slope of {} nearest-neighbour curves: {}", n_rosenstein,
                              rate(r_median, in_unit));
         };
       } else {
-        rosenstein_estimate.reason = [](bool) {
-          return std::string("not admissible: nearest neighbours below the noise scale or no "
-                             "linear region");
-        };
+        rosenstein_estimate = not_determined(
+            "not admissible: nearest neighbours below the noise scale or no linear region");
       }
-      (void)region_begin;
-      (void)region_end;
     }
   }
 
-  auto to_json = [&](const Estimate& e, bool in_unit) {
-    const double f = in_unit ? 1.0 / dt : 1.0;
-    return nonlinear::estimate(e.value * f, e.low * f, e.high * f, e.quality,
-                               e.reason ? e.reason(in_unit) : std::string());
-  };
   Json out;
-  out["lyapunov_max_per_sample"] = to_json(head, false);
-  if (unit != "sample") out["lyapunov_max_per_" + unit] = to_json(head, true);
-  out["kantz_per_sample"] = to_json(kantz_estimate, false);
-  out["rosenstein_per_sample"] = to_json(rosenstein_estimate, false);
+  out["lyapunov_max_per_sample"] = head.json(false, dt);
+  if (unit != "sample") out["lyapunov_max_per_" + unit] = head.json(true, dt);
+  out["kantz_per_sample"] = kantz_estimate.json(false, dt);
+  out["rosenstein_per_sample"] = rosenstein_estimate.json(false, dt);
   out["divergence"] = divergence;
   out["noise_radius"] = noise_floor ? Json(noise_radius) : Json();
   out["noise_dominated_radius"] = noise_scale ? Json(noise_scale_radius) : Json();
   out["sample_interval"] = dt;
-  out["delay_samples"] = tau;
-  out["embedding_dimension"] = m0;
-  out["dimensions"] = {m0, m_max};
-  out["theiler_window_samples"] = embedding.theiler;
+  out["delay_samples"] = plan.delay;
+  out["embedding_dimension"] = plan.m0;
+  out["dimensions"] = {plan.m0, plan.m_max};
+  out["theiler_window_samples"] = plan.theiler;
   out["embedding_source"] = embedding.source;
-  out["radii"] = radii;
+  out["radii"] = plan.radii;
   out["reference_points"] = scan.references;
-  out["step_samples"] = stride;
+  out["step_samples"] = plan.stride;
   Json curves = Json::array();
-  for (const auto* group : {&kantz, &rosenstein})
+  for (const auto* group : {&set.kantz, &set.rosenstein})
     for (const auto& c : *group) {
       Json curve = Json::array();
       for (double v : c.curve) curve.push_back(std::isfinite(v) ? Json(v) : Json());
       const bool fitted = c.usable && c.fit.found;
+      auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
       curves.push_back(Json{{"method", c.method},
                             {"dimension", c.dimension},
-                            {"radius", std::isfinite(c.radius) ? Json(c.radius) : Json()},
+                            {"radius", number(c.radius)},
                             {"references", c.references},
                             {"divergence", curve},
                             {"fit_begin_step", fitted ? Json(c.fit.begin) : Json()},
                             {"fit_end_step", fitted ? Json(c.fit.end - 1) : Json()},
-                            {"fit_intercept", fitted ? Json(c.fit.intercept) : Json()},  // per point
+                            // per curve point (step_samples samples)
+                            {"fit_intercept", fitted ? Json(c.fit.intercept) : Json()},
                             {"slope_per_sample", fitted ? Json(c.fit.slope) : Json()},
-                            {"ci_low_per_sample", std::isfinite(c.ci.low) ? Json(c.ci.low) : Json()},
-                            {"ci_high_per_sample", std::isfinite(c.ci.high) ? Json(c.ci.high) : Json()},
+                            {"ci_low_per_sample", number(c.ci.low)},
+                            {"ci_high_per_sample", number(c.ci.high)},
                             {"admissible", c.admissible},
                             {"selected", c.selected},
                             {"note", c.note}});

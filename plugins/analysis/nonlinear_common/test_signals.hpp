@@ -221,6 +221,16 @@ inline std::vector<double> power_law_noise(std::size_t n, double alpha, unsigned
   return fft.inverse(spectrum);
 }
 
+// tanh(x / sd(x)): a linear process seen through a saturating sensor (a static monotone
+// nonlinearity: what IAAFT surrogates keep).
+inline std::vector<double> saturated(std::vector<double> x) {
+  double mean = 0, var = 0;
+  for (double v : x) mean += v / double(x.size());
+  for (double v : x) var += (v - mean) * (v - mean) / double(x.size());
+  for (double& v : x) v = std::tanh((v - mean) / std::sqrt(var));
+  return x;
+}
+
 // x + level sd(x) e_i, e Gaussian white: measurement noise at `level` (0.05 = 5 %) of the
 // signal's standard deviation.
 inline std::vector<double> with_noise(std::vector<double> x, double level, unsigned seed) {
