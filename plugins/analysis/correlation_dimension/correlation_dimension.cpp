@@ -1009,6 +1009,8 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
   out["bootstrap_ci"] = {std::isfinite(ci.low) ? Json(ci.low) : Json(),
                          std::isfinite(ci.high) ? Json(ci.high) : Json()};
   out["saturation_dimension"] = region.found ? region.saturation : 0;
+  out["consistent_dimensions"] =
+      region.found ? Json::array({region.saturation, region.top}) : Json();
   out["noise_level"] = std::isfinite(noise_r) ? Json(noise_r) : Json();
   out["delay_samples"] = embedding.delay;
   out["theiler_window_samples"] = embedding.theiler;
@@ -1042,18 +1044,27 @@ void CorrelationDimension::plot(const Json& result, const SampledSeries& series,
                                 const std::filesystem::path& out_dir) const {
   const std::string title = series.name.empty() ? std::string("series") : series.name;
   plot::Curves sums, slopes, saturation;
-  sums.title = fmt::format("{}: correlation sums (points: scaling regions)", title);
+  sums.title = fmt::format("{}: correlation sums", title);
   sums.x_label = "r [signal units]";
   sums.y_label = "C(r)";
   sums.log_x = sums.log_y = true;
-  slopes.title = fmt::format("{}: local slopes d ln C / d ln r (points: scaling regions)", title);
+  slopes.title = fmt::format("{}: local slopes d ln C / d ln r", title);
   slopes.x_label = "r [signal units]";
   slopes.y_label = "local slope";
   slopes.log_x = true;
-  saturation.title = fmt::format("{}: D2 versus embedding dimension", title);
+  saturation.title = fmt::format("{}: D2 versus embedding dimension (slopes over the scaling "
+                                 "region)",
+                                 title);
   saturation.x_label = "embedding dimension d";
   saturation.integer_x = true;
   saturation.y_label = "D2";
+  // The scaling region is marked on the dimensions whose slopes agree there.
+  const Json& used = result["consistent_dimensions"];
+  const int first = used.is_array() ? used[0].get<int>() : 0;
+  const int last = used.is_array() ? used[1].get<int>() : -1;
+  const std::string region_label =
+      used.is_array() ? fmt::format("scaling region (d = {}-{})", first, last) : "";
+  plot::Series region{region_label, {}, {}, "points"}, region_slope{region_label, {}, {}, "points"};
   plot::Series d2_curve{"D2(d)", {}, {}, "linespoints"};
   for (const Json& entry : result["by_dimension"]) {
     const int d = entry["dimension"].get<int>();
@@ -1069,35 +1080,33 @@ void CorrelationDimension::plot(const Json& result, const SampledSeries& series,
       }
     sums.series.push_back(std::move(s));
     slopes.series.push_back(std::move(ls));
-    if (entry["d2"].is_number()) {
-      const double lo = entry["r_low"].get<double>(), hi = entry["r_high"].get<double>();
-      plot::Series region{"", {}, {}, "points"};
-      plot::Series region_slope{"", {}, {}, "points"};
-      for (std::size_t k = 0; k < r.size(); ++k)
-        if (r[k] >= lo && r[k] <= hi) {
-          region.x.push_back(r[k]);
-          region.y.push_back(c[k]);
-          if (slope[k].is_number()) {
-            region_slope.x.push_back(r[k]);
-            region_slope.y.push_back(slope[k].get<double>());
-          }
+    if (!entry["d2"].is_number()) continue;
+    d2_curve.x.push_back(d);
+    d2_curve.y.push_back(entry["d2"].get<double>());
+    if (d < first || d > last) continue;
+    const double lo = entry["r_low"].get<double>(), hi = entry["r_high"].get<double>();
+    for (std::size_t k = 0; k < r.size(); ++k)
+      if (r[k] >= lo && r[k] <= hi) {
+        region.x.push_back(r[k]);
+        region.y.push_back(c[k]);
+        if (slope[k].is_number()) {
+          region_slope.x.push_back(r[k]);
+          region_slope.y.push_back(slope[k].get<double>());
         }
-      if (d == 1) region.label = region_slope.label = "scaling region";
-      sums.series.push_back(std::move(region));
-      slopes.series.push_back(std::move(region_slope));
-      d2_curve.x.push_back(d);
-      d2_curve.y.push_back(entry["d2"].get<double>());
-    }
+      }
   }
-  saturation.series.push_back(d2_curve);
+  if (!region.x.empty()) sums.series.push_back(std::move(region));
+  if (!region_slope.x.empty()) slopes.series.push_back(std::move(region_slope));
   const Json& estimate = result["correlation_dimension"];
   if (estimate["value"].is_number()) {
-    saturation.reference_y = estimate["value"].get<double>();
-    saturation.reference_label = fmt::format("D2 = {:.3f}", estimate["value"].get<double>());
+    slopes.reference_y = saturation.reference_y = estimate["value"].get<double>();
+    slopes.reference_label = saturation.reference_label =
+        fmt::format("D2 = {:.3f}", estimate["value"].get<double>());
   }
+  saturation.series.push_back(d2_curve);
   plot::render(sums, out_dir, "correlation_dimension_sums");
   plot::render(slopes, out_dir, "correlation_dimension_slopes");
-  plot::render(saturation, out_dir, "correlation_dimension_saturation");
+  if (!d2_curve.x.empty()) plot::render(saturation, out_dir, "correlation_dimension_saturation");
 }
 
 }  // namespace chatterlab

@@ -77,6 +77,34 @@ TEST(CorrelationDimension, SineIsOneDimensional) {
   EXPECT_NEAR(value(r), 1.0, 0.05);
 }
 
+// 5 % measurement noise: the noise scale is found, and above it the slopes of three dimensions
+// agree over less than a factor 4 in r: reported, not fitted.
+TEST(CorrelationDimension, NoisyHenonReportsTheNoiseScaleAndIsNotFitted) {
+  const Json r = make_analysis("correlation_dimension")
+                     ->analyse(series(test_signals::with_noise(test_signals::henon(10000), 0.05, 9),
+                                      1.0, "henon + noise"),
+                               Json{{"embedding",
+                                     Json{{"delay_samples", 1}, {"embedding_dimension", 2},
+                                          {"theiler_window_samples", 1}}}});
+  const Json& e = r["correlation_dimension"];
+  EXPECT_TRUE(e["value"].is_null()) << e.dump();
+  const std::string reason = e["reason"].get<std::string>();
+  EXPECT_NE(reason.find("not fitted"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("noise scale"), std::string::npos) << reason;
+  EXPECT_TRUE(r["noise_level"].is_number());
+}
+
+TEST(CorrelationDimensionAccuracy, QuasiPeriodicTorusIsTwoDimensional) {
+  // The strands of the finite trajectory look one-dimensional below r ~ 0.08; the scaling
+  // range of the torus (slope 2) lies above: the value is about 2 and the interval spans both.
+  const Json r = make_analysis("correlation_dimension")
+                     ->analyse(series(test_signals::torus(50000), 1.0, "torus"), Json::object());
+  const Json& e = r["correlation_dimension"];
+  EXPECT_NEAR(e["value"].get<double>(), 2.0, 0.15) << e.dump();
+  EXPECT_LE(e["ci_low"].get<double>(), 2.0);
+  EXPECT_GE(e["ci_high"].get<double>(), 2.0);
+}
+
 TEST(CorrelationDimension, WhiteNoiseDoesNotSaturate) {
   const Json r = make_analysis("correlation_dimension", {{"max_dimension", 6}})
                      ->analyse(series(test_signals::white_noise(5000, 3), 1.0, "noise"), Json::object());

@@ -802,11 +802,13 @@ void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
                                : fmt::format("time after start [{}]", unit);
   c.y_label = "< ln distance > (mean log separation)";
   plot::Curves slopes;
-  slopes.title = fmt::format("{}: Kantz slopes by neighbourhood size (points: admissible)", title);
+  slopes.title = fmt::format("{}: Kantz slopes by neighbourhood size and dimension", title);
   slopes.x_label = "neighbourhood size eps [signal units]";
   slopes.log_x = true;
   slopes.y_label = fmt::format("slope [1/{}]", unit);
-  std::map<int, plot::Series> by_dimension, admissible_points;
+  std::map<int, plot::Series> by_dimension;
+  plot::Series used{"used by the estimate", {}, {}, "points"};
+  bool fit_labelled = false;
   for (const Json& curve : result["curves"]) {
     const bool kantz = curve["method"] == "Kantz";
     const int m = curve["dimension"].get<int>();
@@ -817,10 +819,9 @@ void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
       auto& line = by_dimension.try_emplace(m, plot::Series{fmt::format("m = {}", m), {}, {}, "linespoints"}).first->second;
       line.x.push_back(eps);
       line.y.push_back(s);
-      if (curve["admissible"].get<bool>()) {
-        auto& pts = admissible_points.try_emplace(m, plot::Series{"", {}, {}, "points"}).first->second;
-        pts.x.push_back(eps);
-        pts.y.push_back(s);
+      if (curve["selected"].get<bool>()) {
+        used.x.push_back(eps);
+        used.y.push_back(s);
       }
     }
     if (m != m0) continue;
@@ -835,17 +836,21 @@ void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
       }
     if (s.x.empty()) continue;
     c.series.push_back(s);
-    if (curve["admissible"].get<bool>()) {
+    if (curve["selected"].get<bool>()) {
       const double k0 = curve["fit_begin_step"].get<double>(), k1 = curve["fit_end_step"].get<double>();
       const double b = curve["fit_intercept"].get<double>();
       // Slope per curve point (step_samples samples).
       const double slope = curve["slope_per_sample"].get<double>() * result["step_samples"].get<double>();
-      c.series.push_back({"", {k0 * step, k1 * step}, {b + slope * k0, b + slope * k1}, "dashes"});
+      c.series.push_back({fit_labelled ? "" : "linear fits (curves used)",
+                          {k0 * step, k1 * step},
+                          {b + slope * k0, b + slope * k1},
+                          "dashes"});
+      fit_labelled = true;
     }
   }
   plot::render(c, out_dir, "lyapunov_divergence");
   for (auto& [m, s] : by_dimension) slopes.series.push_back(s);
-  for (auto& [m, s] : admissible_points) slopes.series.push_back(s);
+  if (!used.x.empty()) slopes.series.push_back(used);
   const Json& head = result["lyapunov_max_per_sample"];
   if (head["value"].is_number() && !slopes.series.empty()) {
     slopes.reference_y = head["value"].get<double>() / dt;

@@ -47,6 +47,61 @@ TEST(LyapunovAccuracy, Lorenz) {
   EXPECT_NEAR(e["value"].get<double>(), per_sample(r) / 0.01, 1e-9);
 }
 
+// Noise separates neighbours at once whatever their distance: the curves of different
+// neighbourhood sizes collapse onto one, so no exponent is reported.
+TEST(Lyapunov, WhiteNoiseIsNotDetermined) {
+  const Json r = make_analysis("lyapunov", Json{{"embedding_dimension", 3}, {"delay_samples", 1}})
+                     ->analyse(series(test_signals::white_noise(3000, 5), 1.0, "noise"),
+                               Json::object());
+  EXPECT_EQ(r["divergence"], "undetermined");
+  const Json& e = r["lyapunov_max_per_sample"];
+  EXPECT_TRUE(e["value"].is_null()) << e.dump();
+  EXPECT_EQ(e["quality"], "failed");
+  EXPECT_EQ(e["reason"].get<std::string>().rfind("not determined:", 0), 0u) << e.dump();
+}
+
+// Measurement noise (5 % of the standard deviation) biases the exponent low: never "good", and
+// the reason names the noise.
+TEST(Lyapunov, NoisyHenonIsNotGood) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::with_noise(test_signals::henon(8000), 0.05, 9), 1.0, "henon + noise"),
+      Json::object());
+  const Json& e = r["lyapunov_max_per_sample"];
+  EXPECT_EQ(e["quality"], "uncertain") << e.dump();
+  EXPECT_NE(e["reason"].get<std::string>().find("noise"), std::string::npos) << e.dump();
+}
+
+// 400 samples of a flow (about five orbits): an exponent may show, never a "good" one.
+TEST(Lyapunov, ShortFlowIsNotGood) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::lorenz(400), 0.01, "lorenz x"), Json::object());
+  EXPECT_NE(r["lyapunov_max_per_s"]["quality"], "good") << r["lyapunov_max_per_s"].dump();
+}
+
+// Without a time unit (a series counted in samples) there is only the per-sample exponent, and
+// its reason speaks of samples only.
+TEST(Lyapunov, PerSampleSeriesHasOnlyPerSampleRates) {
+  SampledSeries s = series(test_signals::henon(3000), 1.0, "henon x");
+  s.sample_unit = "sample";
+  const Json r = make_analysis("lyapunov")->analyse(s, Json::object());
+  EXPECT_TRUE(r.contains("lyapunov_max_per_sample"));
+  EXPECT_FALSE(r.contains("lyapunov_max_per_s"));
+  const std::string reason = r["lyapunov_max_per_sample"]["reason"].get<std::string>();
+  EXPECT_NE(reason.find("per sample"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find("per s "), std::string::npos) << reason;
+}
+
+// With a sample rate the per-second reason states every rate per second.
+TEST(Lyapunov, PerSecondReasonStatesRatesPerSecond) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::henon(3000), 0.001, "henon x"), Json::object());
+  const std::string reason = r["lyapunov_max_per_s"]["reason"].get<std::string>();
+  EXPECT_EQ(reason.find("per sample"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("per s"), std::string::npos) << reason;
+  EXPECT_NEAR(r["lyapunov_max_per_s"]["value"].get<double>(),
+              r["lyapunov_max_per_sample"]["value"].get<double>() / 0.001, 1e-6);
+}
+
 TEST(Lyapunov, SineDoesNotDiverge) {
   const Json r = make_analysis("lyapunov")->analyse(
       series(test_signals::sine(5000, 20 * std::sqrt(3.0)), 1.0, "sine"), Json::object());

@@ -132,7 +132,7 @@ constexpr double dimension_tolerance = 0.2;
 // An exponent within this fraction of max(|lambda_i|, |lambda_1|) of the sum of two others (or
 // twice another) is a combination exponent: local linear fits of a map embedded in too many
 // dimensions produce 2 lambda_1, lambda_1 + lambda_2, ... (Sauer, Tempkin and Yorke 1998).
-constexpr double combination_tolerance = 0.03;
+constexpr double combination_tolerance = 0.06;
 // The spectrum's largest exponent and the divergence estimate of `lyapunov` agree when they are
 // within this fraction of each other (or the spectrum's value lies inside the other interval).
 constexpr double divergence_agreement = 0.25;

@@ -148,6 +148,56 @@ TEST_F(SignalAnalysisInput, HenonStudyWritesSummaryAndPlots) {
 }
 
 
+// The verdict rules on synthetic method results: chaos needs all four pieces of evidence.
+Json chaotic_context() {
+  return Json{{"lyapunov",
+               {{"divergence", "exponential"},
+                {"lyapunov_max_per_sample", {{"value", 0.42}, {"ci_low", 0.40}, {"ci_high", 0.44}}}}},
+              {"correlation_dimension", {{"correlation_dimension", {{"value", 1.21}}}}},
+              {"surrogates",
+               {{"rejected_for_prediction", true},
+                {"rejected_for_exponent", true},
+                {"rejected_for_dimension", true}}}};
+}
+
+TEST(SignalAnalysisVerdict, ChaosNeedsEveryPieceOfEvidence) {
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(chaotic_context())["verdict"], "deterministic chaos");
+  // Each missing piece withdraws the claim, and the reason says which.
+  Json c = chaotic_context();
+  c["surrogates"]["rejected_for_dimension"] = false;
+  Json v = SignalAnalysis::chaos_verdict(c);
+  EXPECT_NE(v["verdict"], "deterministic chaos");
+  EXPECT_NE(v["reason"].get<std::string>().find("do not reject a linear stochastic process for the "
+                                                "dimension"),
+            std::string::npos)
+      << v.dump();
+  c = chaotic_context();
+  c["lyapunov"]["lyapunov_max_per_sample"]["ci_low"] = -0.01;
+  EXPECT_NE(SignalAnalysis::chaos_verdict(c)["verdict"], "deterministic chaos");
+  c = chaotic_context();
+  c["correlation_dimension"]["correlation_dimension"]["value"] = nullptr;
+  EXPECT_NE(SignalAnalysis::chaos_verdict(c)["verdict"], "deterministic chaos");
+  c = chaotic_context();
+  c.erase("surrogates");
+  v = SignalAnalysis::chaos_verdict(c);
+  EXPECT_EQ(v["verdict"], "not determined");
+  EXPECT_NE(v["reason"].get<std::string>().find("'surrogates' not run"), std::string::npos);
+}
+
+TEST(SignalAnalysisVerdict, StochasticPeriodicAndNoisySignals) {
+  Json c = chaotic_context();
+  c["surrogates"] = {{"rejected_for_prediction", false},
+                     {"rejected_for_exponent", false},
+                     {"rejected_for_dimension", false}};
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "linear stochastic");
+  c = chaotic_context();
+  c["lyapunov"]["divergence"] = "none";
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "periodic or quasi-periodic");
+  c = chaotic_context();
+  c["correlation_dimension"] = {{"correlation_dimension", {{"value", nullptr}}}, {"noise_level", 0.1}};
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "noise-dominated");
+}
+
 // `chatterlab describe <analysis>` shows how a signal_analysis study names the method and where its
 // parameters go, not a `type =` key that no study reads.
 TEST(SignalAnalysisCatalog, DescribeShowsMethodsListAndParameterTable) {

@@ -382,17 +382,22 @@ void Surrogates::plot(const Json& result, const SampledSeries& series,
   const struct {
     const char* key;
     const char* stem;
+    const char* what;
     const char* label;
   } panels[] = {
-      {"prediction_error", "surrogates", "normalised one-step prediction error"},
-      {"divergence", "surrogates_divergence", "growth of ln distance to the half-rise time"},
-      {"dimension", "surrogates_dimension", "slope of ln C(r) (C = 1e-3..1e-2)"}};
+      {"prediction_error", "surrogates", "prediction error",
+       "normalised one-step prediction error"},
+      {"divergence", "surrogates_divergence", "divergence (test for the exponent)",
+       "growth of < ln distance > to the half-rise time"},
+      {"dimension", "surrogates_dimension", "correlation-sum slope (test for the dimension)",
+       "slope of ln C(r) where C = 1e-3..1e-2"}};
   for (const auto& p : panels) {
     const Json& t = result["statistics"][p.key];
     if (!t["computed"].get<bool>() || !t["data"].is_number()) continue;
     plot::Curves c;
-    c.title = fmt::format("{}: {} of the data and of surrogates", title, p.label);
+    c.title = fmt::format("{}: {}, data and surrogates", title, p.what);
     c.x_label = "surrogate number";
+    c.integer_x = true;
     c.y_label = p.label;
     for (const Json& kind : result["kinds"]) {
       const std::string name = kind.get<std::string>();
