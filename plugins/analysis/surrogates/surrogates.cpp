@@ -10,8 +10,8 @@
 
 #include "analysis/correlation_dimension/correlation_dimension.hpp"
 #include "analysis/embedding/embedding.hpp"
+#include "analysis/lyapunov/divergence.hpp"
 #include "analysis/lyapunov/kantz_scan.hpp"
-#include "analysis/lyapunov/lyapunov.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/plot.hpp"
