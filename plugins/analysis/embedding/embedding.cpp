@@ -322,7 +322,7 @@ Json EmbeddingAnalysis::analyse(const SampledSeries& series, const Json& /*conte
       c.delay.from_mutual_information || c.delay.rule.rfind("given", 0) == 0 ? "good"
                                                                              : "uncertain",
       c.delay.rule);
-  out["delay_" + series.sample_unit] = c.delay.delay * dt;
+  if (series.sample_unit != "sample") out["delay_" + series.sample_unit] = c.delay.delay * dt;
   const auto& d = c.dimension;
   std::string quality = "good", reason;
   if (d.fnn_dimension > 0 && d.cao_dimension > 0) {
