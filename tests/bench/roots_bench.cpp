@@ -20,7 +20,7 @@ namespace {
 using namespace chatterlab;
 
 // The band searched when a benchmark gives none: this multiple of the model's natural frequency
-// scale, as the stability_map study kind does by default (StabilityMap::default_band_multiple).
+// scale, as the stability_map study kind does by default (kit::default_band_multiple).
 constexpr double kBandMultiple = 4.0;
 
 // Runs one grid point per iteration over `tables`, cycling; reports points/s, evaluations per

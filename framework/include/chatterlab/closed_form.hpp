@@ -1,8 +1,9 @@
 #pragma once
 // Closed-form stability indicators a model may report next to its characteristic roots (e.g. the
-// Thompson criteria of MODELS.md G2). A model opts in by also deriving from ClosedFormIndicators;
-// the stability_map study kind finds it with dynamic_cast and appends one results.csv column per
-// indicator, so the closed forms and the rightmost root can be compared point by point.
+// Thompson criteria of MODELS.md G2). A model opts in by also deriving from ClosedFormIndicators
+// and returning `this` from Model::closed_forms(); the stability_map study kind then appends one
+// results.csv column per indicator, so the closed forms and the rightmost root can be compared
+// point by point.
 #include <string>
 #include <vector>
 

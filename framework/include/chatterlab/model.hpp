@@ -1,14 +1,43 @@
 #pragma once
 // A dynamics model plugin (MODELS.md G1..G7). The model supplies physics only; the framework owns
 // root finding, integration, grids and output.
+//
+// Capabilities beyond the physics are typed interfaces a model class may also derive from; study
+// kinds reach them through the accessors below (the model returns `this`), never by the model's
+// name or by casting to a plugin's class:
+//   ClosedFormIndicators (closed_form.hpp)    closed-form criteria reported beside the roots
+//   ProcessConditionsModel (process_conditions.hpp)  parameters that follow the process conditions
+//   StiffnessChain (below)                    the G1 stiffness chain, for the closed forms
+#include <limits>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
+
+class ClosedFormIndicators;
+class ProcessConditionsModel;
+
+// A structural mode as the closed forms of MODELS.md G1/G3/S1 see it.
+struct ModeView {
+  double frequency_hz = 0.0;
+  double damping_ratio = 0.0;
+  double stiffness_n_per_m = 0.0;
+};
+
+// The G1 (Snoeys) stiffness chain of a model: the process line of the compliance chart (eq 2-21)
+// and the closed forms (G3 wheel growth rate, S1 chatter frequency under variable feed) need it.
+// A regeneration that is switched off has an infinite stiffness (its term vanishes from 2-16).
+struct StiffnessChain {
+  double contact_stiffness_n_per_m = 0.0;  // kc
+  double wheel_wear_stiffness_n_per_m = std::numeric_limits<double>::infinity();    // kg
+  double work_removal_stiffness_n_per_m = std::numeric_limits<double>::infinity();  // kw
+  std::vector<ModeView> modes;
+};
 
 class Model {
  public:
@@ -25,6 +54,12 @@ class Model {
   // Time-domain form (states, contact law, regenerated surfaces) for the dynamics engine
   // (chatterlab/dynamics.hpp, study kind `simulate`), or null when the model has none.
   virtual std::unique_ptr<TimeDomainModel> time_domain() const { return nullptr; }
+
+  // ---- capabilities (null / nullopt: the model does not have it)
+  virtual const ClosedFormIndicators* closed_forms() const { return nullptr; }
+  virtual const ProcessConditionsModel* process_conditions() const { return nullptr; }
+  // The G1 stiffness chain, for models of the Snoeys family (plunge_regenerative, thompson, ...).
+  virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
 };
 
 }  // namespace chatterlab

@@ -13,7 +13,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
-#include "kinds/model_table.hpp"
+#include "chatterlab/kit/model.hpp"
 
 namespace chatterlab::feed_risk {
 
@@ -68,8 +68,8 @@ std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettin
   for (long i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     try {
-      auto model = kinds_detail::build_model(segment_model_table(model_table, p, items[g.representative[u]]));
-      const RightmostRoot root = kinds_detail::rightmost_root(*model, settings.stability);
+      auto model = kit::build_model(segment_model_table(model_table, p, items[g.representative[u]]));
+      const RightmostRoot root = kit::rightmost_root(*model, kit::stability_settings_table().read(settings.stability));
       values[u].growth_rate_per_s = root.root.real();
       values[u].frequency_hz = std::abs(root.root.imag()) / (2 * kPi);
       values[u].certified = root.certified;
@@ -301,7 +301,7 @@ std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const
   for (std::size_t k = 0; k < plan.size(); ++k) {
     auto [it, inserted] = model_of_group.emplace(g.group_of_item[k], models.size());
     if (inserted) {
-      auto model = kinds_detail::build_model(segment_model_table(model_table, p, risk.process[k]));
+      auto model = kit::build_model(segment_model_table(model_table, p, risk.process[k]));
       auto td = model->time_domain();
       if (!td) throw std::invalid_argument("the model has no time-domain form");
       models.push_back(std::move(td));

@@ -14,8 +14,7 @@
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "feed_risk/feed_risk.hpp"
-#include "kinds/model_table.hpp"
-#include "kinds/stability_map.hpp"
+#include "chatterlab/kit/model.hpp"
 #include "planner/feed_plan.hpp"
 #include "planner/setup.hpp"
 
@@ -458,7 +457,7 @@ void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
           "wheel_wear_stiffness_n_per_m, work_removal_stiffness_n_per_m) into the model, which has no '{}'",
           sources.locate("model.type").str(), model["type"].get<std::string>(), key));
   {
-    auto built = kinds_detail::build_model(model);
+    auto built = kit::build_model(model);
     if (!built->characteristic() || !built->time_domain())
       throw InputError(fmt::format("{}: model.type = \"{}\": feed_risk needs a characteristic function and a "
                                    "time-domain form", sources.locate("model.type").str(),
@@ -468,7 +467,7 @@ void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
   if (!stability.is_object())
     throw InputError(fmt::format("{}: stability = {}: expected a table [stability]",
                                  sources.locate("stability").str(), stability.dump()));
-  stability = validate_params(stability, StabilityMap::info().params, "stability", sources);
+  stability = validate_params(stability, kit::stability_settings_table().specs(), "stability", sources);
 
   if (!document.contains("feed_risk") || !document["feed_risk"].is_object())
     throw InputError(fmt::format("{}: missing table [feed_risk] (the feed_risk study needs it)",

@@ -12,8 +12,8 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
 #include "feed_risk/feed_risk_kind.hpp"
-#include "kinds/model_table.hpp"
-#include "kinds/stability_map.hpp"
+#include "chatterlab/kit/model.hpp"
+#include "study_kinds/stability_map/stability_map.hpp"
 #include "planner/setup.hpp"
 #include "unit/study_test_support.hpp"
 
@@ -201,7 +201,7 @@ TEST(FeedRisk, AmplificationIsTheIntegralOfTheGrowthRate) {
 TEST(FeedRisk, StreamedSamplesAreTheStoredSamples) {
   // The engine's streaming option (SimulationSettings::on_sample, store_samples) hands out exactly
   // the samples it would store; with storage off the series stay empty.
-  auto model = kinds_detail::build_model(model_table())->time_domain();
+  auto model = kit::build_model(model_table())->time_domain();
   SimulationSettings s;
   s.duration_s = 0.5;
   s.sample_rate_hz = 2000.0;
@@ -339,7 +339,7 @@ TEST(FeedRiskAccuracy, SimulationAlongAConstantPlanGrowsAtTheRootsRate) {
   plain.initial_waviness_m = 1e-12;
   plain.one_sided_contact = false;
   plain.relative_tolerance = settings.relative_tolerance;
-  auto model = kinds_detail::build_model(model_table())->time_domain();
+  auto model = kit::build_model(model_table())->time_domain();
   const SimulationResult r = simulate(*model, plain);
   const double engine = fit_envelope(r.t_s, r.displacement_m, 30.0, 60.0, 10.0).growth_rate_per_s;
   EXPECT_NEAR(fitted, engine, 0.01 * engine) << "along-plan " << fitted << " engine " << engine;

@@ -13,7 +13,7 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
-#include "kinds/model_table.hpp"
+#include "chatterlab/kit/model.hpp"
 #include "chatterlab/spectrum.hpp"
 
 namespace chatterlab {
@@ -35,7 +35,7 @@ constexpr const char* col_work_ront = "work_roundness_ront_um";
 constexpr const char* surface_plugin = "surface_profile";
 constexpr std::size_t max_peaks = 10;
 
-using kinds_detail::build_model;
+using kit::build_model;
 
 ParamSpec real_spec(std::string key, std::string unit, std::string description, double default_value,
                     double min, bool min_exclusive) {

@@ -123,6 +123,7 @@ class Thompson final : public Model, public ClosedFormIndicators {
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
 
+  const ClosedFormIndicators* closed_forms() const override { return this; }
   std::vector<ClosedFormIndicatorSpec> indicator_specs() const override;
   std::vector<Json> indicator_values() const override;
 

@@ -1,7 +1,7 @@
 // The stability_map study kind: its [stability] table, output columns, one grid point against
 // independent reference roots (tests/cli/reference/dde_rightmost_roots.csv), and which plots a
 // grid gets.
-#include "kinds/stability_map.hpp"
+#include "study_kinds/stability_map/stability_map.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,47 @@
+#pragma once
+// Capability of a model: its parameters follow the grinding process conditions. A feed plan
+// changes the work radius, the work surface speed, the engaged width of the wheel and the spindle
+// speed segment by segment (feed_risk); a variable-speed or variable-feed strategy changes a
+// speed or the depth of cut over time (suppression_map, MODELS.md S1-S3). Study kinds reach any
+// model that implements this interface through Model::process_conditions(), never through its
+// parameter names, so a new model that declares the capability works with them unchanged.
+#include "chatterlab/params.hpp"
+
+namespace chatterlab {
+
+// The process conditions at the wheel-work contact.
+struct ProcessConditions {
+  double wheel_speed_rpm = 0.0;
+  double work_speed_rpm = 0.0;
+  double contact_width_mm = 0.0;    // engaged width of cut b (along the wheel axis)
+  double work_radius_mm = 0.0;      // radius of the part under the wheel
+  double wheel_diameter_mm = 0.0;
+  double depth_of_cut_ratio = 1.0;  // depth of cut per work revolution over the reference's
+};
+
+// How the process stiffnesses follow the conditions: study settings, the same for every model.
+struct ProcessScaling {
+  // MODELS.md G4: the removal stiffness grows with Kv/(1 + Kv) and the wear stiffness falls as
+  // 1/(1 + Kv), Kv = v_work / v_wheel; false: only the width scales them.
+  bool speed_dependent_stiffness = true;
+  // MODELS.md S1 (5-29): contact and wear stiffness k = k0 (1 - eps/2 da/a) with the relative
+  // depth-of-cut change da/a = depth_of_cut_ratio - 1; 0 leaves them alone.
+  double thickness_exponent = 0.0;
+};
+
+class ProcessConditionsModel {
+ public:
+  virtual ~ProcessConditionsModel() = default;
+
+  // The speeds the model's own parameters describe (width, radii and depth ratio are not model
+  // parameters: a study gives them as the reference, see parameters_at).
+  virtual ProcessConditions nominal_conditions() const = 0;
+
+  // The model's parameter table (validated form, without `type`) at `conditions`, given that its
+  // own parameters hold at `reference`. A condition of 0 in both means "not given": the model
+  // keeps what depends on it unchanged.
+  virtual Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                             const ProcessScaling& scaling) const = 0;
+};
+
+}  // namespace chatterlab

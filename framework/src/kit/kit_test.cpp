@@ -1,0 +1,154 @@
+// The study kit's building blocks: a ParamTable declared once gives specs (limits, defaults from
+// the struct), validation messages, reading and writing; axis labels from key names.
+#include <gtest/gtest.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "chatterlab/kit/plots.hpp"
+#include "chatterlab/kit/settings.hpp"
+#include "chatterlab/param_table.hpp"
+#include "unit/study_test_support.hpp"
+
+namespace chatterlab::testing {
+namespace {
+
+enum class Shape { sine, square };
+
+struct Mode {
+  double frequency_hz = 100.0;
+  double damping_ratio = 0.05;
+};
+
+struct Settings {
+  double duration_s = 2.0;
+  int steps = 10;
+  bool one_sided = true;
+  std::string label = "run";
+  std::optional<double> fit_start_s;
+  std::vector<double> levels{1.0, 2.0};
+  Shape shape = Shape::square;
+  std::vector<Mode> modes{Mode{}};
+  double stiffness_n_per_m = 0.0;  // required
+};
+
+const ParamTable<Mode>& mode_table() {
+  static const ParamTable<Mode> table = [] {
+    ParamTable<Mode> t;
+    t.add(&Mode::frequency_hz, "frequency_hz", "Hz", "natural frequency").positive();
+    t.add(&Mode::damping_ratio, "damping_ratio", "1", "damping ratio").fraction(true);
+    return t;
+  }();
+  return table;
+}
+
+const ParamTable<Settings>& settings_table() {
+  static const ParamTable<Settings> table = [] {
+    ParamTable<Settings> t;
+    t.add(&Settings::duration_s, "duration_s", "s", "simulated time").positive().at_most(100.0);
+    t.add(&Settings::steps, "steps", "1", "steps").at_least(1);
+    t.add(&Settings::one_sided, "one_sided", "1", "one-sided contact");
+    t.add(&Settings::label, "label", "", "a label");
+    t.add(&Settings::fit_start_s, "fit_start_s", "s", "start of the fit").non_negative();
+    t.add(&Settings::levels, "levels", "1", "levels").min_items(1);
+    t.add_choice(&Settings::shape, "shape", "wave form", {{"sine", Shape::sine}, {"square", Shape::square}});
+    t.add_tables(&Settings::modes, "modes", "structural modes", mode_table()).min_items(1);
+    t.add(&Settings::stiffness_n_per_m, "stiffness_n_per_m", "N/m", "stiffness").positive().required();
+    return t;
+  }();
+  return table;
+}
+
+class LineSeven final : public SourceMap {
+ public:
+  SourceLocation locate(std::string_view) const override { return {"s.toml", 7}; }
+};
+
+TEST(ParamTable, SpecsCarryKindsLimitsAndTheStructsDefaults) {
+  const std::vector<ParamSpec> specs = settings_table().specs();
+  ASSERT_EQ(specs.size(), 9u);
+  EXPECT_EQ(specs[0].kind, ValueKind::real);
+  EXPECT_EQ(specs[0].default_value, Json(2.0));
+  EXPECT_EQ(specs[0].min, 0.0);
+  EXPECT_TRUE(specs[0].min_exclusive);
+  EXPECT_EQ(specs[0].max, 100.0);
+  EXPECT_EQ(specs[1].kind, ValueKind::integer);
+  EXPECT_EQ(specs[2].kind, ValueKind::boolean);
+  EXPECT_EQ(specs[3].kind, ValueKind::string);
+  EXPECT_TRUE(specs[4].optional);
+  EXPECT_TRUE(specs[4].default_value.is_null());
+  EXPECT_EQ(specs[5].kind, ValueKind::real_list);
+  EXPECT_EQ(specs[6].choices, (std::vector<std::string>{"sine", "square"}));
+  EXPECT_EQ(specs[6].default_value, Json("square"));
+  EXPECT_EQ(specs[7].kind, ValueKind::table_list);
+  ASSERT_EQ(specs[7].fields.size(), 2u);
+  EXPECT_TRUE(specs[7].fields[1].max_exclusive);
+  EXPECT_TRUE(specs[8].required());
+}
+
+TEST(ParamTable, ReadsAValidatedTableIntoTheStruct) {
+  Json table = {{"stiffness_n_per_m", 5e7}, {"shape", "sine"}, {"fit_start_s", 0.5},
+                {"modes", {{{"frequency_hz", 67.56}}}}};
+  const Json validated = validate_params(table, settings_table().specs(), "simulation", LineSeven());
+  const Settings s = settings_table().read(validated);
+  EXPECT_EQ(s.duration_s, 2.0);
+  EXPECT_EQ(s.stiffness_n_per_m, 5e7);
+  EXPECT_EQ(s.shape, Shape::sine);
+  ASSERT_TRUE(s.fit_start_s.has_value());
+  EXPECT_EQ(*s.fit_start_s, 0.5);
+  ASSERT_EQ(s.modes.size(), 1u);
+  EXPECT_EQ(s.modes[0].frequency_hz, 67.56);
+  EXPECT_EQ(s.modes[0].damping_ratio, 0.05);  // the field's default from the struct
+  // Writing back gives the validated table: one declaration serves both directions.
+  EXPECT_EQ(settings_table().write(s), validated);
+}
+
+TEST(ParamTable, ValidationNamesFileLineKeyValueAndLimit) {
+  const std::string message = input_error_of([] {
+    validate_params({{"stiffness_n_per_m", 5e7}, {"duration_s", 250.0}}, settings_table().specs(),
+                    "simulation", LineSeven());
+  });
+  EXPECT_NE(message.find("s.toml:7"), std::string::npos) << message;
+  EXPECT_NE(message.find("simulation.duration_s = 250"), std::string::npos) << message;
+  EXPECT_NE(message.find("<= 100"), std::string::npos) << message;
+  const std::string missing = input_error_of(
+      [] { validate_params(Json::object(), settings_table().specs(), "simulation", LineSeven()); });
+  EXPECT_NE(missing.find("stiffness_n_per_m"), std::string::npos) << missing;
+}
+
+TEST(ParamTable, ADuplicateKeyIsAProgrammingError) {
+  ParamTable<Settings> t;
+  t.add(&Settings::duration_s, "duration_s", "s", "time");
+  EXPECT_THROW(t.add(&Settings::steps, "duration_s", "1", "again"), std::logic_error);
+}
+
+TEST(KitSettings, AbsentTableTakesEveryDefaultAndIsWrittenBack) {
+  struct Small {
+    double rate_hz = 3.0;
+  };
+  ParamTable<Small> t;
+  t.add(&Small::rate_hz, "rate_hz", "Hz", "rate").positive();
+  Json document = Json::object();
+  const Small s = kit::validate_settings(document, "sampling", t, LineSeven());
+  EXPECT_EQ(s.rate_hz, 3.0);
+  EXPECT_EQ(document.at("sampling"), Json({{"rate_hz", 3.0}}));
+  document["sampling"] = 4;
+  const std::string message = input_error_of([&] { kit::validate_settings(document, "sampling", t, LineSeven()); });
+  EXPECT_NE(message.find("expected a table [sampling]"), std::string::npos) << message;
+}
+
+TEST(KitPlots, AxisLabelsAreWordsWithTheUnitOfTheKeySuffix) {
+  EXPECT_EQ(kit::axis_label("wheel_speed_rpm"), "wheel speed [rpm]");
+  EXPECT_EQ(kit::axis_label("model.contact_stiffness_n_per_m"), "contact stiffness [N/m]");
+  EXPECT_EQ(kit::axis_label("model.modes.0.damping_ratio"), "mode 1 damping ratio");
+  EXPECT_EQ(kit::axis_label("growth_rate_per_s"), "growth rate [1/s]");
+  EXPECT_EQ(kit::axis_label("suppression.amplitude_ratio"), "suppression amplitude ratio");
+  EXPECT_EQ(kit::axis_label("suppression.frequency_hz"), "suppression frequency [Hz]");
+  EXPECT_EQ(kit::axis_label("penetration_damping_n_s_per_m"), "penetration damping [N s/m]");
+  EXPECT_EQ(kit::axis_label("waviness_um"), "waviness [µm]");
+  EXPECT_EQ(kit::axis_label("seed"), "seed");
+}
+
+}  // namespace
+}  // namespace chatterlab::testing

@@ -1,0 +1,181 @@
+#include "study_kinds/stability_map/stability_map.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "chatterlab/closed_form.hpp"
+
+namespace chatterlab {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Output columns, in results.csv order.
+constexpr const char* col_growth_rate = "growth_rate_per_s";
+constexpr const char* col_chatter_frequency = "chatter_frequency_hz";
+constexpr const char* col_growth_per_wheel_rev = "growth_rate_per_wheel_rev";
+constexpr const char* col_stable = "stable";
+constexpr const char* col_certified = "certified";
+constexpr const char* col_certified_real_part = "certified_real_part_per_s";
+constexpr const char* col_certificate = "certificate";
+
+std::vector<ClosedFormIndicatorSpec> indicator_specs(const Json& document) {
+  auto model = kit::build_model(document.at("model"));
+  const ClosedFormIndicators* indicators = model->closed_forms();
+  return indicators ? indicators->indicator_specs() : std::vector<ClosedFormIndicatorSpec>{};
+}
+
+// The closed-form indicators' values; a closed form that overflowed is "does not apply" here,
+// never a silent inf in results.csv.
+std::vector<Json> indicator_values(const Model& model) {
+  const ClosedFormIndicators* indicators = model.closed_forms();
+  if (!indicators) return {};
+  std::vector<Json> values = indicators->indicator_values();
+  if (values.size() != indicators->indicator_specs().size())
+    throw std::logic_error("stability_map: a model reported a wrong number of indicators");
+  for (Json& v : values)
+    if (v.is_number() && !std::isfinite(v.get<double>())) v = Json();
+  return values;
+}
+
+std::size_t count_uncertified(const ResultTable& results) {
+  const std::size_t certified = kit::column_index(results, col_certified);
+  return static_cast<std::size_t>(std::count_if(results.rows.begin(), results.rows.end(),
+                                                [&](const auto& row) { return row[certified] == Json(false); }));
+}
+
+// Growth rate and chatter frequency over the grid. A map has no marker for single cells: its
+// title says how many points rest on an unproven search; a curve marks them.
+void plot_roots(const std::vector<kit::PlotAxis>& axes, const Study& study, const ResultTable& results,
+                const fs::path& out_dir, kit::Figures& figures) {
+  const std::string title = kit::study_title(study);
+  const bool map = axes.size() == 2;
+  kit::ColumnFigure growth{col_growth_rate, title + ": growth rate Re s", "growth rate Re s [1/s]"};
+  growth.reference = 0.0;
+  growth.reference_label = map ? "stability boundary (Re s = 0)" : "stability limit (Re s = 0)";
+  growth.flag_column = col_certified;
+  growth.flag_label = "no certificate";
+  if (map) {
+    if (const std::size_t n = count_uncertified(results); n > 0)
+      growth.title += fmt::format(" ({}/{} uncertified)", n, results.rows.size());
+    growth.diverging = true;
+    growth.low_label = "stable";
+    growth.high_label = "chatter";
+    // The palette stretches each side of 0 over its own range, but the colour bar is linear: when
+    // the stable side is tiny next to the chatter side (roots of a regeneration chain decaying
+    // slowly) its ticks vanish, so the colour-bar label states the most stable value.
+    const std::size_t c = kit::column_index(results, col_growth_rate);
+    double most_stable = 0.0;
+    for (std::size_t r = 0; r < results.rows.size(); ++r)
+      if (const double z = kit::cell(results, r, c); std::isfinite(z)) most_stable = std::min(most_stable, z);
+    if (most_stable < 0.0)
+      growth.value_label = fmt::format("growth rate Re s [1/s]  (most stable: {:.3g})", most_stable);
+  }
+  kit::plot_column(axes, results, growth, out_dir, map ? "growth_rate_map" : "growth_rate", figures);
+  kit::ColumnFigure frequency{col_chatter_frequency, title + ": chatter frequency |Im s|/2 pi",
+                              "chatter frequency [Hz]"};
+  frequency.flag_column = col_certified;
+  frequency.flag_label = "no certificate";
+  kit::plot_column(axes, results, frequency, out_dir, map ? "chatter_frequency_map" : "chatter_frequency",
+                   figures);
+}
+
+// Closed-form chatter margins (ClosedFormIndicatorSpec::chatter_margin): drawn like the growth
+// rate, with their own zero line, and the title counts the points where the closed form's verdict
+// (margin > 0: chatter) differs from the rightmost root's (Re s > 0).
+void plot_closed_form_margins(const std::vector<kit::PlotAxis>& axes, const Study& study,
+                              const ResultTable& results, const fs::path& out_dir, kit::Figures& figures) {
+  const std::size_t growth = kit::column_index(results, col_growth_rate);
+  for (const ClosedFormIndicatorSpec& spec : indicator_specs(study.document)) {
+    if (!spec.chatter_margin) continue;
+    const std::size_t margin = kit::column_index(results, spec.name);
+    std::size_t compared = 0, disagree = 0;
+    for (std::size_t r = 0; r < results.rows.size(); ++r) {
+      const double g = kit::cell(results, r, growth), m = kit::cell(results, r, margin);
+      if (!std::isfinite(g) || !std::isfinite(m)) continue;
+      ++compared;
+      disagree += (g > 0.0) != (m > 0.0) ? 1 : 0;
+    }
+    kit::ColumnFigure figure{spec.name,
+                             fmt::format("{} ({}/{} points disagree with the root)", spec.name, disagree, compared),
+                             axes.size() == 1 ? spec.name + " (> 0: chatter)" : spec.name};
+    figure.reference = 0.0;
+    figure.reference_label = axes.size() == 1 ? "closed-form boundary" : "closed-form boundary (margin = 0)";
+    figure.diverging = true;
+    figure.low_label = "stable";
+    figure.high_label = "chatter";
+    kit::plot_column(axes, results, figure, out_dir, spec.name, figures);  // file = column name
+  }
+}
+
+}  // namespace
+
+PluginInfo StabilityMap::info() {
+  PluginInfo info;
+  info.name = "stability_map";
+  info.description =
+      "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
+      "and a certificate that no root lies further right";
+  info.models_md_ids = "G1, G3";
+  info.params = kit::stability_settings_table().specs();
+  info.thread_safety = ThreadSafety::shareable;
+  info.example_params = {{"max_frequency_hz", 500.0}};
+  return info;
+}
+
+void StabilityMap::validate(Json& document, const SourceMap& sources) const {
+  auto model = kit::validate_model(document, kit::ModelNeeds::characteristic, "stability_map", sources);
+  kit::validate_stability(document, *model, sources);
+}
+
+std::vector<std::string> StabilityMap::output_columns(const Json& document) const {
+  std::vector<std::string> columns{col_growth_rate, col_chatter_frequency};
+  // Growth per wheel revolution (G3) only for models with a wheel.
+  if (kit::build_model(document.at("model"))->wheel_period_s())
+    columns.push_back(col_growth_per_wheel_rev);
+  for (const char* c : {col_stable, col_certified, col_certified_real_part, col_certificate})
+    columns.push_back(c);
+  // Closed-form indicators last: a property of the model type, like the wheel column.
+  for (const ClosedFormIndicatorSpec& spec : indicator_specs(document)) columns.push_back(spec.name);
+  return columns;
+}
+
+std::vector<Json> StabilityMap::run_point(const Json& point_document,
+                                          const PointContext& /*context*/) const {
+  auto model = kit::build_model(point_document.at("model"));
+  const RightmostRoot found = kit::rightmost_root(
+      *model, kit::read_settings(point_document, "stability", kit::stability_settings_table()));
+  const kit::StabilityVerdict v = kit::verdict(found, *model);
+  std::vector<Json> out{v.growth_rate_per_s, v.chatter_frequency_hz};
+  // Same rule as output_columns(): having a wheel is a property of the model type.
+  if (v.growth_rate_per_wheel_rev) out.emplace_back(*v.growth_rate_per_wheel_rev);
+  out.emplace_back(v.stable);
+  out.emplace_back(found.certified);
+  out.push_back(found.certified ? Json(found.certified_real_part) : Json());
+  out.emplace_back(found.certificate);
+  for (Json& value : indicator_values(*model)) out.push_back(std::move(value));
+  return out;
+}
+
+void StabilityMap::write_artifacts(const Study& study, const ResultTable& results,
+                                   const fs::path& out_dir) const {
+  // A single point has nothing to draw; 3+ varying axes have no faithful 2-D picture: both are
+  // documented, and results.csv holds every number.
+  const std::vector<kit::PlotAxis> axes = kit::varying_axes(study);
+  if (axes.empty() || axes.size() > 2) return;
+  kit::Figures figures;
+  plot_roots(axes, study, results, out_dir, figures);
+  plot_closed_form_margins(axes, study, results, out_dir, figures);
+  figures.finish();
+}
+
+bool StabilityMap::requires_serial(const Json& document) const {
+  return model_is_serial(document.at("model"));
+}
+
+}  // namespace chatterlab
+
+CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::StabilityMap);
