@@ -770,17 +770,321 @@ PluginInfo CorrelationDimension::info() {
   return info;
 }
 
+namespace {
+
+const double min_region_span = std::log(4.0);  // at least a factor 4 in r
+// Another run of consistent slopes counts as a second scaling behaviour when it spans at least
+// a factor 2 in r and levels off more than this fraction away from the region's level.
+constexpr double other_level_difference = 0.15;
+
+double span_of(const std::vector<double>& log_r, const ScalingRegion& g) {
+  return log_r[g.plateau_end - 1] - log_r[g.plateau_begin];
+}
+
+// The sweep goes to max(8, 2 m + 2) dimensions, as far as the series holds minimum_vectors
+// vectors (a short series with a long delay would otherwise have none).
+int sweep_dimensions(std::size_t samples, const EmbeddingParameters& embedding,
+                     std::optional<std::int64_t> given) {
+  if (given) return int(*given);
+  int max_dimension = std::max(8, 2 * embedding.dimension + 2);
+  while (max_dimension > 2 && samples < nonlinear::minimum_samples(max_dimension, embedding.delay))
+    --max_dimension;
+  return max_dimension;
+}
+
+// The scales of the data: the scaling region (if any), else the longest consistent stretch
+// (reported, not fitted), the noise scale below, a second level of consistent slopes.
+struct Scales {
+  ScalingRegion region, longest;
+  double noise_r = nan;
+  std::size_t other_begin = 0, other_end = 0;
+  double other_level = nan;
+};
+
+// Saturation: the dimension from 2 on whose local slopes agree with those of the next two over
+// the longest plateau of at least min_region_span (the first of equally long ones). A dimension
+// below the embedding one may agree over a short range (Lorenz: d = 2 folds the attractor only
+// at large scales); the longest plateau is where all agree. The lowest dimension whose plateau
+// is nearly (3/4) as long as the longest is taken.
+ScalingRegion saturation_region(const std::vector<DimensionSlopes>& dims,
+                                double dimension_tolerance, double slope_tolerance) {
+  const int max_dimension = int(dims.size());
+  const auto& log_r = dims.front().curve.log_r;
+  std::vector<ScalingRegion> candidates;
+  double longest_span = 0;
+  for (int d = 2; d + consistent_dimensions - 1 <= max_dimension; ++d) {
+    candidates.push_back(
+        scaling_region(dims, d, dimension_tolerance, slope_tolerance, min_region_span));
+    if (candidates.back().found)
+      longest_span = std::max(longest_span, span_of(log_r, candidates.back()));
+  }
+  for (const auto& c : candidates)
+    if (c.found && span_of(log_r, c) >= 0.75 * longest_span) return c;
+  return {};
+}
+
+// Without a scaling region: the longest consistent stretch of any span (at least three bins, a
+// tenth of a decade: a lone point is no range).
+ScalingRegion longest_consistent(const std::vector<DimensionSlopes>& dims,
+                                 double dimension_tolerance, double slope_tolerance) {
+  ScalingRegion longest;
+  for (int d = 2; d + consistent_dimensions - 1 <= int(dims.size()); ++d) {
+    auto candidate = scaling_region(dims, d, dimension_tolerance, slope_tolerance, 0.0);
+    if (candidate.found && candidate.plateau_end - candidate.plateau_begin >= 3 &&
+        (!longest.found || candidate.plateau_end - candidate.plateau_begin >
+                               longest.plateau_end - longest.plateau_begin))
+      longest = candidate;
+  }
+  return longest;
+}
+
+// The slope of the highest dimension with data at bin k, above dimension `above` (NaN if none).
+double highest_slope(const std::vector<DimensionSlopes>& dims, int above, std::size_t k) {
+  for (int d = int(dims.size()); d > above; --d)
+    if (std::isfinite(dims[std::size_t(d - 1)].slopes[k])) return dims[std::size_t(d - 1)].slopes[k];
+  return nan;
+}
+
+// Noise scale: below bin `below`, the largest r whose local slope in the highest swept
+// dimension with data exceeds that of dimension low_d by noise_slope_excess.
+double noise_scale(const std::vector<DimensionSlopes>& dims, int low_d, std::size_t below) {
+  double noise_r = nan;
+  const auto& log_r = dims.front().curve.log_r;
+  for (std::size_t k = 0; k < below && int(dims.size()) > low_d; ++k) {
+    const double base = dims[std::size_t(low_d - 1)].slopes[k];
+    const double highest = highest_slope(dims, low_d, k);
+    if (std::isfinite(base) && std::isfinite(highest) && highest - base > noise_slope_excess)
+      noise_r = std::exp(log_r[k]);
+  }
+  return noise_r;
+}
+
+// Another stretch of consistent slopes (at least a factor 2 in r) whose level differs from the
+// region's by more than other_level_difference: the data show two scaling behaviours (e.g. the
+// strands of a finite trajectory below the scale of a quasi-periodic torus), and D2 is not
+// settled. Above the region, slopes that still grow with the dimension beyond it are the bend at
+// the attractor's extent, not a second scaling behaviour.
+void find_other_level(const std::vector<DimensionSlopes>& dims, Scales& s) {
+  const ScalingRegion& region = s.region;
+  const auto& log_r = dims.front().curve.log_r;
+  const std::size_t bins = log_r.size();
+  const double level = region.mean_slope[(region.plateau_begin + region.plateau_end) / 2];
+  auto outside = [&](std::size_t k) {
+    return std::isfinite(region.mean_slope[k]) &&
+           !(k >= region.plateau_begin && k < region.plateau_end);
+  };
+  for (std::size_t k = 0; k < bins;) {
+    if (!outside(k)) {
+      ++k;
+      continue;
+    }
+    std::size_t e = k;
+    std::vector<double> run;
+    while (e < bins && outside(e)) run.push_back(region.mean_slope[e++]);
+    const double median = run[run.size() / 2];
+    bool bend = false;
+    if (k >= region.plateau_end) {
+      const std::size_t mid = (k + e) / 2;
+      const double highest = highest_slope(dims, region.saturation, mid);
+      bend = std::isfinite(highest) &&
+             highest - dims[std::size_t(region.saturation - 1)].slopes[mid] > 0.05 * median;
+    }
+    if (!bend && log_r[e - 1] - log_r[k] >= std::log(2.0) &&
+        std::abs(median - level) > other_level_difference * level &&
+        (!std::isfinite(s.other_level) || e - k > s.other_end - s.other_begin)) {
+      s.other_begin = k;
+      s.other_end = e;
+      s.other_level = median;
+    }
+    k = e;
+  }
+}
+
+Scales find_scales(const std::vector<DimensionSlopes>& dims, double dimension_tolerance,
+                   double slope_tolerance) {
+  Scales s;
+  s.region = saturation_region(dims, dimension_tolerance, slope_tolerance);
+  if (!s.region.found) s.longest = longest_consistent(dims, dimension_tolerance, slope_tolerance);
+  const ScalingRegion& seen = s.region.found ? s.region : s.longest;
+  s.noise_r = noise_scale(dims, seen.found ? seen.saturation : 2,
+                          seen.found ? seen.plateau_begin : dims.front().slopes.size());
+  if (s.region.found) find_other_level(dims, s);
+  return s;
+}
+
+// D2 over the scaling region: the mean slope of the consistent dimensions, its bootstrap
+// interval, each dimension's slope, the ML estimate, and the interval spanning what the data
+// leave open.
+struct D2Fit {
+  double value = nan, ml = nan, low = nan, high = nan;
+  nonlinear::Interval ci{nan, nan};
+  std::vector<double> per_dimension;
+};
+
+D2Fit fit_region(const CorrelationSums& sums, const std::vector<DimensionSlopes>& dims,
+                 const Scales& s, std::size_t replicates, std::uint64_t seed) {
+  const ScalingRegion& region = s.region;
+  const int max_dimension = int(dims.size());
+  D2Fit f;
+  f.per_dimension.assign(std::size_t(max_dimension), nan);
+  const std::vector<double> ones(CorrelationSums::blocks, 1.0);
+  auto slope_over = [&](const std::vector<double>& w, int d, std::size_t b, std::size_t e) {
+    const Curve c = curve(sums, d, w);
+    for (std::size_t k = b; k < e; ++k)
+      if (!std::isfinite(c.log_c[k])) return nan;
+    return nonlinear::fit_line(c.log_r, c.log_c, b, e).slope;
+  };
+  const double consistent = double(region.top - region.saturation + 1);
+  auto mean_over = [&](const std::vector<double>& w, std::size_t b, std::size_t e) {
+    double mean = 0;
+    for (int d = region.saturation; d <= region.top; ++d) mean += slope_over(w, d, b, e) / consistent;
+    return mean;
+  };
+  f.value = mean_over(ones, region.begin, region.end);
+  f.ci = nonlinear::block_bootstrap(
+      CorrelationSums::blocks, replicates, seed,
+      [&](const std::vector<double>& w) { return mean_over(w, region.begin, region.end); });
+  for (int d = 1; d <= max_dimension; ++d)
+    f.per_dimension[std::size_t(d - 1)] = slope_over(ones, d, region.begin, region.end);
+  // Maximum likelihood over the same scales, mean of the consistent dimensions.
+  f.ml = 0;
+  for (int d = region.saturation; d <= region.top; ++d)
+    f.ml += ml_dimension(dims[std::size_t(d - 1)].curve, region.begin, region.end,
+                         2.0 * max_dimension) /
+            consistent;
+  // The interval spans the bootstrap interval, each consistent dimension's slope, the lower and
+  // upper halves of the region, the ML estimate and a second level of consistent slopes.
+  const std::size_t mid = (region.begin + region.end) / 2;
+  std::vector<double> alternatives{f.ml, mean_over(ones, region.begin, mid + 1),
+                                   mean_over(ones, mid, region.end)};
+  for (int d = region.saturation; d <= region.top; ++d)
+    alternatives.push_back(f.per_dimension[std::size_t(d - 1)]);
+  if (std::isfinite(s.other_level)) alternatives.push_back(s.other_level);
+  f.low = f.ci.low, f.high = f.ci.high;
+  for (double v : alternatives)
+    if (std::isfinite(v)) {
+      f.low = std::isfinite(f.low) ? std::min(f.low, v) : v;
+      f.high = std::isfinite(f.high) ? std::max(f.high, v) : v;
+    }
+  return f;
+}
+
+double decades_between(const std::vector<double>& log_r, std::size_t a, std::size_t b) {
+  return (log_r[b] - log_r[a]) / std::log(10.0);
+}
+
+// Plateau range in r and decades (the slope points; the fit adds half a window each side).
+std::string plateau_text(const std::vector<double>& log_r, const ScalingRegion& g) {
+  return fmt::format("r = {:.3g}..{:.3g} ({:.2f} decades)", std::exp(log_r[g.plateau_begin]),
+                     std::exp(log_r[g.plateau_end - 1]),
+                     decades_between(log_r, g.plateau_begin, g.plateau_end - 1));
+}
+
+std::string noise_note(const Scales& s) {
+  if (!s.region.found && !s.longest.found)
+    return "local slopes grow with the dimension at every scale";
+  return std::isfinite(s.noise_r) ? fmt::format("noise scale {:.3g} (local slopes grow with the "
+                                                "embedding dimension below it)",
+                                                s.noise_r)
+                                  : "no noise scale detected";
+}
+
+// Why a fitted D2 is not "good" (empty: it is).
+std::vector<std::string> doubts_about(const std::vector<double>& log_r, const Scales& s,
+                                      const D2Fit& f) {
+  const ScalingRegion& region = s.region;
+  std::vector<std::string> doubts;
+  const double span = decades_between(log_r, region.plateau_begin, region.plateau_end - 1);
+  const double half_width = 0.5 * (f.high - f.low) / f.value;
+  if (span < good_decades)
+    doubts.push_back(fmt::format("the scaling region spans only {:.2f} decades", span));
+  if (std::isfinite(s.other_level))
+    doubts.push_back(fmt::format(
+        "the slopes level off at {:.3g} over r = {:.3g}..{:.3g} as well (two scaling "
+        "behaviours; the interval spans both)",
+        s.other_level, std::exp(log_r[s.other_begin]), std::exp(log_r[s.other_end - 1])));
+  else if (!(half_width <= good_relative_half_width))
+    doubts.push_back(fmt::format("the interval is +-{:.1f} % wide", 100 * half_width));
+  return doubts;
+}
+
+// What lies above the region: where the slopes leave the plateau.
+std::string upper_scale_note(const std::vector<DimensionSlopes>& dims, const ScalingRegion& region) {
+  const auto& log_r = dims.front().curve.log_r;
+  const std::size_t bins = log_r.size();
+  if (region.plateau_end >= bins || !std::isfinite(region.mean_slope[region.plateau_end - 1]))
+    return "";
+  std::size_t k = region.plateau_end;
+  while (k < bins && !std::isfinite(dims[std::size_t(region.saturation - 1)].slopes[k])) ++k;
+  return k < bins ? fmt::format("; above r = {:.3g} the slopes leave the plateau (curvature or "
+                                "finite extent of the attractor)",
+                                std::exp(log_r[region.end - 1]))
+                  : "";
+}
+
+std::string region_reason(const std::vector<DimensionSlopes>& dims, const Scales& s,
+                          const D2Fit& f, const std::vector<std::string>& doubts) {
+  const ScalingRegion& region = s.region;
+  const auto& log_r = dims.front().curve.log_r;
+  std::string reason = fmt::format(
+      "local slopes of dimensions {}-{} agree over {}: D2 = mean least-squares slope of ln C "
+      "over r = {:.3g}..{:.3g}, maximum-likelihood estimate {:.4g}; {}{}; interval: "
+      "bootstrap, dimensions, halves of the region and ML estimate",
+      region.saturation, region.top, plateau_text(log_r, region), std::exp(log_r[region.begin]),
+      std::exp(log_r[region.end - 1]), f.ml, noise_note(s), upper_scale_note(dims, region));
+  if (!doubts.empty()) reason += fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
+  return reason;
+}
+
+std::string no_region_reason(const std::vector<double>& log_r, const Scales& s,
+                             int max_dimension) {
+  const ScalingRegion& longest = s.longest;
+  if (longest.found)
+    return fmt::format(
+        "no scaling region: the longest range where the local slopes of dimensions {}-{} agree "
+        "(about {:.3g}) is {}, shorter than the {:.2f} decades needed: not fitted; {}",
+        longest.saturation, longest.top,
+        longest.mean_slope[(longest.plateau_begin + longest.plateau_end) / 2],
+        plateau_text(log_r, longest), min_region_span / std::log(10.0), noise_note(s));
+  return fmt::format("no saturation: the local slopes grow with the embedding dimension at "
+                     "every resolved scale up to dimension {} (noise-like, high-dimensional "
+                     "or too short a series); {}",
+                     max_dimension, noise_note(s));
+}
+
+// C(r), local slopes and D2 of every swept dimension, with the fitted region.
+Json by_dimension_json(const std::vector<DimensionSlopes>& dims, const D2Fit& f,
+                       const ScalingRegion& region) {
+  const auto& log_r = dims.front().curve.log_r;
+  Json by_dimension = Json::array();
+  for (const auto& d : dims) {
+    const double d2 = f.per_dimension.empty() ? nan : f.per_dimension[std::size_t(d.dimension - 1)];
+    Json entry{{"dimension", d.dimension}, {"d2", std::isfinite(d2) ? Json(d2) : Json()}};
+    entry["r_low"] = region.found ? Json(std::exp(log_r[region.begin])) : Json();
+    entry["r_high"] = region.found ? Json(std::exp(log_r[region.end - 1])) : Json();
+    std::vector<double> r, c;
+    Json slopes_json = Json::array();
+    for (std::size_t k = 0; k < d.curve.log_r.size(); ++k)
+      if (std::isfinite(d.curve.log_c[k])) {
+        r.push_back(std::exp(d.curve.log_r[k]));
+        c.push_back(std::exp(d.curve.log_c[k]));
+        slopes_json.push_back(std::isfinite(d.slopes[k]) ? Json(d.slopes[k]) : Json());
+      }
+    entry["r"] = r;
+    entry["correlation_sum"] = c;
+    entry["local_slope"] = slopes_json;
+    by_dimension.push_back(entry);
+  }
+  return by_dimension;
+}
+
+}  // namespace
+
 Json CorrelationDimension::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
-  const auto given_max = nonlinear::given_integer(params_, "max_dimension");
-  // The sweep goes to max(8, 2 m + 2) dimensions, as far as the series holds minimum_vectors
-  // vectors (a short series with a long delay would otherwise have none).
-  int max_dimension = given_max ? int(*given_max) : std::max(8, 2 * embedding.dimension + 2);
-  if (!given_max)
-    while (max_dimension > 2 &&
-           x.size() < nonlinear::minimum_samples(max_dimension, embedding.delay))
-      --max_dimension;
+  const int max_dimension = sweep_dimensions(
+      x.size(), embedding, nonlinear::given_integer(params_, "max_dimension"));
   const std::string name = series.name.empty() ? std::string("series") : series.name;
   nonlinear::check_series(x, max_dimension, embedding.delay, name);
 
@@ -791,252 +1095,46 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
                                     *all_pairs_within)
           : correlation_sums(x, max_dimension, embedding.delay, embedding.theiler,
                              std::size_t(params_.integer("max_reference_points")));
-  const double min_pairs = double(params_.integer("min_pairs"));
-  const double tolerance = params_.real("slope_tolerance");
-  const double dimension_tolerance = params_.real("saturation_tolerance");
-  const double min_span = std::log(4.0);  // at least a factor 4 in r
-
   std::vector<DimensionSlopes> dims;
-  for (int d = 1; d <= max_dimension; ++d) dims.push_back(dimension_slopes(sums, d, min_pairs));
+  for (int d = 1; d <= max_dimension; ++d)
+    dims.push_back(dimension_slopes(sums, d, double(params_.integer("min_pairs"))));
   const auto& log_r = dims.front().curve.log_r;
-  const std::size_t bins = log_r.size();
-  auto decades = [&](std::size_t a, std::size_t b) { return (log_r[b] - log_r[a]) / std::log(10.0); };
-
-  // Saturation: the dimension from 2 on whose local slopes agree with those of the next two
-  // over the longest plateau of at least min_span (the first of equally long ones). A dimension
-  // below the embedding one may agree over a short range (Lorenz: d = 2 folds the attractor
-  // only at large scales); the longest plateau is where all agree.
-  std::vector<ScalingRegion> candidates;
-  double longest_span = 0;
-  for (int d = 2; d + consistent_dimensions - 1 <= max_dimension; ++d) {
-    candidates.push_back(scaling_region(dims, d, dimension_tolerance, tolerance, min_span));
-    const auto& c = candidates.back();
-    if (c.found)
-      longest_span = std::max(longest_span, log_r[c.plateau_end - 1] - log_r[c.plateau_begin]);
-  }
-  // The lowest dimension whose plateau is nearly (3/4) as long as the longest.
-  ScalingRegion region;
-  for (const auto& c : candidates)
-    if (c.found && log_r[c.plateau_end - 1] - log_r[c.plateau_begin] >= 0.75 * longest_span) {
-      region = c;
-      break;
-    }
-  // Without one: the longest consistent stretch of any span, reported but not fitted.
-  ScalingRegion longest;
-  if (!region.found)
-    for (int d = 2; d + consistent_dimensions - 1 <= max_dimension; ++d) {
-      auto candidate = scaling_region(dims, d, dimension_tolerance, tolerance, 0.0);
-      // At least three bins (a tenth of a decade): a lone point is no range.
-      if (candidate.found && candidate.plateau_end - candidate.plateau_begin >= 3 &&
-          (!longest.found || candidate.plateau_end - candidate.plateau_begin >
-                                 longest.plateau_end - longest.plateau_begin))
-        longest = candidate;
-    }
-
-  // Noise scale: below the region, the largest r whose local slope in the highest swept
-  // dimension with data exceeds that of the saturation (or second) dimension by
-  // noise_slope_excess. Upper (curvature) scale: the first r above the region where the slopes
-  // leave it.
-  const int low_d = region.found ? region.saturation : longest.found ? longest.saturation : 2;
-  const std::size_t below = region.found    ? region.plateau_begin
-                            : longest.found ? longest.plateau_begin
-                                            : bins;
-  double noise_r = nan;
-  for (std::size_t k = 0; k < below && max_dimension > low_d; ++k) {
-    const double base = dims[std::size_t(low_d - 1)].slopes[k];
-    double highest = nan;
-    for (int d = max_dimension; d > low_d; --d)
-      if (std::isfinite(dims[std::size_t(d - 1)].slopes[k])) {
-        highest = dims[std::size_t(d - 1)].slopes[k];
-        break;
-      }
-    if (std::isfinite(base) && std::isfinite(highest) && highest - base > noise_slope_excess)
-      noise_r = std::exp(log_r[k]);
-  }
-  std::string noise_note = std::isfinite(noise_r)
-                               ? fmt::format("noise scale {:.3g} (local slopes grow with the "
-                                             "embedding dimension below it)",
-                                             noise_r)
-                               : "no noise scale detected";
-  if (!region.found && !longest.found) noise_note = "local slopes grow with the dimension at every scale";
-  // Plateau ranges in r and decades (the slope points; the fit adds half a window each side).
-  auto plateau_text = [&](const ScalingRegion& g) {
-    return fmt::format("r = {:.3g}..{:.3g} ({:.2f} decades)", std::exp(log_r[g.plateau_begin]),
-                       std::exp(log_r[g.plateau_end - 1]),
-                       decades(g.plateau_begin, g.plateau_end - 1));
-  };
-  // Another stretch of consistent slopes (at least a factor 2 in r) whose level differs from the
-  // region's by more than 15 %: the data show two scaling behaviours (e.g. the strands of a
-  // finite trajectory below the scale of a quasi-periodic torus), and D2 is not settled.
-  std::size_t other_begin = 0, other_end = 0;
-  double other_level = nan;
-  if (region.found) {
-    const double level = region.mean_slope[(region.plateau_begin + region.plateau_end) / 2];
-    for (std::size_t k = 0; k < bins;) {
-      if (!std::isfinite(region.mean_slope[k]) ||
-          (k >= region.plateau_begin && k < region.plateau_end)) {
-        ++k;
-        continue;
-      }
-      std::size_t e = k;
-      std::vector<double> run;
-      while (e < bins && std::isfinite(region.mean_slope[e]) &&
-             !(e >= region.plateau_begin && e < region.plateau_end))
-        run.push_back(region.mean_slope[e++]);
-      const double median = run[run.size() / 2];
-      // Above the region, slopes that still grow with the dimension beyond it are the bend at
-      // the attractor's extent, not a second scaling behaviour.
-      bool bend = false;
-      if (k >= region.plateau_end) {
-        const std::size_t mid = (k + e) / 2;
-        for (int d = max_dimension; d > region.saturation; --d)
-          if (std::isfinite(dims[std::size_t(d - 1)].slopes[mid])) {
-            bend = dims[std::size_t(d - 1)].slopes[mid] -
-                       dims[std::size_t(region.saturation - 1)].slopes[mid] >
-                   0.05 * median;
-            break;
-          }
-      }
-      if (!bend && log_r[e - 1] - log_r[k] >= std::log(2.0) &&
-          std::abs(median - level) > 0.15 * level &&
-          (!std::isfinite(other_level) || e - k > other_end - other_begin)) {
-        other_begin = k;
-        other_end = e;
-        other_level = median;
-      }
-      k = e;
-    }
-  }
+  const Scales scales =
+      find_scales(dims, params_.real("saturation_tolerance"), params_.real("slope_tolerance"));
+  const ScalingRegion& region = scales.region;
 
   Json out;
-  double value = nan, ml = nan;
-  nonlinear::Interval ci{nan, nan};
-  double low = nan, high = nan;
+  D2Fit fit;
   std::string quality = "failed", reason;
-  std::vector<double> per_dimension(std::size_t(max_dimension), nan);
   if (region.found) {
-    const std::vector<double> ones(CorrelationSums::blocks, 1.0);
-    auto slope_over = [&](const std::vector<double>& w, int d, std::size_t b, std::size_t e) {
-      const Curve c = curve(sums, d, w);
-      for (std::size_t k = b; k < e; ++k)
-        if (!std::isfinite(c.log_c[k])) return nan;
-      return nonlinear::fit_line(c.log_r, c.log_c, b, e).slope;
-    };
-    auto mean_over = [&](const std::vector<double>& w, std::size_t b, std::size_t e) {
-      double mean = 0;
-      for (int d = region.saturation; d <= region.top; ++d)
-        mean += slope_over(w, d, b, e) / double(region.top - region.saturation + 1);
-      return mean;
-    };
-    value = mean_over(ones, region.begin, region.end);
-    ci = nonlinear::block_bootstrap(
-        CorrelationSums::blocks, std::size_t(params_.integer("bootstrap_replicates")),
-        std::uint64_t(params_.integer("seed")),
-        [&](const std::vector<double>& w) { return mean_over(w, region.begin, region.end); });
-    for (int d = 1; d <= max_dimension; ++d)
-      per_dimension[std::size_t(d - 1)] = slope_over(ones, d, region.begin, region.end);
-    // Maximum likelihood over the same scales, mean of the consistent dimensions.
-    ml = 0;
-    for (int d = region.saturation; d <= region.top; ++d)
-      ml += ml_dimension(dims[std::size_t(d - 1)].curve, region.begin, region.end,
-                         2.0 * max_dimension) /
-            double(region.top - region.saturation + 1);
-    // The interval spans what the data leave open: the bootstrap interval, each consistent
-    // dimension's slope, the lower and upper halves of the region, and the ML estimate.
-    const std::size_t mid = (region.begin + region.end) / 2;
-    std::vector<double> alternatives{ml, mean_over(ones, region.begin, mid + 1),
-                                     mean_over(ones, mid, region.end)};
-    for (int d = region.saturation; d <= region.top; ++d)
-      alternatives.push_back(per_dimension[std::size_t(d - 1)]);
-    if (std::isfinite(other_level)) alternatives.push_back(other_level);
-    low = ci.low, high = ci.high;
-    for (double v : alternatives)
-      if (std::isfinite(v)) {
-        low = std::isfinite(low) ? std::min(low, v) : v;
-        high = std::isfinite(high) ? std::max(high, v) : v;
-      }
-    const double span = decades(region.plateau_begin, region.plateau_end - 1);
-    const double half_width = 0.5 * (high - low) / value;
-    std::vector<std::string> doubts;
-    if (span < good_decades)
-      doubts.push_back(fmt::format("the scaling region spans only {:.2f} decades", span));
-    if (std::isfinite(other_level))
-      doubts.push_back(fmt::format(
-          "the slopes level off at {:.3g} over r = {:.3g}..{:.3g} as well (two scaling "
-          "behaviours; the interval spans both)",
-          other_level, std::exp(log_r[other_begin]), std::exp(log_r[other_end - 1])));
-    else if (!(half_width <= good_relative_half_width))
-      doubts.push_back(fmt::format("the interval is +-{:.1f} % wide", 100 * half_width));
+    fit = fit_region(sums, dims, scales, std::size_t(params_.integer("bootstrap_replicates")),
+                     std::uint64_t(params_.integer("seed")));
+    const auto doubts = doubts_about(log_r, scales, fit);
     quality = doubts.empty() ? "good" : "uncertain";
-    // What lies below and above the region.
-    std::string upper;
-    if (region.plateau_end < bins && std::isfinite(region.mean_slope[region.plateau_end - 1])) {
-      std::size_t k = region.plateau_end;
-      while (k < bins && !std::isfinite(dims[std::size_t(region.saturation - 1)].slopes[k])) ++k;
-      upper = k < bins ? fmt::format("; above r = {:.3g} the slopes leave the plateau "
-                                     "(curvature or finite extent of the attractor)",
-                                     std::exp(log_r[region.end - 1]))
-                       : "";
-    }
-    reason = fmt::format(
-        "local slopes of dimensions {}-{} agree over {}: D2 = mean least-squares slope of ln C "
-        "over r = {:.3g}..{:.3g}, maximum-likelihood estimate {:.4g}; {}{}; interval: "
-        "bootstrap, dimensions, halves of the region and ML estimate",
-        region.saturation, region.top, plateau_text(region), std::exp(log_r[region.begin]),
-        std::exp(log_r[region.end - 1]), ml, noise_note, upper);
-    if (!doubts.empty()) reason += fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
+    reason = region_reason(dims, scales, fit, doubts);
     out["scaling_region"] = {std::exp(log_r[region.begin]), std::exp(log_r[region.end - 1])};
-  } else if (longest.found) {
-    reason = fmt::format(
-        "no scaling region: the longest range where the local slopes of dimensions {}-{} agree "
-        "(about {:.3g}) is {}, shorter than the {:.2f} decades needed: not fitted; {}",
-        longest.saturation, longest.top,
-        longest.mean_slope[(longest.plateau_begin + longest.plateau_end) / 2],
-        plateau_text(longest), min_span / std::log(10.0), noise_note);
-    out["scaling_region"] = Json();
   } else {
-    reason = fmt::format("no saturation: the local slopes grow with the embedding dimension at "
-                         "every resolved scale up to dimension {} (noise-like, high-dimensional "
-                         "or too short a series); {}",
-                         max_dimension, noise_note);
+    reason = no_region_reason(log_r, scales, max_dimension);
     out["scaling_region"] = Json();
   }
-  out["correlation_dimension"] = nonlinear::estimate(value, low, high, quality, reason);
+  const bool ml_found = std::isfinite(fit.ml);
+  out["correlation_dimension"] = nonlinear::estimate(fit.value, fit.low, fit.high, quality, reason);
   out["correlation_dimension_ml"] = nonlinear::estimate(
-      ml, nan, nan, std::isfinite(ml) ? quality : "failed",
-      std::isfinite(ml) ? "binned maximum likelihood (Takens-Theiler-Judd) over the scaling region"
-                        : "no scaling region");
-  out["bootstrap_ci"] = {std::isfinite(ci.low) ? Json(ci.low) : Json(),
-                         std::isfinite(ci.high) ? Json(ci.high) : Json()};
+      fit.ml, nan, nan, ml_found ? quality : "failed",
+      ml_found ? "binned maximum likelihood (Takens-Theiler-Judd) over the scaling region"
+               : "no scaling region");
+  out["bootstrap_ci"] = {std::isfinite(fit.ci.low) ? Json(fit.ci.low) : Json(),
+                         std::isfinite(fit.ci.high) ? Json(fit.ci.high) : Json()};
   out["saturation_dimension"] = region.found ? region.saturation : 0;
   out["consistent_dimensions"] =
       region.found ? Json::array({region.saturation, region.top}) : Json();
-  out["noise_level"] = std::isfinite(noise_r) ? Json(noise_r) : Json();
+  out["noise_level"] = std::isfinite(scales.noise_r) ? Json(scales.noise_r) : Json();
   out["delay_samples"] = embedding.delay;
   out["theiler_window_samples"] = embedding.theiler;
   out["embedding_source"] = embedding.source;
   out["reference_points"] = params_.integer("max_reference_points");
   if (all_pairs_within) out["all_pairs_within"] = *all_pairs_within;
-  Json by_dimension = Json::array();
-  for (const auto& f : dims) {
-    const double d2 = per_dimension[std::size_t(f.dimension - 1)];
-    Json entry{{"dimension", f.dimension}, {"d2", std::isfinite(d2) ? Json(d2) : Json()}};
-    entry["r_low"] = region.found ? Json(std::exp(log_r[region.begin])) : Json();
-    entry["r_high"] = region.found ? Json(std::exp(log_r[region.end - 1])) : Json();
-    std::vector<double> r, c;
-    Json slopes_json = Json::array();
-    for (std::size_t k = 0; k < f.curve.log_r.size(); ++k)
-      if (std::isfinite(f.curve.log_c[k])) {
-        r.push_back(std::exp(f.curve.log_r[k]));
-        c.push_back(std::exp(f.curve.log_c[k]));
-        slopes_json.push_back(std::isfinite(f.slopes[k]) ? Json(f.slopes[k]) : Json());
-      }
-    entry["r"] = r;
-    entry["correlation_sum"] = c;
-    entry["local_slope"] = slopes_json;
-    by_dimension.push_back(entry);
-  }
-  out["by_dimension"] = by_dimension;
+  out["by_dimension"] = by_dimension_json(dims, fit, region);
   return out;
 }
 

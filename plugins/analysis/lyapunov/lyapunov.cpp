@@ -139,7 +139,7 @@ PluginInfo LyapunovAnalysis::info() {
   info.name = "lyapunov";
   info.description =
       "largest Lyapunov exponent from Kantz's and Rosenstein's divergence curves over three "
-      "embedding dimensions and five neighbourhood sizes; reported only where they show a "
+      "embedding dimensions and six neighbourhood sizes; reported only where they show a "
       "common exponential divergence; per sample and per second";
   info.models_md_ids = "N3, N4";
   using nonlinear::numeric_spec;
@@ -152,8 +152,9 @@ PluginInfo LyapunovAnalysis::info() {
       numeric_spec("max_reference_points", ValueKind::integer, "1",
                    "reference vectors whose neighbours are followed (evenly spread)", 5000, 20),
       numeric_spec("radius", ValueKind::real, "signal unit",
-                   "middle of the five Kantz neighbourhood sizes eps (factor 2 apart; absent: "
-                   "median distances to the 4th, 12th, 36th, 108th and 324th nearest neighbour)",
+                   "middle of five Kantz neighbourhood sizes eps, a factor 2 apart (absent: six "
+                   "sizes, the median distances to the 4th, 10th, 25th, 60th, 150th and 400th "
+                   "nearest neighbour)",
                    Json(), 0, std::numeric_limits<double>::infinity(), true),
       nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
@@ -227,6 +228,8 @@ ScanPlan plan_scan(const std::vector<double>& x, const EmbeddingParameters& embe
 // Every curve of the scan, classified.
 struct CurveSet {
   std::size_t dims = 0, sizes = 0;
+  std::size_t references = 0;  // of the Kantz scan
+  double min_references = 0;   // a usable curve has neighbours for this many references
   std::vector<CurveResult> kantz;  // [r * dims + d]
   std::vector<CurveResult> rosenstein;  // [d]
   CurveResult& at(std::size_t r, std::size_t d) { return kantz[r * dims + d]; }
@@ -301,8 +304,18 @@ struct Envelope {
   }
 };
 
-// An estimate per sample with its reason, written for either unit (per sample, or per unit of
-// the series) so that no reason mixes units.
+// A rate written per sample, or per unit of the series (dt of them per sample): reasons are
+// written for either unit so that none mixes them.
+struct RateText {
+  double dt = 1;
+  std::string unit;
+  std::string operator()(double per_sample, bool in_unit) const {
+    return in_unit ? fmt::format("{:.4g} per {}", per_sample / dt, unit)
+                   : fmt::format("{:.4g} per sample", per_sample);
+  }
+};
+
+// An estimate per sample with its reason, written for either unit.
 struct Estimate {
   double value = nan, low = nan, high = nan;
   std::string quality = "failed";
@@ -320,26 +333,15 @@ Estimate not_determined(std::string why) {
   return e;
 }
 
-}  // namespace
-
-Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context) const {
-  const auto embedding = resolve_embedding(params_, series, context);
-  const auto& x = series.values;
-  const std::string name = series.name.empty() ? std::string("series") : series.name;
-  const ScanPlan plan = plan_scan(x, embedding, nonlinear::given_integer(params_, "max_steps"),
-                                  nonlinear::given_real(params_, "radius"), name);
-  const auto references = std::size_t(params_.integer("max_reference_points"));
-  const auto replicates = std::size_t(params_.integer("bootstrap_replicates"));
-  const auto seed = std::uint64_t(params_.integer("seed"));
-  const double dt = series.sample_interval;
-  const std::string unit = series.sample_unit;
-
-  // Kantz's curves for every size and dimension at once, Rosenstein's per dimension.
+// Kantz's curves for every size and dimension at once (one scan), Rosenstein's per dimension,
+// fitted and classified.
+CurveSet scan_curves(const std::vector<double>& x, const ScanPlan& plan, std::size_t references,
+                     std::size_t replicates, std::uint64_t seed) {
   const auto scan = kantz_scan(x, plan.m0, plan.m_max, plan.delay, plan.theiler, plan.steps,
                                references, plan.radii, plan.stride);
-  const double min_references =
-      std::max(usable_references, usable_reference_share * double(scan.references));
   CurveSet set;
+  set.references = scan.references;
+  set.min_references = std::max(usable_references, usable_reference_share * double(scan.references));
   set.dims = std::size_t(plan.m_max - plan.m0 + 1);
   set.sizes = plan.radii.size();
   for (std::size_t r = 0; r < set.sizes; ++r)
@@ -349,7 +351,7 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
       c.dimension = m;
       c.radius = plan.radii[r];
       c.data = scan.block_curve(r, m);
-      fit_curve(c, plan.stride, replicates, seed + set.kantz.size(), min_references);
+      fit_curve(c, plan.stride, replicates, seed + set.kantz.size(), set.min_references);
       set.kantz.push_back(std::move(c));
     }
   for (int m = plan.m0; m <= plan.m_max; ++m) {
@@ -359,122 +361,285 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
     c.data = rosenstein_curve(x, m, plan.delay, plan.theiler, plan.steps, plan.stride,
                               std::min(references, rosenstein_references));
     fit_curve(c, plan.stride, replicates, seed + 1000 + std::size_t(m),
-              std::min(min_references, usable_reference_share * double(rosenstein_references)));
+              std::min(set.min_references,
+                       usable_reference_share * double(rosenstein_references)));
     set.rosenstein.push_back(std::move(c));
   }
   classify(set);
+  return set;
+}
 
-  // Noise: a floor (the smallest sizes of a dimension collapse below an admissible one), or a
-  // noise-dominated scale among those used (local dimensions in m0 and m_max).
-  bool noise_floor = false;
-  double noise_radius = nan;
+// What noise does to the curves: a floor (the smallest sizes of a dimension collapse below an
+// admissible one), or a noise-dominated scale among those used (from the local dimensions of
+// the neighbour distances in m0 and m_max).
+struct NoiseEvidence {
+  bool floor = false;
+  double floor_radius = nan;
+  bool scale = false;
+  double scale_radius = nan, scale_dimension = nan;
+  std::vector<double> low_dims, high_dims;  // local dimensions per scale in m0 and m_max
+};
+
+void find_noise_floor(const CurveSet& set, const ScanPlan& plan, NoiseEvidence& noise) {
   for (std::size_t d = 0; d < set.dims; ++d) {
     std::size_t first_admissible = set.sizes;
     for (std::size_t r = 0; r < set.sizes && first_admissible == set.sizes; ++r)
       if (set.at(r, d).admissible) first_admissible = r;
     for (std::size_t r = 0; r < first_admissible && first_admissible < set.sizes; ++r)
       if (set.at(r, d).collapsed) {
-        noise_floor = true;
-        noise_radius = std::isfinite(noise_radius) ? std::max(noise_radius, plan.radii[r])
-                                                   : plan.radii[r];
+        noise.floor = true;
+        noise.floor_radius = std::isfinite(noise.floor_radius)
+                                 ? std::max(noise.floor_radius, plan.radii[r])
+                                 : plan.radii[r];
       }
   }
+}
+
+// Scale q is noise-dominated when its local dimension grows with the embedding dimension or
+// exceeds that of every larger scale by more than noise_dimension_excess.
+bool noisy_scale(const NoiseEvidence& noise, std::size_t q) {
+  const auto& low = noise.low_dims;
+  const auto& high = noise.high_dims;
+  if (q >= low.size() || !std::isfinite(low[q])) return false;
+  double larger = std::numeric_limits<double>::infinity();
+  for (std::size_t p = q + 1; p < low.size(); ++p)
+    if (std::isfinite(low[p])) larger = std::min(larger, low[p]);
+  const double growth = std::isfinite(high[q]) ? high[q] - low[q] : 0.0;
+  return growth > noise_dimension_excess ||
+         (std::isfinite(larger) && low[q] - larger > noise_dimension_excess);
+}
+
+NoiseEvidence detect_noise(const std::vector<double>& x, const ScanPlan& plan,
+                           const CurveSet& set) {
+  NoiseEvidence noise;
+  find_noise_floor(set, plan, noise);
   auto local_dimensions_in = [&](int m) {
     return local_dimensions(neighbour_distances(x, m, plan.delay, plan.theiler, plan.limit,
                                                 radius_neighbours, radius_sample),
                             radius_neighbours);
   };
-  const auto low_dims = local_dimensions_in(plan.m0);
-  const auto high_dims = plan.m_max > plan.m0 ? local_dimensions_in(plan.m_max) : low_dims;
-  // Scale q is noise-dominated when its local dimension grows with the embedding dimension or
-  // exceeds that of every larger scale by more than noise_dimension_excess.
-  auto noisy_scale = [&](std::size_t q) {
-    if (q >= low_dims.size() || !std::isfinite(low_dims[q])) return false;
-    double larger = std::numeric_limits<double>::infinity();
-    for (std::size_t p = q + 1; p < low_dims.size(); ++p)
-      if (std::isfinite(low_dims[p])) larger = std::min(larger, low_dims[p]);
-    const double growth = std::isfinite(high_dims[q]) ? high_dims[q] - low_dims[q] : 0.0;
-    return growth > noise_dimension_excess ||
-           (std::isfinite(larger) && low_dims[q] - larger > noise_dimension_excess);
-  };
-  bool noise_scale = false;
-  double noise_scale_radius = nan, noise_scale_dimension = nan;
-  for (std::size_t r = 0; r < plan.radius_scale.size() && !noise_scale; ++r) {
+  noise.low_dims = local_dimensions_in(plan.m0);
+  noise.high_dims = plan.m_max > plan.m0 ? local_dimensions_in(plan.m_max) : noise.low_dims;
+  for (std::size_t r = 0; r < plan.radius_scale.size() && !noise.scale; ++r) {
     bool used = false;
     for (std::size_t d = 0; d < set.dims; ++d) used = used || set.at(r, d).selected;
-    if (used && noisy_scale(plan.radius_scale[r])) {
-      noise_scale = true;
-      noise_scale_radius = plan.radii[r];
-      noise_scale_dimension = low_dims[plan.radius_scale[r]];
+    if (used && noisy_scale(noise, plan.radius_scale[r])) {
+      noise.scale = true;
+      noise.scale_radius = plan.radii[r];
+      noise.scale_dimension = noise.low_dims[plan.radius_scale[r]];
     }
   }
+  return noise;
+}
 
-  auto rate = [&](double per_sample, bool in_unit) {
-    return in_unit ? fmt::format("{:.4g} per {}", per_sample / dt, unit)
-                   : fmt::format("{:.4g} per sample", per_sample);
+// The selected curves: their slopes and intervals, and the dimensions and sizes they cover.
+struct Selection {
+  Envelope kantz, rosenstein;
+  std::vector<int> dims;
+  int sizes = 0;
+};
+
+Selection selected_curves(const CurveSet& set) {
+  Selection s;
+  std::size_t sizes_mask = 0;
+  for (std::size_t r = 0; r < set.sizes; ++r)
+    for (std::size_t d = 0; d < set.dims; ++d) {
+      const CurveResult& c = set.at(r, d);
+      if (!c.selected) continue;
+      s.kantz.add(c);
+      if (std::find(s.dims.begin(), s.dims.end(), c.dimension) == s.dims.end())
+        s.dims.push_back(c.dimension);
+      sizes_mask |= std::size_t(1) << r;
+    }
+  for (const auto& c : set.rosenstein)
+    if (c.selected) s.rosenstein.add(c);
+  s.sizes = std::popcount(sizes_mask);
+  return s;
+}
+
+// The exponent and its interval, per method, and the divergence found.
+struct Decision {
+  Estimate head, kantz, rosenstein;
+  std::string divergence = "undetermined";
+};
+
+// No divergence: the flat curves' mean trend, an interval including 0.
+Decision no_divergence(const CurveSet& set, const ScanPlan& plan, const RateText& rate) {
+  Decision out;
+  out.divergence = "none";
+  Envelope trends, rosenstein_trends;
+  for (const auto& c : set.kantz)
+    if (c.usable && c.fit.found && !c.fit.diverging) trends.add(c);
+  for (const auto& c : set.rosenstein)
+    if (c.usable && c.fit.found && !c.fit.diverging) rosenstein_trends.add(c);
+  Estimate& head = out.head;
+  head.value = median_of(trends.slopes);
+  head.low = std::min(trends.low, 0.0);
+  head.high = std::max(trends.high, 0.0);
+  head.quality = "good";
+  const std::size_t count = trends.slopes.size();
+  const double value = head.value;
+  const double horizon_samples = double(plan.steps - 1) * double(plan.stride);
+  head.reason = [=](bool in_unit) {
+    return fmt::format(
+        "no exponential divergence: the curves of the smallest neighbourhoods rise by less "
+        "than ln 2 over {:.0f} samples (periodic or quasi-periodic motion: largest exponent "
+        "0); mean trend of {} flat curves {}",
+        horizon_samples, count, rate(value, in_unit));
   };
+  out.kantz = out.rosenstein = head;
+  out.rosenstein.value = median_of(rosenstein_trends.slopes);
+  return out;
+}
+
+Decision undetermined(Estimate why) {
+  Decision out;
+  out.head = out.kantz = out.rosenstein = std::move(why);
+  return out;
+}
+
+// Why an estimate that showed exponential divergence is not "good" (empty: it is).
+std::vector<std::string> doubts_about(double median, const Estimate& head,
+                                      const Selection& selected, std::size_t dims,
+                                      const NoiseEvidence& noise, std::size_t samples) {
+  std::vector<std::string> doubts;
+  const double half_width = 0.5 * (head.high - head.low) / std::abs(median);
+  if (!(median > 0)) doubts.push_back("the slope is not positive");
+  if (half_width > good_relative_half_width)
+    doubts.push_back(fmt::format("the interval is +-{:.0f} % wide", 100 * half_width));
+  if (noise.floor)
+    doubts.push_back(fmt::format(
+        "neighbours closer than {:.3g} separate at once (measurement or dynamical noise), "
+        "which biases the slope of the larger neighbourhoods low",
+        noise.floor_radius));
+  if (noise.scale)
+    doubts.push_back(fmt::format(
+        "at the neighbourhood size {:.3g} the local dimension is {:.2g} and grows with the "
+        "embedding dimension or towards smaller scales: noise dominates there, which biases "
+        "the slope low",
+        noise.scale_radius, noise.scale_dimension));
+  if (selected.kantz.min_references < good_references)
+    doubts.push_back(fmt::format("only {:.0f} reference points have neighbours",
+                                 selected.kantz.min_references));
+  if (median > 0 && double(samples) * median < good_e_foldings)
+    doubts.push_back(fmt::format(
+        "the series covers only {:.0f} e-folding times 1/lambda (at least {:.0f} wanted)",
+        double(samples) * median, good_e_foldings));
+  if (selected.dims.size() < dims)
+    doubts.push_back(
+        fmt::format("only {} of {} embedding dimensions show it", selected.dims.size(), dims));
+  return doubts;
+}
+
+// The linear region of the selected curve closest to the median, in samples.
+std::string central_region(const CurveSet& set, const ScanPlan& plan, double median) {
+  const CurveResult* central = nullptr;
+  for (const auto& c : set.kantz)
+    if (c.selected &&
+        (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median)))
+      central = &c;
+  return fmt::format("samples {:.0f}-{:.0f}", double(central->fit.begin * plan.stride),
+                     double((central->fit.end - 1) * plan.stride));
+}
+
+Estimate rosenstein_estimate(const Selection& selected, const RateText& rate) {
+  const std::size_t n = selected.rosenstein.slopes.size();
+  if (n == 0)
+    return not_determined(
+        "not admissible: nearest neighbours below the noise scale or no linear region");
+  Estimate e;
+  e.value = median_of(selected.rosenstein.slopes);
+  e.low = selected.rosenstein.low;
+  e.high = selected.rosenstein.high;
+  e.quality = "uncertain";
+  const double value = e.value;
+  e.reason = [=](bool in_unit) {
+    return fmt::format("median slope of {} nearest-neighbour curves: {}", n, rate(value, in_unit));
+  };
+  return e;
+}
+
+// Exponential divergence: the median slope of the selected Kantz curves, the interval spanning
+// every admissible curve of both methods.
+Decision exponential(const CurveSet& set, const ScanPlan& plan, const Selection& selected,
+                     const NoiseEvidence& noise, std::size_t samples, const RateText& rate) {
+  const auto& slopes = selected.kantz.slopes;
+  const double median = median_of(slopes);
+  const auto [lo_it, hi_it] = std::minmax_element(slopes.begin(), slopes.end());
+  const double lo = *lo_it, hi = *hi_it;
+  const std::size_t n_slopes = slopes.size(), n_dims = selected.dims.size(), dims = set.dims;
+  if (n_dims < std::min<std::size_t>(2, dims) ||
+      (hi - lo) / std::abs(median) > max_relative_spread) {
+    Estimate why;
+    why.reason = [=](bool in_unit) {
+      return fmt::format(
+          "not determined: the admissible Kantz slopes range from {} to {} ({} curves in {} of "
+          "{} embedding dimensions): no exponent common to dimensions and neighbourhood sizes",
+          rate(lo, in_unit), rate(hi, in_unit), n_slopes, n_dims, dims);
+    };
+    return undetermined(why);
+  }
+  Decision out;
+  out.divergence = "exponential";
+  Estimate& head = out.head;
+  out.kantz.value = head.value = median;
+  out.kantz.low = selected.kantz.low;
+  out.kantz.high = selected.kantz.high;
+  // The headline interval also spans Rosenstein's admissible estimates.
+  head.low = std::min(selected.kantz.low, selected.rosenstein.low);
+  head.high = std::max(selected.kantz.high, selected.rosenstein.high);
+  const auto doubts = doubts_about(median, head, selected, dims, noise, samples);
+  head.quality = out.kantz.quality = doubts.empty() ? "good" : "uncertain";
+  const std::string doubt_text =
+      doubts.empty() ? "" : fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
+  const std::string region = central_region(set, plan, median);
+  const double r_median = median_of(selected.rosenstein.slopes);
+  const std::size_t n_rosenstein = selected.rosenstein.slopes.size();
+  const int sizes_used = selected.sizes;
+  head.reason = [=](bool in_unit) {
+    std::string text = fmt::format(
+        "exponential divergence: median slope of {} parallel Kantz curves (the smallest "
+        "admissible neighbourhood sizes, {} dimensions x {} sizes; slopes {} to {}; linear "
+        "region e.g. {})",
+        n_slopes, n_dims, sizes_used, rate(lo, in_unit), rate(hi, in_unit), region);
+    text += n_rosenstein > 0 ? fmt::format("; Rosenstein {} (median of {} dimensions)",
+                                           rate(r_median, in_unit), n_rosenstein)
+                             : "; Rosenstein not admissible";
+    text += "; interval: all admissible curves' 95 % bootstrap intervals (dimensions, sizes, "
+            "regions, methods)";
+    return text + doubt_text;
+  };
+  out.kantz.reason = head.reason;
+  out.rosenstein = rosenstein_estimate(selected, rate);
+  return out;
+}
+
+// The decision over the classified curves: too few neighbours, no divergence (flat curves),
+// no divergence common to sizes and dimensions, or exponential divergence.
+Decision decide(const CurveSet& set, const ScanPlan& plan, const NoiseEvidence& noise,
+                std::size_t samples, const RateText& rate) {
   std::size_t usable = 0, diverging = 0;
   for (const auto& c : set.kantz) {
     usable += c.usable;
     diverging += c.usable && c.fit.found && c.fit.diverging;
   }
+  if (usable == 0)
+    return undetermined(not_determined(fmt::format(
+        "not determined: too few neighbours (fewer than {:.0f} of {} reference points have a "
+        "neighbour within the largest radius {:.3g})",
+        set.min_references, set.references, plan.radii.back())));
   // No divergence: in every dimension the curve of the smallest usable neighbourhood rises by
   // less than ln 2 over the whole horizon (larger neighbourhoods may wobble: a too small
   // dimension folds the attractor, and the curvature of a torus moves their mean distance).
-  bool flat = usable > 0;
+  bool flat = true;
   for (std::size_t d = 0; d < set.dims; ++d) {
     const std::size_t r = set.first_usable(d);
     if (r < set.sizes) flat = flat && set.at(r, d).fit.found && !set.at(r, d).fit.diverging;
   }
-  Envelope kantz, rosenstein;
-  std::vector<int> dims_used;
-  std::size_t sizes_used_mask = 0;
-  for (std::size_t r = 0; r < set.sizes; ++r)
-    for (std::size_t d = 0; d < set.dims; ++d)
-      if (set.at(r, d).selected) {
-        kantz.add(set.at(r, d));
-        if (std::find(dims_used.begin(), dims_used.end(), set.at(r, d).dimension) ==
-            dims_used.end())
-          dims_used.push_back(set.at(r, d).dimension);
-        sizes_used_mask |= std::size_t(1) << r;
-      }
-  for (const auto& c : set.rosenstein)
-    if (c.selected) rosenstein.add(c);
-  const int sizes_used = std::popcount(sizes_used_mask);
-  const double horizon_samples = double(plan.steps - 1) * double(plan.stride);
-
-  Estimate head, kantz_estimate, rosenstein_estimate;
-  std::string divergence = "undetermined";
-  if (usable == 0) {
-    head = not_determined(fmt::format(
-        "not determined: too few neighbours (fewer than {:.0f} of {} reference points have a "
-        "neighbour within the largest radius {:.3g})",
-        min_references, scan.references, plan.radii.back()));
-    kantz_estimate = rosenstein_estimate = head;
-  } else if (flat) {
-    divergence = "none";
-    Envelope trends, rosenstein_trends;
-    for (const auto& c : set.kantz)
-      if (c.usable && c.fit.found && !c.fit.diverging) trends.add(c);
-    for (const auto& c : set.rosenstein)
-      if (c.usable && c.fit.found && !c.fit.diverging) rosenstein_trends.add(c);
-    head.value = median_of(trends.slopes);
-    head.low = std::min(trends.low, 0.0);
-    head.high = std::max(trends.high, 0.0);
-    head.quality = "good";
-    const std::size_t count = trends.slopes.size();
-    const double value = head.value;
-    head.reason = [=, &rate](bool in_unit) {
-      return fmt::format(
-          "no exponential divergence: the curves of the smallest neighbourhoods rise by less "
-          "than ln 2 over {:.0f} samples (periodic or quasi-periodic motion: largest exponent "
-          "0); mean trend of {} flat curves {}",
-          horizon_samples, count, rate(value, in_unit));
-    };
-    kantz_estimate = rosenstein_estimate = head;
-    rosenstein_estimate.value = median_of(rosenstein_trends.slopes);
-  } else if (kantz.slopes.empty()) {
-    head = not_determined(
+  if (flat) return no_divergence(set, plan, rate);
+  const Selection selected = selected_curves(set);
+  if (selected.kantz.slopes.empty())
+    return undetermined(not_determined(
         "not determined: no exponential divergence common to neighbourhood sizes" +
         (diverging > 0
              ? fmt::format(" ({} of {} usable Kantz curves have a linear region, none stays "
@@ -482,129 +647,23 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
                            "within the first steps whatever their distance, as in noise or a "
                            "linear stochastic process)",
                            diverging, usable)
-             : fmt::format(" (none of the {} usable Kantz curves has a linear region)", usable)));
-    kantz_estimate = rosenstein_estimate = head;
-  } else {
-    const double median = median_of(kantz.slopes);
-    const auto [lo_it, hi_it] = std::minmax_element(kantz.slopes.begin(), kantz.slopes.end());
-    const double lo = *lo_it, hi = *hi_it;
-    const std::size_t n_slopes = kantz.slopes.size(), n_dims = dims_used.size(),
-                      dims = set.dims;
-    if (n_dims < std::min<std::size_t>(2, dims) || (hi - lo) / std::abs(median) > max_relative_spread) {
-      head.reason = [=, &rate](bool in_unit) {
-        return fmt::format(
-            "not determined: the admissible Kantz slopes range from {} to {} ({} curves in {} "
-            "of {} embedding dimensions): no exponent common to dimensions and neighbourhood "
-            "sizes",
-            rate(lo, in_unit), rate(hi, in_unit), n_slopes, n_dims, dims);
-      };
-      kantz_estimate = rosenstein_estimate = head;
-    } else {
-      divergence = "exponential";
-      kantz_estimate.value = head.value = median;
-      kantz_estimate.low = kantz.low;
-      kantz_estimate.high = kantz.high;
-      // The headline interval also spans Rosenstein's admissible estimates.
-      head.low = std::min(kantz.low, rosenstein.low);
-      head.high = std::max(kantz.high, rosenstein.high);
-      // Quality: consistent, precise, noise-free at the sizes used and a long enough series.
-      std::vector<std::string> doubts;
-      const double half_width = 0.5 * (head.high - head.low) / std::abs(median);
-      if (!(median > 0)) doubts.push_back("the slope is not positive");
-      if (half_width > good_relative_half_width)
-        doubts.push_back(fmt::format("the interval is +-{:.0f} % wide", 100 * half_width));
-      if (noise_floor)
-        doubts.push_back(fmt::format(
-            "neighbours closer than {:.3g} separate at once (measurement or dynamical noise), "
-            "which biases the slope of the larger neighbourhoods low",
-            noise_radius));
-      if (noise_scale)
-        doubts.push_back(fmt::format(
-            "at the neighbourhood size {:.3g} the local dimension is {:.2g} and grows with the "
-            "embedding dimension or towards smaller scales: noise dominates there, which biases "
-            "the slope low",
-            noise_scale_radius, noise_scale_dimension));
-      if (kantz.min_references < good_references)
-        doubts.push_back(fmt::format("only {:.0f} reference points have neighbours",
-                                     kantz.min_references));
-      const double samples = double(x.size());
-      if (median > 0 && samples * median < good_e_foldings)
-        doubts.push_back(fmt::format(
-            "the series covers only {:.0f} e-folding times 1/lambda (at least {:.0f} wanted)",
-            samples * median, good_e_foldings));
-      if (n_dims < dims)
-        doubts.push_back(fmt::format("only {} of {} embedding dimensions show it", n_dims, dims));
-      head.quality = kantz_estimate.quality = doubts.empty() ? "good" : "uncertain";
-      const std::string doubt_text =
-          doubts.empty() ? "" : fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
-      const CurveResult* central = nullptr;  // the selected curve closest to the median
-      for (const auto& c : set.kantz)
-        if (c.selected &&
-            (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median)))
-          central = &c;
-      const std::string region =
-          fmt::format("samples {:.0f}-{:.0f}", double(central->fit.begin * plan.stride),
-                      double((central->fit.end - 1) * plan.stride));
-      const double r_median = median_of(rosenstein.slopes);
-      const std::size_t n_rosenstein = rosenstein.slopes.size();
-      head.reason = [=, &rate](bool in_unit) {
-        std::string text = fmt::format(
-            "exponential divergence: median slope of {} parallel Kantz curves (the smallest "
-            "admissible neighbourhood sizes, {} dimensions x {} sizes; slopes {} to {}; linear "
-            "region e.g. {})",
-            n_slopes, n_dims, sizes_used, rate(lo, in_unit), rate(hi, in_unit), region);
-        text += n_rosenstein > 0
-                    ? fmt::format("; Rosenstein {} (median of {} dimensions)",
-                                  rate(r_median, in_unit), n_rosenstein)
-                    : "; Rosenstein not admissible";
-        text += "; interval: all admissible curves' 95 % bootstrap intervals (dimensions, sizes, "
-                "regions, methods)";
-        return text + doubt_text;
-      };
-      kantz_estimate.reason = head.reason;
-      if (n_rosenstein > 0) {
-        rosenstein_estimate.value = r_median;
-        rosenstein_estimate.low = rosenstein.low;
-        rosenstein_estimate.high = rosenstein.high;
-        rosenstein_estimate.quality = "uncertain";
-        rosenstein_estimate.reason = [=, &rate](bool in_unit) {
-          return fmt::format("median slope of {} nearest-neighbour curves: {}", n_rosenstein,
-                             rate(r_median, in_unit));
-        };
-      } else {
-        rosenstein_estimate = not_determined(
-            "not admissible: nearest neighbours below the noise scale or no linear region");
-      }
-    }
-  }
+             : fmt::format(" (none of the {} usable Kantz curves has a linear region)", usable))));
+  return exponential(set, plan, selected, noise, samples, rate);
+}
 
-  Json out;
-  out["lyapunov_max_per_sample"] = head.json(false, dt);
-  if (unit != "sample") out["lyapunov_max_per_" + unit] = head.json(true, dt);
-  out["kantz_per_sample"] = kantz_estimate.json(false, dt);
-  out["rosenstein_per_sample"] = rosenstein_estimate.json(false, dt);
-  out["divergence"] = divergence;
-  out["noise_radius"] = noise_floor ? Json(noise_radius) : Json();
-  out["noise_dominated_radius"] = noise_scale ? Json(noise_scale_radius) : Json();
-  out["sample_interval"] = dt;
-  out["delay_samples"] = plan.delay;
-  out["embedding_dimension"] = plan.m0;
-  out["dimensions"] = {plan.m0, plan.m_max};
-  out["theiler_window_samples"] = plan.theiler;
-  out["embedding_source"] = embedding.source;
-  out["radii"] = plan.radii;
-  out["reference_points"] = scan.references;
-  out["step_samples"] = plan.stride;
+Json number_or_null(double v) { return std::isfinite(v) ? Json(v) : Json(); }
+
+// Every curve with its fit and why it counts or not.
+Json curves_json(const CurveSet& set) {
   Json curves = Json::array();
   for (const auto* group : {&set.kantz, &set.rosenstein})
     for (const auto& c : *group) {
       Json curve = Json::array();
-      for (double v : c.curve) curve.push_back(std::isfinite(v) ? Json(v) : Json());
+      for (double v : c.curve) curve.push_back(number_or_null(v));
       const bool fitted = c.usable && c.fit.found;
-      auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
       curves.push_back(Json{{"method", c.method},
                             {"dimension", c.dimension},
-                            {"radius", number(c.radius)},
+                            {"radius", number_or_null(c.radius)},
                             {"references", c.references},
                             {"divergence", curve},
                             {"fit_begin_step", fitted ? Json(c.fit.begin) : Json()},
@@ -612,57 +671,77 @@ Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context)
                             // per curve point (step_samples samples)
                             {"fit_intercept", fitted ? Json(c.fit.intercept) : Json()},
                             {"slope_per_sample", fitted ? Json(c.fit.slope) : Json()},
-                            {"ci_low_per_sample", number(c.ci.low)},
-                            {"ci_high_per_sample", number(c.ci.high)},
+                            {"ci_low_per_sample", number_or_null(c.ci.low)},
+                            {"ci_high_per_sample", number_or_null(c.ci.high)},
                             {"admissible", c.admissible},
                             {"selected", c.selected},
                             {"note", c.note}});
     }
-  out["curves"] = curves;
-  out["local_dimension_low"] = low_dims;
-  out["local_dimension_high"] = high_dims;
+  return curves;
+}
+
+}  // namespace
+
+Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context) const {
+  const auto embedding = resolve_embedding(params_, series, context);
+  const auto& x = series.values;
+  const std::string name = series.name.empty() ? std::string("series") : series.name;
+  const ScanPlan plan = plan_scan(x, embedding, nonlinear::given_integer(params_, "max_steps"),
+                                  nonlinear::given_real(params_, "radius"), name);
+  const CurveSet set =
+      scan_curves(x, plan, std::size_t(params_.integer("max_reference_points")),
+                  std::size_t(params_.integer("bootstrap_replicates")),
+                  std::uint64_t(params_.integer("seed")));
+  const NoiseEvidence noise = detect_noise(x, plan, set);
+  const double dt = series.sample_interval;
+  const std::string unit = series.sample_unit;
+  const Decision decision = decide(set, plan, noise, x.size(), RateText{dt, unit});
+
+  Json out;
+  out["lyapunov_max_per_sample"] = decision.head.json(false, dt);
+  if (unit != "sample") out["lyapunov_max_per_" + unit] = decision.head.json(true, dt);
+  out["kantz_per_sample"] = decision.kantz.json(false, dt);
+  out["rosenstein_per_sample"] = decision.rosenstein.json(false, dt);
+  out["divergence"] = decision.divergence;
+  out["noise_radius"] = noise.floor ? Json(noise.floor_radius) : Json();
+  out["noise_dominated_radius"] = noise.scale ? Json(noise.scale_radius) : Json();
+  out["sample_interval"] = dt;
+  out["delay_samples"] = plan.delay;
+  out["embedding_dimension"] = plan.m0;
+  out["dimensions"] = {plan.m0, plan.m_max};
+  out["theiler_window_samples"] = plan.theiler;
+  out["embedding_source"] = embedding.source;
+  out["radii"] = plan.radii;
+  out["reference_points"] = set.references;
+  out["step_samples"] = plan.stride;
+  out["curves"] = curves_json(set);
+  out["local_dimension_low"] = noise.low_dims;
+  out["local_dimension_high"] = noise.high_dims;
   return out;
 }
 
-void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
-                            const std::filesystem::path& out_dir) const {
-  const std::string title = series.name.empty() ? std::string("series") : series.name;
-  const double dt = series.sample_interval;
-  const std::string unit = series.sample_unit;
-  const double step = result["step_samples"].get<double>() * dt;
+namespace {
+
+// The Kantz curves of dimension m0 for every size and Rosenstein's, with the linear fits of the
+// curves the estimate uses (dashed).
+void plot_divergence(const Json& result, const std::string& title, double dt,
+                     const std::string& unit, const std::filesystem::path& out_dir) {
+  const double step_samples = result["step_samples"].get<double>();
+  const double step = step_samples * dt;
   const int m0 = result["embedding_dimension"].get<int>();
   plot::Curves c;
   c.title = fmt::format("{}: divergence of neighbouring trajectories (dimension {})", title, m0);
   c.x_label = unit == "sample" ? "time after start [samples]"
                                : fmt::format("time after start [{}]", unit);
   c.y_label = "< ln distance > (mean log separation)";
-  plot::Curves slopes;
-  slopes.title = fmt::format("{}: Kantz slopes by neighbourhood size and dimension", title);
-  slopes.x_label = "neighbourhood size eps [signal units]";
-  slopes.log_x = true;
-  slopes.y_label = fmt::format("slope [1/{}]", unit);
-  std::map<int, plot::Series> by_dimension;
-  plot::Series used{"used by the estimate", {}, {}, "points"};
   bool fit_labelled = false;
   for (const Json& curve : result["curves"]) {
+    if (curve["dimension"].get<int>() != m0) continue;
     const bool kantz = curve["method"] == "Kantz";
-    const int m = curve["dimension"].get<int>();
-    if (kantz && curve["slope_per_sample"].is_number() && curve["fit_end_step"].get<double>() > 0 &&
-        curve["radius"].is_number()) {
-      const double eps = curve["radius"].get<double>();
-      const double s = curve["slope_per_sample"].get<double>() / dt;
-      auto& line = by_dimension.try_emplace(m, plot::Series{fmt::format("m = {}", m), {}, {}, "linespoints"}).first->second;
-      line.x.push_back(eps);
-      line.y.push_back(s);
-      if (curve["selected"].get<bool>()) {
-        used.x.push_back(eps);
-        used.y.push_back(s);
-      }
-    }
-    if (m != m0) continue;
-    const std::string label =
-        kantz ? fmt::format("Kantz eps = {:.3g}", curve["radius"].get<double>()) : "Rosenstein";
-    plot::Series s{label, {}, {}, "lines"};
+    // Rosenstein's curve with markers: the palette repeats after seven curves.
+    plot::Series s{kantz ? fmt::format("Kantz eps = {:.3g}", curve["radius"].get<double>())
+                         : "Rosenstein (nearest neighbour)",
+                   {}, {}, kantz ? "lines" : "linespoints"};
     const Json& d = curve["divergence"];
     for (std::size_t k = 0; k < d.size(); ++k)
       if (d[k].is_number()) {
@@ -671,27 +750,66 @@ void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
       }
     if (s.x.empty()) continue;
     c.series.push_back(s);
-    if (curve["selected"].get<bool>()) {
-      const double k0 = curve["fit_begin_step"].get<double>(), k1 = curve["fit_end_step"].get<double>();
-      const double b = curve["fit_intercept"].get<double>();
-      // Slope per curve point (step_samples samples).
-      const double slope = curve["slope_per_sample"].get<double>() * result["step_samples"].get<double>();
-      c.series.push_back({fit_labelled ? "" : "linear fits (curves used)",
-                          {k0 * step, k1 * step},
-                          {b + slope * k0, b + slope * k1},
-                          "dashes"});
-      fit_labelled = true;
-    }
+    if (!curve["selected"].get<bool>()) continue;
+    const double k0 = curve["fit_begin_step"].get<double>(), k1 = curve["fit_end_step"].get<double>();
+    const double b = curve["fit_intercept"].get<double>();
+    // Slope per curve point (step_samples samples).
+    const double slope = curve["slope_per_sample"].get<double>() * step_samples;
+    c.series.push_back({fit_labelled ? "" : "linear fits (curves used)",
+                        {k0 * step, k1 * step},
+                        {b + slope * k0, b + slope * k1},
+                        "dashes"});
+    fit_labelled = true;
   }
   plot::render(c, out_dir, "lyapunov_divergence");
+}
+
+// Slope of every fitted Kantz curve by neighbourhood size, one line per dimension, the curves the
+// estimate uses marked, and the estimate as a horizontal line.
+void plot_slopes(const Json& result, const std::string& title, double dt, const std::string& unit,
+                 const std::filesystem::path& out_dir) {
+  plot::Curves slopes;
+  slopes.title = fmt::format("{}: Kantz slopes by neighbourhood size and dimension", title);
+  slopes.x_label = "neighbourhood size eps [signal units]";
+  slopes.log_x = true;
+  slopes.y_label = fmt::format("slope [1/{}]", unit);
+  std::map<int, plot::Series> by_dimension;
+  plot::Series used{"used by the estimate", {}, {}, "points"};
+  for (const Json& curve : result["curves"]) {
+    if (curve["method"] != "Kantz" || !curve["slope_per_sample"].is_number() ||
+        !(curve["fit_end_step"].get<double>() > 0) || !curve["radius"].is_number())
+      continue;
+    const int m = curve["dimension"].get<int>();
+    const double eps = curve["radius"].get<double>();
+    const double s = curve["slope_per_sample"].get<double>() / dt;
+    auto& line =
+        by_dimension.try_emplace(m, plot::Series{fmt::format("m = {}", m), {}, {}, "linespoints"})
+            .first->second;
+    line.x.push_back(eps);
+    line.y.push_back(s);
+    if (curve["selected"].get<bool>()) {
+      used.x.push_back(eps);
+      used.y.push_back(s);
+    }
+  }
   for (auto& [m, s] : by_dimension) slopes.series.push_back(s);
   if (!used.x.empty()) slopes.series.push_back(used);
+  if (slopes.series.empty()) return;
   const Json& head = result["lyapunov_max_per_sample"];
-  if (head["value"].is_number() && !slopes.series.empty()) {
+  if (head["value"].is_number()) {
     slopes.reference_y = head["value"].get<double>() / dt;
     slopes.reference_label = fmt::format("lambda_1 = {:.4g} per {}", *slopes.reference_y, unit);
   }
-  if (!slopes.series.empty()) plot::render(slopes, out_dir, "lyapunov_slopes");
+  plot::render(slopes, out_dir, "lyapunov_slopes");
+}
+
+}  // namespace
+
+void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
+                            const std::filesystem::path& out_dir) const {
+  const std::string title = series.name.empty() ? std::string("series") : series.name;
+  plot_divergence(result, title, series.sample_interval, series.sample_unit, out_dir);
+  plot_slopes(result, title, series.sample_interval, series.sample_unit, out_dir);
 }
 
 }  // namespace chatterlab

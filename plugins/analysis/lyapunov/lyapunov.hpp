@@ -1,7 +1,7 @@
 #pragma once
 // Analysis `lyapunov` (MODELS.md N3/N4, largest exponent): divergence of neighbouring
 // trajectories in the delay embedding. Kantz's curves (1994, all neighbours within eps) for three
-// embedding dimensions x five neighbourhood sizes, Rosenstein's (1993, the nearest neighbour)
+// embedding dimensions x six neighbourhood sizes, Rosenstein's (1993, the nearest neighbour)
 // for the same dimensions; each curve S(k) = < ln distance after k samples > with the slope of its
 // automatically detected linear region. The exponent is reported only when the curves show
 // exponential divergence: a linear region whose slope is the same for several dimensions and

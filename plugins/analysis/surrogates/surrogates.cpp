@@ -213,162 +213,211 @@ PluginInfo Surrogates::info() {
   return info;
 }
 
+namespace {
+
+// Surrogate kinds (indices into kind_names) of the `kinds` parameter.
+std::vector<std::size_t> surrogate_kinds(const std::string& kinds) {
+  std::vector<std::size_t> out;
+  if (kinds != "phase_randomised") out.push_back(0);
+  if (kinds != "iaaft") out.push_back(1);
+  return out;
+}
+
+// The correlation-sum statistic's scales: the data's radii where C = 1e-3 and 1e-2 (sampled
+// references, all radii), in the saturation dimension of `correlation_dimension` (else m), as
+// far as the series holds vectors.
+void set_dimension_scales(const std::vector<double>& x, const Json& context, Scales& s) {
+  const auto saturation =
+      nonlinear::context_value(context, "correlation_dimension", "saturation_dimension");
+  s.correlation_dimension =
+      std::max(2, saturation && *saturation > 0 ? int(*saturation) : s.dimension);
+  while (s.correlation_dimension > 1 &&
+         x.size() < nonlinear::minimum_samples(s.correlation_dimension, s.delay))
+    --s.correlation_dimension;
+  const auto sums = correlation_sums(x, s.correlation_dimension, s.delay, s.theiler, 1000);
+  const auto log_c = sums.log_correlation(s.correlation_dimension);
+  const auto log_r = sums.log_radii();
+  s.log_r_low = s.log_r_high = std::nan("");
+  for (std::size_t b = 0; b < log_c.size(); ++b) {
+    if (!std::isfinite(s.log_r_low) && log_c[b] >= std::log(1e-3)) s.log_r_low = log_r[b];
+    if (!std::isfinite(s.log_r_high) && log_c[b] >= std::log(1e-2)) s.log_r_high = log_r[b];
+  }
+}
+
+// The divergence statistic's scales: eps = the median distance to the divergence_neighbour-th
+// neighbour (300 references), the horizon and curve stride.
+void set_divergence_scales(const std::vector<double>& x, Scales& s) {
+  const nonlinear::Embedding e(x, s.dimension, s.delay);
+  const nonlinear::NeighbourSearch search(e);
+  std::vector<double> d;
+  for (std::size_t r = 0; r < 300; ++r) {
+    const auto nn = search.nearest(r * e.size() / 300, divergence_neighbour, s.theiler, e.size());
+    if (nn.size() == divergence_neighbour) d.push_back(nn.back().distance);
+  }
+  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+  s.eps = d.empty() ? 0.0 : d[d.size() / 2];
+  const std::size_t window = std::size_t(s.dimension - 1) * std::size_t(s.delay);
+  const std::size_t horizon =
+      std::min<std::size_t>(std::max(30, 100 * s.delay), (x.size() - window) / 4);
+  s.stride = curve_stride(s.delay, horizon, 64);
+  s.steps = horizon / s.stride + 1;
+}
+
+// The data's half-rise step of its divergence curve and the statistic there; false when the
+// curve does not rise (no statistic).
+bool set_half_rise(const std::vector<double>& x, Scales& s, double& statistic) {
+  if (!(s.eps > 0)) return false;
+  const auto y = divergence_curve(x, s);
+  const double top = *std::max_element(y.begin(), y.end());
+  s.half_rise_step = 0;
+  for (std::size_t q = 1; q < y.size() && s.half_rise_step == 0; ++q)
+    if (std::isfinite(y[q]) && y[q] >= y[0] + 0.5 * (top - y[0])) s.half_rise_step = q;
+  if (!std::isfinite(y[0]) || s.half_rise_step == 0) return false;
+  statistic = y[s.half_rise_step] - y[0];
+  return true;
+}
+
+// The three rank tests with their statistics on the data and on every surrogate.
+struct Tests {
+  std::vector<std::size_t> kinds;
+  std::size_t count = 0;  // surrogates per kind
+  RankTest prediction, divergence, dimension;
+  bool divergence_ok = false, dimension_ok = false;
+  double asymmetry_data = 0;
+  std::vector<double> asymmetry;  // of the IAAFT surrogates
+  bool all_reject(const RankTest& t, bool ok) const {
+    if (!ok) return false;
+    for (std::size_t q = 0; q < kinds.size(); ++q)
+      if (!t.rejected(q)) return false;
+    return true;
+  }
+};
+
+// Every statistic of the data and of `count` surrogates of each kind.
+template <class PredictionError>
+void run_tests(const std::vector<double>& x, const Scales& s, std::uint64_t seed,
+               const PredictionError& error_of, Tests& t) {
+  t.prediction.data = error_of(x);
+  if (t.dimension_ok) t.dimension.data = dimension_statistic(x, s);
+  t.asymmetry_data = time_reversal_asymmetry(x, s.delay);
+  for (RankTest* r : {&t.prediction, &t.divergence, &t.dimension})
+    r->surrogates.assign(t.kinds.size(), {});
+  for (std::size_t q = 0; q < t.kinds.size(); ++q)
+    for (std::size_t n = 0; n < t.count; ++n) {
+      const std::uint64_t surrogate_seed = seed + 1000 * t.kinds[q] + n;
+      const auto v = t.kinds[q] == 0 ? iaaft_surrogate(x, surrogate_seed, iaaft_iterations)
+                                     : phase_randomised_surrogate(x, surrogate_seed);
+      t.prediction.surrogates[q].push_back(error_of(v));
+      t.divergence.surrogates[q].push_back(t.divergence_ok ? divergence_statistic(v, s)
+                                                           : std::nan(""));
+      t.dimension.surrogates[q].push_back(t.dimension_ok ? dimension_statistic(v, s)
+                                                         : std::nan(""));
+      if (t.kinds[q] == 0) t.asymmetry.push_back(time_reversal_asymmetry(v, s.delay));
+    }
+  for (RankTest* r : {&t.prediction, &t.divergence, &t.dimension}) rank(*r);
+}
+
+Json test_json(const Tests& tests, const RankTest& t, bool ok, const char* what) {
+  Json j;
+  j["data"] = ok && std::isfinite(t.data) ? Json(t.data) : Json();
+  j["computed"] = ok;
+  j["what"] = what;
+  for (std::size_t q = 0; q < tests.kinds.size(); ++q) {
+    Json values = Json::array();
+    for (double v : t.surrogates[q]) values.push_back(std::isfinite(v) ? Json(v) : Json());
+    j[kind_names[tests.kinds[q]]] =
+        Json{{"surrogates", values}, {"rank", t.rank[q]}, {"rejected", ok && t.rejected(q)}};
+  }
+  j["rejected"] = tests.all_reject(t, ok);
+  return j;
+}
+
+// "prediction error: rejected (iaaft rank 1 of 20, ...); ..." for the reason.
+std::string verdicts_text(const Tests& t) {
+  std::vector<std::string> verdicts;
+  for (const auto& [name, test, ok] :
+       {std::tuple{"prediction error", &t.prediction, true},
+        std::tuple{"divergence (exponent)", &t.divergence, t.divergence_ok},
+        std::tuple{"correlation-sum slope (dimension)", &t.dimension, t.dimension_ok}}) {
+    std::vector<std::string> per_kind;
+    for (std::size_t q = 0; q < t.kinds.size(); ++q)
+      per_kind.push_back(fmt::format("{} rank {} of {}", kind_names[t.kinds[q]], test->rank[q],
+                                     t.count + 1));
+    verdicts.push_back(fmt::format("{}: {} ({})", name,
+                                   !ok                       ? "not computed"
+                                   : t.all_reject(*test, ok) ? "rejected"
+                                                             : "not rejected",
+                                   fmt::join(per_kind, ", ")));
+  }
+  return fmt::format("{}", fmt::join(verdicts, "; "));
+}
+
+Json tests_json(const Tests& t, std::size_t samples_used) {
+  Json out;
+  out["statistics"] = {
+      {"prediction_error", test_json(t, t.prediction, true,
+                                     "normalised one-step prediction error (locally constant)")},
+      {"divergence", test_json(t, t.divergence, t.divergence_ok,
+                               "growth of ln distance of neighbours within eps up to the data's "
+                               "half-rise time (Kantz)")},
+      {"dimension", test_json(t, t.dimension, t.dimension_ok,
+                              "slope of ln C(r) where the data's C is 1e-3..1e-2")}};
+  out["kinds"] = Json::array();
+  for (std::size_t q : t.kinds) out["kinds"].push_back(kind_names[q]);
+  out["samples_used"] = samples_used;
+  const double significance = 1.0 / double(t.count + 1);
+  out["significance"] = significance;
+  out["rejected_for_prediction"] = t.all_reject(t.prediction, true);
+  out["rejected_for_exponent"] = t.all_reject(t.divergence, t.divergence_ok);
+  out["rejected_for_dimension"] = t.all_reject(t.dimension, t.dimension_ok);
+  // Compatibility with the single-test summary: the prediction error under the first kind.
+  const auto& first = t.prediction.surrogates[0];
+  const auto [lo, hi] = std::minmax_element(first.begin(), first.end());
+  out["prediction_error"] = nonlinear::estimate(
+      t.prediction.data, *lo, *hi, "good",
+      fmt::format("surrogate range shown as interval; linear stochastic null at significance "
+                  "{:.3g} per test (one-sided, data below every surrogate): {}",
+                  significance, verdicts_text(t)));
+  out["null_rejected"] = t.prediction.rejected(0);
+  out["rank"] = t.prediction.rank[0];
+  out["time_reversal_asymmetry"] = t.asymmetry_data;
+  out["surrogate_time_reversal_asymmetry"] = t.asymmetry;
+  const std::size_t tr_extreme =
+      std::size_t(std::count_if(t.asymmetry.begin(), t.asymmetry.end(), [&](double a) {
+        return std::abs(a) >= std::abs(t.asymmetry_data);
+      }));
+  out["time_reversal_rank"] = tr_extreme + 1;  // 1: more asymmetric than every surrogate
+  return out;
+}
+
+}  // namespace
+
 Json Surrogates::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto max_samples = std::size_t(params_.integer("max_samples"));
   const std::vector<double> x(series.values.begin(),
                               series.values.begin() +
                                   std::ptrdiff_t(std::min(max_samples, series.values.size())));
-  const auto k = std::size_t(params_.integer("neighbours"));
-  const auto refs = std::size_t(params_.integer("max_reference_points"));
-  const auto count = std::size_t(params_.integer("surrogates"));
-  const auto seed = std::uint64_t(params_.integer("seed"));
-  const std::string kinds_param = params_.string("kinds");
-  std::vector<std::size_t> kinds;
-  if (kinds_param != "phase_randomised") kinds.push_back(0);
-  if (kinds_param != "iaaft") kinds.push_back(1);
-
   // Scales of the statistics, fixed by the data.
   Scales s;
   s.dimension = embedding.dimension;
   s.delay = embedding.delay;
   s.theiler = embedding.theiler;
-  const auto saturation =
-      nonlinear::context_value(context, "correlation_dimension", "saturation_dimension");
-  s.correlation_dimension = std::max(2, saturation && *saturation > 0 ? int(*saturation)
-                                                                      : embedding.dimension);
-  while (s.correlation_dimension > 1 &&
-         x.size() < nonlinear::minimum_samples(s.correlation_dimension, s.delay))
-    --s.correlation_dimension;
-  {
-    // The data's scales from sampled references (all radii), then the statistic from all pairs.
-    const auto sums = correlation_sums(x, s.correlation_dimension, s.delay, s.theiler, 1000);
-    const auto log_c = sums.log_correlation(s.correlation_dimension);
-    const auto log_r = sums.log_radii();
-    s.log_r_low = s.log_r_high = std::nan("");
-    for (std::size_t b = 0; b < log_c.size(); ++b) {
-      if (!std::isfinite(s.log_r_low) && log_c[b] >= std::log(1e-3)) s.log_r_low = log_r[b];
-      if (!std::isfinite(s.log_r_high) && log_c[b] >= std::log(1e-2)) s.log_r_high = log_r[b];
-    }
-  }
-  {
-    const nonlinear::Embedding e(x, s.dimension, s.delay);
-    const nonlinear::NeighbourSearch search(e);
-    std::vector<double> d;
-    for (std::size_t r = 0; r < 300; ++r) {
-      const auto nn = search.nearest(r * e.size() / 300, divergence_neighbour, s.theiler, e.size());
-      if (nn.size() == divergence_neighbour) d.push_back(nn.back().distance);
-    }
-    std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
-    s.eps = d.empty() ? 0.0 : d[d.size() / 2];
-    const std::size_t window = std::size_t(s.dimension - 1) * std::size_t(s.delay);
-    const std::size_t horizon =
-        std::min<std::size_t>(std::max(30, 100 * s.delay), (x.size() - window) / 4);
-    s.stride = curve_stride(s.delay, horizon, 64);
-    s.steps = horizon / s.stride + 1;
-  }
-  RankTest prediction, divergence, dimension;
-  std::string divergence_note;
-  bool divergence_ok = s.eps > 0;
-  if (divergence_ok) {
-    const auto y = divergence_curve(x, s);
-    const double top = *std::max_element(y.begin(), y.end());
-    s.half_rise_step = 0;
-    for (std::size_t q = 1; q < y.size() && s.half_rise_step == 0; ++q)
-      if (std::isfinite(y[q]) && y[q] >= y[0] + 0.5 * (top - y[0])) s.half_rise_step = q;
-    divergence_ok = std::isfinite(y[0]) && s.half_rise_step > 0;
-    if (divergence_ok) divergence.data = y[s.half_rise_step] - y[0];
-  }
-  const bool dimension_ok = std::isfinite(s.log_r_low) && std::isfinite(s.log_r_high) &&
-                            s.log_r_high > s.log_r_low;
+  set_dimension_scales(x, context, s);
+  set_divergence_scales(x, s);
+  Tests tests;
+  tests.kinds = surrogate_kinds(params_.string("kinds"));
+  tests.count = std::size_t(params_.integer("surrogates"));
+  tests.divergence_ok = set_half_rise(x, s, tests.divergence.data);
+  tests.dimension_ok = std::isfinite(s.log_r_low) && std::isfinite(s.log_r_high) &&
+                       s.log_r_high > s.log_r_low;
+  const auto k = std::size_t(params_.integer("neighbours"));
+  const auto refs = std::size_t(params_.integer("max_reference_points"));
   auto error_of = [&](const std::vector<double>& v) {
     return prediction_error(v, s.dimension, s.delay, s.theiler, k, refs);
   };
-  prediction.data = error_of(x);
-  if (dimension_ok) dimension.data = dimension_statistic(x, s);
-  const double original_tr = time_reversal_asymmetry(x, s.delay);
-  std::vector<double> asymmetry;
-  for (RankTest* t : {&prediction, &divergence, &dimension}) t->surrogates.assign(kinds.size(), {});
-  for (std::size_t q = 0; q < kinds.size(); ++q)
-    for (std::size_t n = 0; n < count; ++n) {
-      const std::uint64_t surrogate_seed = seed + 1000 * kinds[q] + n;
-      const auto v = kinds[q] == 0 ? iaaft_surrogate(x, surrogate_seed, iaaft_iterations)
-                                   : phase_randomised_surrogate(x, surrogate_seed);
-      prediction.surrogates[q].push_back(error_of(v));
-      divergence.surrogates[q].push_back(divergence_ok ? divergence_statistic(v, s) : std::nan(""));
-      dimension.surrogates[q].push_back(dimension_ok ? dimension_statistic(v, s) : std::nan(""));
-      if (kinds[q] == 0) asymmetry.push_back(time_reversal_asymmetry(v, s.delay));
-    }
-  for (RankTest* t : {&prediction, &divergence, &dimension}) rank(*t);
-  const double significance = 1.0 / double(count + 1);
-  auto all_reject = [&](const RankTest& t, bool ok) {
-    if (!ok) return false;
-    for (std::size_t q = 0; q < kinds.size(); ++q)
-      if (!t.rejected(q)) return false;
-    return true;
-  };
-  auto test_json = [&](const RankTest& t, bool ok, const char* what) {
-    Json j;
-    j["data"] = ok && std::isfinite(t.data) ? Json(t.data) : Json();
-    j["computed"] = ok;
-    j["what"] = what;
-    for (std::size_t q = 0; q < kinds.size(); ++q) {
-      Json values = Json::array();
-      for (double v : t.surrogates[q]) values.push_back(std::isfinite(v) ? Json(v) : Json());
-      j[kind_names[kinds[q]]] = Json{{"surrogates", values},
-                                     {"rank", t.rank[q]},
-                                     {"rejected", ok && t.rejected(q)}};
-    }
-    j["rejected"] = all_reject(t, ok);
-    return j;
-  };
-  Json out;
-  out["statistics"] = {
-      {"prediction_error",
-       test_json(prediction, true, "normalised one-step prediction error (locally constant)")},
-      {"divergence", test_json(divergence, divergence_ok,
-                               "growth of ln distance of neighbours within eps up to the data's "
-                               "half-rise time (Kantz)")},
-      {"dimension", test_json(dimension, dimension_ok,
-                              "slope of ln C(r) where the data's C is 1e-3..1e-2")}};
-  out["kinds"] = Json::array();
-  for (std::size_t q : kinds) out["kinds"].push_back(kind_names[q]);
-  out["samples_used"] = x.size();
-  out["significance"] = significance;
-  out["rejected_for_prediction"] = all_reject(prediction, true);
-  out["rejected_for_exponent"] = all_reject(divergence, divergence_ok);
-  out["rejected_for_dimension"] = all_reject(dimension, dimension_ok);
-  // Compatibility with the single-test summary: the prediction error under the first kind.
-  const bool rejected = prediction.rejected(0);
-  const auto& first = prediction.surrogates[0];
-  const auto [lo, hi] = std::minmax_element(first.begin(), first.end());
-  std::vector<std::string> verdicts;
-  for (const auto& [name, t, ok] :
-       {std::tuple{"prediction error", &prediction, true},
-        std::tuple{"divergence (exponent)", &divergence, divergence_ok},
-        std::tuple{"correlation-sum slope (dimension)", &dimension, dimension_ok}}) {
-    std::vector<std::string> per_kind;
-    for (std::size_t q = 0; q < kinds.size(); ++q)
-      per_kind.push_back(fmt::format("{} rank {} of {}", kind_names[kinds[q]], t->rank[q],
-                                     count + 1));
-    verdicts.push_back(fmt::format("{}: {} ({})", name,
-                                   !ok ? "not computed"
-                                   : all_reject(*t, ok) ? "rejected"
-                                                        : "not rejected",
-                                   fmt::join(per_kind, ", ")));
-  }
-  out["prediction_error"] = nonlinear::estimate(
-      prediction.data, *lo, *hi, "good",
-      fmt::format("surrogate range shown as interval; linear stochastic null at significance "
-                  "{:.3g} per test (one-sided, data below every surrogate): {}",
-                  significance, fmt::join(verdicts, "; ")));
-  out["null_rejected"] = rejected;
-  out["rank"] = prediction.rank[0];
-  out["time_reversal_asymmetry"] = original_tr;
-  out["surrogate_time_reversal_asymmetry"] = asymmetry;
-  const std::size_t tr_extreme = std::size_t(std::count_if(
-      asymmetry.begin(), asymmetry.end(), [&](double a) { return std::abs(a) >= std::abs(original_tr); }));
-  out["time_reversal_rank"] = tr_extreme + 1;  // 1: more asymmetric than every surrogate
+  run_tests(x, s, std::uint64_t(params_.integer("seed")), error_of, tests);
+  Json out = tests_json(tests, x.size());
   out["delay_samples"] = embedding.delay;
   out["embedding_dimension"] = embedding.dimension;
   out["theiler_window_samples"] = embedding.theiler;
