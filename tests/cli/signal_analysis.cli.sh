@@ -2,8 +2,8 @@
 # Study kind signal_analysis through the command: the shipped Lorenz and Henon studies (exit 0,
 # intervals covering the known answers for 10,000 / 5,000 samples, the verdict, summary.json and
 # every plot), a study without a sample rate (rates per sample), and bad input (missing column,
-# constant signal, 150 samples, too short for the requested dimension): exit 2, the reason in the
-# message, nothing written.
+# constant signal, 150 samples, too short for the requested dimension, a Theiler window leaving
+# too few neighbours): exit 2, the reason in the message, nothing written.
 # Usage: signal_analysis.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
 source "$(dirname "$0")/lib.sh"
 bin=$1 work=$2 src=$3
@@ -80,5 +80,7 @@ bad_study constant '[input]\nfile = "constant.csv"\ncolumn = "x"\nsample_rate_hz
   "the signal is constant"
 bad_study too_short '[input]\nfile = "short.csv"\ncolumn = "x"\nsample_rate_hz = 100\n[analysis]\nmethods = ["correlation_dimension"]\n[analysis.correlation_dimension]\nembedding_dimension = 5\ndelay_samples = 60' \
   "300 samples are too short for embedding dimension 5 with delay 60" "at least 340 samples"
+bad_study theiler '[input]\nfile = "short.csv"\ncolumn = "x"\nsample_rate_hz = 100\n[analysis]\nmethods = ["embedding", "lyapunov"]\n[analysis.lyapunov]\ntheiler_window_samples = 100' \
+  "analysis.lyapunov.theiler_window_samples = 100: too few neighbours" "at most 99 samples"
 
 finish

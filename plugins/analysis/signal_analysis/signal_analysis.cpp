@@ -105,63 +105,84 @@ SampledSeries SignalAnalysis::load_series(const Json& input) {
   return s;
 }
 
-void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
-  auto where = [&](const std::string& path) { return sources.locate(path).str(); };
-  // ---- [input]
-  if (!document.contains("input") || !document["input"].is_object())
-    throw InputError(fmt::format(
-        "{}: missing table [input] (file = \"...\", column = \"...\", sample_rate_hz = ...)",
-        where("input")));
-  study_support::integer_columns_as_names(document["input"], {"column"});
-  Json input = validate_params(document["input"], input_specs(), "input", sources);
-  const fs::path file = study_support::resolve_data_file(input["file"], "input.file", sources);
-  const DataTable table = study_support::read_table_at(file, "input.file", sources);
+namespace {
+
+// The validated [input] table with the column chosen and the table read.
+struct Input {
+  Json table;  // the validated [input]
+  fs::path file;
+  DataTable data;
   std::string column;
+};
+
+// The column named in [input], or the only one.
+std::string choose_column(const Json& input, const DataTable& table, const fs::path& file,
+                          const SourceMap& sources) {
+  auto where = [&](const std::string& path) { return sources.locate(path).str(); };
   if (input["column"].is_string()) {
-    column = input["column"].get<std::string>();
+    const std::string column = input["column"].get<std::string>();
     try {
       (void)table.column(column);
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: input.column = \"{}\": {}", where("input.column"), column,
                                    e.what()));
     }
-  } else if (table.names.size() == 1) {
-    column = table.names.front();
-  } else {
-    throw InputError(fmt::format("{}: missing key 'input.column': {} has {} columns ({})",
-                                 where("input"), file.string(), table.names.size(),
-                                 json_list(table.names)));
+    return column;
   }
+  if (table.names.size() == 1) return table.names.front();
+  throw InputError(fmt::format("{}: missing key 'input.column': {} has {} columns ({})",
+                               where("input"), file.string(), table.names.size(),
+                               json_list(table.names)));
+}
+
+Input validate_input(Json& document, const SourceMap& sources) {
+  auto where = [&](const std::string& path) { return sources.locate(path).str(); };
+  if (!document.contains("input") || !document["input"].is_object())
+    throw InputError(fmt::format(
+        "{}: missing table [input] (file = \"...\", column = \"...\", sample_rate_hz = ...)",
+        where("input")));
+  study_support::integer_columns_as_names(document["input"], {"column"});
+  Input in;
+  in.table = validate_params(document["input"], input_specs(), "input", sources);
+  in.file = study_support::resolve_data_file(in.table["file"], "input.file", sources);
+  in.data = study_support::read_table_at(in.file, "input.file", sources);
+  in.column = choose_column(in.table, in.data, in.file, sources);
   // Without a sample rate (and not a WAV file) time is counted in samples: every rate is then
   // reported per sample (lyapunov_max_per_sample instead of lyapunov_max_per_s).
-  if (input["sample_rate_hz"].is_null()) {
-    if (table.sample_rate_hz) input["sample_rate_hz"] = *table.sample_rate_hz;
-  } else if (table.sample_rate_hz &&
-             std::abs(*table.sample_rate_hz - input["sample_rate_hz"].get<double>()) >
-                 1e-9 * *table.sample_rate_hz) {
+  Json& rate = in.table["sample_rate_hz"];
+  const auto& wav_rate = in.data.sample_rate_hz;
+  if (rate.is_null()) {
+    if (wav_rate) rate = *wav_rate;
+  } else if (wav_rate && std::abs(*wav_rate - rate.get<double>()) > 1e-9 * *wav_rate) {
     throw InputError(fmt::format("{}: input.sample_rate_hz = {}: the WAV file says {} Hz",
-                                 where("input.sample_rate_hz"),
-                                 input["sample_rate_hz"].get<double>(), *table.sample_rate_hz));
+                                 where("input.sample_rate_hz"), rate.get<double>(), *wav_rate));
   }
-  input["file"] = file.string();
-  input["column"] = column;
+  in.table["file"] = in.file.string();
+  in.table["column"] = in.column;
+  return in;
+}
 
-  // ---- [analysis]
-  Json analysis = document.contains("analysis") ? document["analysis"] : Json::object();
+// analysis.methods (default_methods when absent).
+std::vector<std::string> listed_methods(const Json& analysis, const SourceMap& sources) {
+  if (!analysis.contains("methods")) return default_methods;
+  const Json& m = analysis["methods"];
+  if (!m.is_array() || m.empty() ||
+      !std::all_of(m.begin(), m.end(), [](const Json& v) { return v.is_string(); }))
+    throw InputError(fmt::format(
+        "{}: analysis.methods = {}: expected a non-empty list of analysis names, e.g. "
+        "[\"embedding\", \"lyapunov\"]",
+        sources.locate("analysis.methods").str(), m.dump()));
+  return m.get<std::vector<std::string>>();
+}
+
+// The [analysis] table: the methods and each one's validated parameter table.
+Json validate_analysis(const Json& document, const SourceMap& sources) {
+  auto where = [&](const std::string& path) { return sources.locate(path).str(); };
+  const Json analysis = document.contains("analysis") ? document["analysis"] : Json::object();
   if (!analysis.is_object())
     throw InputError(fmt::format("{}: analysis = {}: expected a table [analysis]",
                                  where("analysis"), analysis.dump()));
-  std::vector<std::string> methods = default_methods;
-  if (analysis.contains("methods")) {
-    const Json& m = analysis["methods"];
-    if (!m.is_array() || m.empty() ||
-        !std::all_of(m.begin(), m.end(), [](const Json& v) { return v.is_string(); }))
-      throw InputError(fmt::format(
-          "{}: analysis.methods = {}: expected a non-empty list of analysis names, e.g. "
-          "[\"embedding\", \"lyapunov\"]",
-          where("analysis.methods"), m.dump()));
-    methods = m.get<std::vector<std::string>>();
-  }
+  const std::vector<std::string> methods = listed_methods(analysis, sources);
   Json validated{{"methods", methods}};
   for (std::size_t i = 0; i < methods.size(); ++i) {
     const auto* entry = analysis_registry().find(methods[i]);
@@ -190,16 +211,43 @@ void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
           "{}: analysis.{}: not a listed method (methods = [{}]); [analysis.<method>] tables "
           "hold the parameters of listed methods",
           where("analysis." + key), key, json_list(methods)));
+  return validated;
+}
 
-  // ---- the signal itself: finite, not constant, long enough for the methods and for every
-  // explicit embedding
-  const std::vector<double>& values = table.column(column);
-  const std::string what = fmt::format("{} column '{}'", file.string(), column);
+// An explicit Theiler window W must leave every delay vector at least minimum_vectors candidate
+// neighbours (vectors - (2 W + 1)): a wider one excludes every pair a neighbour statistic needs.
+void check_theiler_windows(std::size_t samples, const Json& analysis, const std::string& what,
+                           const SourceMap& sources) {
+  for (const auto& m : analysis["methods"].get<std::vector<std::string>>()) {
+    const ParamValues p(analysis[m]);
+    const auto theiler = nonlinear::given_integer(p, "theiler_window_samples");
+    if (!theiler) continue;
+    const int d = int(nonlinear::given_integer(p, "embedding_dimension").value_or(2));
+    const int tau = int(nonlinear::given_integer(p, "delay_samples").value_or(1));
+    const std::size_t vectors = nonlinear::vector_count(samples, d, tau);
+    const std::size_t most =
+        vectors > nonlinear::minimum_vectors ? (vectors - nonlinear::minimum_vectors - 1) / 2 : 0;
+    if (std::size_t(*theiler) <= most) continue;
+    const std::string key = fmt::format("analysis.{}.theiler_window_samples", m);
+    throw InputError(fmt::format(
+        "{}: {} = {}: too few neighbours: {} has {} delay vectors (dimension {}, delay {}), and "
+        "a Theiler window of {} samples leaves fewer than {} candidate neighbours per vector; "
+        "at most {} samples",
+        sources.locate(key).str(), key, *theiler, what, vectors, d, tau, *theiler,
+        nonlinear::minimum_vectors, most));
+  }
+}
+
+// The signal itself: finite, not constant, long enough for the methods and for every explicit
+// embedding, with room for neighbours outside every explicit Theiler window.
+void check_signal(const Input& in, const Json& analysis, const SourceMap& sources) {
+  const std::string where = sources.locate("input.column").str();
+  const std::vector<double>& values = in.data.column(in.column);
+  const std::string what = fmt::format("{} column '{}'", in.file.string(), in.column);
   int needed_dimension = 2, needed_delay = 1;
   std::size_t needed = nonlinear::minimum_samples(2, 1);
-  for (const auto& m : methods) {
-    const Json& p = validated[m];
-    const ParamValues values_of_method(p);
+  for (const auto& m : analysis["methods"].get<std::vector<std::string>>()) {
+    const ParamValues values_of_method(analysis[m]);
     const int d = int(nonlinear::given_integer(values_of_method, "embedding_dimension").value_or(2));
     const int tau = int(nonlinear::given_integer(values_of_method, "delay_samples").value_or(1));
     if (nonlinear::minimum_samples(d, tau) > needed) {
@@ -211,16 +259,25 @@ void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
   try {
     nonlinear::check_series(values, needed_dimension, needed_delay, what);
   } catch (const InputError& e) {
-    throw InputError(fmt::format("{}: {}", where("input.column"), e.what()));
+    throw InputError(fmt::format("{}: {}", where, e.what()));
   }
   if (values.size() < nonlinear::minimum_series_samples)
     throw InputError(fmt::format(
         "{}: {}: {} samples are too short: the nonlinear analyses need at least {} samples "
         "(delay vectors in up to 10 embedding dimensions, 2000 pairs inside a scaling region, "
         "divergence followed for 30 samples)",
-        where("input.column"), what, values.size(), nonlinear::minimum_series_samples));
-  document["input"] = std::move(input);
-  document["analysis"] = std::move(validated);
+        where, what, values.size(), nonlinear::minimum_series_samples));
+  check_theiler_windows(values.size(), analysis, what, sources);
+}
+
+}  // namespace
+
+void SignalAnalysis::validate(Json& document, const SourceMap& sources) const {
+  Input input = validate_input(document, sources);
+  Json analysis = validate_analysis(document, sources);
+  check_signal(input, analysis, sources);
+  document["input"] = std::move(input.table);
+  document["analysis"] = std::move(analysis);
 }
 
 std::vector<std::string> SignalAnalysis::output_columns(const Json& document) const {
@@ -248,101 +305,141 @@ std::string quality_of(const Json& e) {
              : "failed";
 }
 
-}  // namespace
+// What the methods' results say about chaos, each piece with the words the verdict gives it.
+struct Evidence {
+  std::vector<std::string> found, missing;
+  std::string divergence;
+  bool positive_exponent = false, saturating = false, surrogates_run = false;
+  bool rejected_exponent = false, rejected_dimension = false, rejected_prediction = false;
+  bool noise = false;  // a D2 noise scale, a Kantz noise floor or noise-dominated scales
+};
 
-Json SignalAnalysis::chaos_verdict(const Json& context) {
-  // Evidence, each with the words the verdict gives it.
-  const Json none = Json::object();
-  const Json& lyapunov = context.contains("lyapunov") ? context["lyapunov"] : none;
-  const Json& dimension =
-      context.contains("correlation_dimension") ? context["correlation_dimension"] : none;
-  const Json& surrogates = context.contains("surrogates") ? context["surrogates"] : none;
-  std::vector<std::string> evidence, missing;
-
-  const std::string divergence = lyapunov.value("divergence", "");
+void exponent_evidence(const Json& context, Evidence& e) {
+  if (!context.contains("lyapunov")) {
+    e.missing.push_back("no largest exponent (method 'lyapunov' not run)");
+    return;
+  }
+  const Json& lyapunov = context["lyapunov"];
+  e.divergence = lyapunov.value("divergence", "");
   const Json lambda_low = lyapunov.contains("lyapunov_max_per_sample")
                               ? number_at(lyapunov["lyapunov_max_per_sample"], "ci_low")
                               : Json();
-  const bool positive_exponent =
-      divergence == "exponential" && lambda_low.is_number() && lambda_low.get<double>() > 0;
-  if (!context.contains("lyapunov"))
-    missing.push_back("no largest exponent (method 'lyapunov' not run)");
-  else if (positive_exponent)
-    evidence.push_back("a positive largest exponent whose interval excludes zero");
-  else if (divergence == "none")
-    evidence.push_back("no exponential divergence of neighbouring trajectories");
+  e.positive_exponent =
+      e.divergence == "exponential" && lambda_low.is_number() && lambda_low.get<double>() > 0;
+  e.noise = e.noise || lyapunov.value("noise_dominated_radius", Json()).is_number() ||
+            lyapunov.value("noise_radius", Json()).is_number();
+  if (e.positive_exponent)
+    e.found.push_back("a positive largest exponent whose interval excludes zero");
+  else if (e.divergence == "none")
+    e.found.push_back("no exponential divergence of neighbouring trajectories");
   else
-    missing.push_back(divergence == "exponential"
-                          ? "the exponent's interval does not exclude zero"
-                          : "the divergence curves show no exponential divergence common to "
-                            "dimensions and neighbourhood sizes");
+    e.missing.push_back(e.divergence == "exponential"
+                            ? "the exponent's interval does not exclude zero"
+                            : "the divergence curves show no exponential divergence common to "
+                              "dimensions and neighbourhood sizes");
+}
 
+void dimension_evidence(const Json& context, Evidence& e) {
+  if (!context.contains("correlation_dimension")) {
+    e.missing.push_back("no correlation dimension (method 'correlation_dimension' not run)");
+    return;
+  }
+  const Json& dimension = context["correlation_dimension"];
   const Json d2 = dimension.contains("correlation_dimension")
                       ? number_at(dimension["correlation_dimension"], "value")
                       : Json();
-  const bool saturating = d2.is_number();
-  if (!context.contains("correlation_dimension"))
-    missing.push_back("no correlation dimension (method 'correlation_dimension' not run)");
-  else if (saturating)
-    evidence.push_back(fmt::format("a saturating correlation dimension ({:.3g})",
-                                   d2.get<double>()));
+  e.saturating = d2.is_number();
+  e.noise = e.noise || dimension.value("noise_level", Json()).is_number();
+  if (e.saturating)
+    e.found.push_back(fmt::format("a saturating correlation dimension ({:.3g})", d2.get<double>()));
   else
-    missing.push_back("no saturating correlation dimension");
+    e.missing.push_back("no saturating correlation dimension");
+}
 
-  const bool surrogates_run = context.contains("surrogates");
-  const bool rejected_exponent = surrogates.value("rejected_for_exponent", false);
-  const bool rejected_dimension = surrogates.value("rejected_for_dimension", false);
-  const bool rejected_prediction = surrogates.value("rejected_for_prediction", false);
-  if (!surrogates_run) {
-    missing.push_back("no surrogate test (method 'surrogates' not run)");
-  } else {
-    if (rejected_exponent && rejected_dimension)
-      evidence.push_back("the surrogate tests reject a linear stochastic process for the "
-                         "exponent and the dimension");
-    else
-      missing.push_back(fmt::format(
-          "the surrogate tests do not reject a linear stochastic process for the {}",
-          !rejected_exponent && !rejected_dimension ? "exponent nor the dimension"
-          : !rejected_exponent                      ? "exponent"
-                                                    : "dimension"));
+void surrogate_evidence(const Json& context, Evidence& e) {
+  e.surrogates_run = context.contains("surrogates");
+  if (!e.surrogates_run) {
+    e.missing.push_back("no surrogate test (method 'surrogates' not run)");
+    return;
   }
+  const Json& surrogates = context["surrogates"];
+  e.rejected_exponent = surrogates.value("rejected_for_exponent", false);
+  e.rejected_dimension = surrogates.value("rejected_for_dimension", false);
+  e.rejected_prediction = surrogates.value("rejected_for_prediction", false);
+  if (e.rejected_exponent && e.rejected_dimension)
+    e.found.push_back("the surrogate tests reject a linear stochastic process for the exponent "
+                      "and the dimension");
+  else
+    e.missing.push_back(fmt::format(
+        "the surrogate tests do not reject a linear stochastic process for the {}",
+        !e.rejected_exponent && !e.rejected_dimension ? "exponent nor the dimension"
+        : !e.rejected_exponent                        ? "exponent"
+                                                      : "dimension"));
+}
 
-  std::string verdict;
-  std::string summary;
-  const bool any_rejected = rejected_exponent || rejected_dimension || rejected_prediction;
-  if (positive_exponent && saturating && surrogates_run && rejected_exponent &&
-      rejected_dimension) {
-    verdict = "deterministic chaos";
-    summary = "every test for deterministic chaos passed";
-  } else if (surrogates_run && !any_rejected) {
-    verdict = "linear stochastic";
-    summary = "no statistic distinguishes the data from linear stochastic surrogates";
-  } else if (divergence == "none") {
-    verdict = "periodic or quasi-periodic";
-    summary = "neighbouring trajectories do not separate exponentially";
-  } else if (any_rejected && (!saturating || !positive_exponent) &&
-             (dimension.value("noise_level", Json()).is_number() ||
-              lyapunov.value("noise_dominated_radius", Json()).is_number() ||
-              lyapunov.value("noise_radius", Json()).is_number())) {
-    verdict = "noise-dominated";
-    summary = "nonlinear structure that noise hides at the scales a dimension or exponent "
-              "needs";
-  } else {
-    verdict = "not determined";
-    summary = "the evidence for chaos is incomplete";
-  }
+// The verdict and its one-line summary.
+std::pair<std::string, std::string> classify(const Evidence& e) {
+  const bool any_rejected = e.rejected_exponent || e.rejected_dimension || e.rejected_prediction;
+  if (e.positive_exponent && e.saturating && e.surrogates_run && e.rejected_exponent &&
+      e.rejected_dimension)
+    return {"deterministic chaos", "every test for deterministic chaos passed"};
+  if (e.surrogates_run && !any_rejected)
+    return {"linear stochastic",
+            "no statistic distinguishes the data from linear stochastic surrogates"};
+  if (e.divergence == "none")
+    return {"periodic or quasi-periodic",
+            "neighbouring trajectories do not separate exponentially"};
+  if (any_rejected && (!e.saturating || !e.positive_exponent) && e.noise)
+    return {"noise-dominated",
+            "nonlinear structure that noise hides at the scales a dimension or exponent needs"};
+  return {"not determined", "the evidence for chaos is incomplete"};
+}
+
+}  // namespace
+
+Json SignalAnalysis::chaos_verdict(const Json& context) {
+  Evidence e;
+  exponent_evidence(context, e);
+  dimension_evidence(context, e);
+  surrogate_evidence(context, e);
+  const auto [verdict, summary] = classify(e);
   return Json{{"verdict", verdict},
               {"reason", fmt::format("{}: {}{}", summary,
-                                     evidence.empty() ? std::string("no evidence for chaos")
-                                                      : fmt::format("{}", fmt::join(evidence, "; ")),
-                                     missing.empty() ? std::string()
-                                                     : fmt::format("; missing: {}",
-                                                                   fmt::join(missing, "; ")))},
-              {"positive_exponent", positive_exponent},
-              {"saturating_dimension", saturating},
-              {"surrogates_reject_for_exponent", rejected_exponent},
-              {"surrogates_reject_for_dimension", rejected_dimension}};
+                                     e.found.empty() ? std::string("no evidence for chaos")
+                                                     : fmt::format("{}", fmt::join(e.found, "; ")),
+                                     e.missing.empty()
+                                         ? std::string()
+                                         : fmt::format("; missing: {}", fmt::join(e.missing, "; ")))},
+              {"positive_exponent", e.positive_exponent},
+              {"saturating_dimension", e.saturating},
+              {"surrogates_reject_for_exponent", e.rejected_exponent},
+              {"surrogates_reject_for_dimension", e.rejected_dimension}};
 }
+
+namespace {
+
+// Phase portrait x(t) against x(t + tau): at most 20000 points.
+void plot_phase_portrait(const SampledSeries& series, std::size_t tau, const fs::path& plot_dir) {
+  plot::Curves portrait;
+  portrait.title = fmt::format("{}: phase portrait (delay {} samples)", series.name, tau);
+  portrait.x_label = "x(t) [signal unit]";
+  portrait.y_label =
+      series.sample_unit == "sample"
+          ? fmt::format("x(t + {} samples) [signal unit]", tau)
+          : fmt::format("x(t + {:.4g} {}) [signal unit]", double(tau) * series.sample_interval,
+                        series.sample_unit);
+  plot::Series points{"delay-embedded samples", {}, {}, "points"};
+  const std::size_t n = series.values.size() > tau ? series.values.size() - tau : 0;
+  const std::size_t stride = std::max<std::size_t>(1, n / 20000);
+  for (std::size_t i = 0; i < n; i += stride) {
+    points.x.push_back(series.values[i]);
+    points.y.push_back(series.values[i + tau]);
+  }
+  portrait.series.push_back(points);
+  plot::render(portrait, plot_dir, "phase_portrait");
+}
+
+}  // namespace
 
 Json SignalAnalysis::analyse_series(const SampledSeries& series, const Json& analysis,
                                     const fs::path& plot_dir) {
@@ -392,27 +489,10 @@ Json SignalAnalysis::analyse_series(const SampledSeries& series, const Json& ana
         }
   summary["verdict"] = chaos_verdict(context);
   if (!plot_dir.empty()) {
-    // Phase portrait x(t) vs x(t + tau): at most 20000 points.
     const Json& delay = summary["delay_samples"]["value"];
-    const std::size_t tau = delay.is_number() ? std::size_t(delay.get<double>()) : 1;
-    plot::Curves portrait;
-    portrait.title = fmt::format("{}: phase portrait (delay {} samples)", series.name, tau);
-    portrait.x_label = "x(t) [signal unit]";
-    portrait.y_label =
-        series.sample_unit == "sample"
-            ? fmt::format("x(t + {} samples) [signal unit]", tau)
-            : fmt::format("x(t + {:.4g} {}) [signal unit]", double(tau) * series.sample_interval,
-                          series.sample_unit);
-    plot::Series points{"delay-embedded samples", {}, {}, "points"};
-    const std::size_t n = series.values.size() > tau ? series.values.size() - tau : 0;
-    const std::size_t stride = std::max<std::size_t>(1, n / 20000);
-    for (std::size_t i = 0; i < n; i += stride) {
-      points.x.push_back(series.values[i]);
-      points.y.push_back(series.values[i + tau]);
-    }
-    portrait.series.push_back(points);
     try {
-      plot::render(portrait, plot_dir, "phase_portrait");
+      plot_phase_portrait(series, delay.is_number() ? std::size_t(delay.get<double>()) : 1,
+                          plot_dir);
     } catch (const std::exception& e) {
       plot_errors.push_back(fmt::format("phase portrait: {}", e.what()));
     }

@@ -107,6 +107,25 @@ TEST_F(SignalAnalysisInput, TooShortForTheRequestedDimensionSaysTheMinimum) {
   EXPECT_NE(m.find("at least 350 samples"), std::string::npos) << m;
 }
 
+TEST_F(SignalAnalysisInput, TheilerWindowLeavingTooFewNeighboursSaysTheLimit) {
+  // 400 samples in dimension 2, delay 1: 399 vectors; a window W leaves 399 - (2 W + 1)
+  // candidates, at least 100 wanted: W <= 149.
+  write_signal(dir_, "s.csv", test_signals::henon(400));
+  const std::string input = "file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000";
+  auto analysis = [](int w) {
+    return fmt::format("[analysis]\nmethods = [\"embedding\", \"lyapunov\"]\n[analysis.lyapunov]\n"
+                       "theiler_window_samples = {}\n",
+                       w);
+  };
+  const std::string m = load_error(dir_, study(input, analysis(150)));
+  EXPECT_NE(m.find("analysis.lyapunov.theiler_window_samples = 150: too few neighbours"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("399 delay vectors"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 149 samples"), std::string::npos) << m;
+  EXPECT_NO_THROW(testing::load_text(dir_, study(input, analysis(149))));
+}
+
 TEST_F(SignalAnalysisInput, UnknownMethodAndStrayOverride) {
   write_signal(dir_, "s.csv", test_signals::henon(500));
   const std::string input = "file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000";
