@@ -1,22 +1,29 @@
 // Speed of the nonlinear analyses (MODELS.md N) on 100,000-sample series against TISEAN 3.0.1.
 //
-// Kantz's method against TISEAN's lyap_k, side by side, on every signal of the validation suite
-// (tests/validation/): `BM_LyapKProcess/<signal>` runs this program as a separate process on the
-// signal written to a file (`chaos_bench --lyap-k FILE OUT`: read the file, Kantz curves with
-// lyap_k's parameters, write them; start-up included) and, when TISEAN_BIN names TISEAN's bin
-// directory, `lyap_k -m 2 -M 4` on the same file right after it; the counters give TISEAN's time
-// and the ratio. lyap_k's defaults (read from its usage text and source): dimensions m..M,
-// delay 1, 5 radii from 1/1000 to 1/100 of the data range (geometric), every point a reference,
-// 50 iterations (S(k), k = 0..50), Theiler window 0, all neighbours within eps.
+// Side by side with TISEAN, as processes on the same file (start-up, reading and writing
+// included): `BM_Process/<tool>/<signal>` writes the signal to a file once, then per iteration
+// runs this program (`chaos_bench --run TOOL FILE OUT`: read the file, compute, write the result)
+// and, when TISEAN_BIN names TISEAN's bin directory, the TISEAN program on the same file right
+// after it. The time is the process's CPU time (user + system: steadier than the wall time on
+// a shared machine; the wall times are counters); the counters give TISEAN's times and the
+// CPU-time ratio. Tools:
+//  - lyap_k (Kantz's method) on every signal of the validation suite (tests/validation/):
+//    `lyap_k -m 2 -M 4`, i.e. dimensions 2..4, delay 1, 5 radii from 1/1000 to 1/100 of the data
+//    range (geometric), every point a reference, 50 iterations (S(k), k = 0..50), Theiler
+//    window 0, all neighbours within eps (its defaults, read from its usage text and source);
+//  - d2 (Henon, Lorenz): `d2 -d 1 -M 1,10 -t 0 -N 0 -R <2 % of the range>`, every pair closer
+//    than 2 % of the range in dimensions 1..10;
+//  - lyap_spec (Henon, Lorenz): `lyap_spec -m 1,2 -k 30`, local Jacobians from 30 neighbours at
+//    every point, dimension 2, delay 1.
 //
-// The other benchmarks time the analyses in process: lyap_spec's work (m = 2, delay 1,
-// 30 neighbours, every point a reference: BM_LyapSpec*), d2's (sampled references, and every
-// pair within 2 % / 20 % of the range: BM_D2Henon*), and the Kantz scan alone (BM_LyapK*).
-// Run single-threaded (OMP_NUM_THREADS=1) and with 2 threads; docs/performance.md records the
-// figures and the commands.
+// The other benchmarks time the analyses in process: lyap_spec's work (BM_LyapSpec*), d2's
+// (sampled references, and every pair within 2 % / 20 % of the range: BM_D2Henon*), and the
+// Kantz scan alone (BM_LyapK*). Run single-threaded (OMP_NUM_THREADS=1) and with 2 threads;
+// docs/performance.md records the figures and the commands.
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -35,6 +42,8 @@
 #include "analysis/lyapunov_spectrum/lyapunov_spectrum.hpp"
 #include "analysis/nonlinear_common/test_signals.hpp"
 #include "chatterlab/signal_io.hpp"
+
+#include <fmt/format.h>
 
 extern char** environ;
 
@@ -88,13 +97,25 @@ KantzScan lyap_k_scan(const std::vector<double>& x) {
   return kantz_scan(x, 2, 4, 1, 0, 51, 0, lyap_k_radii(x));
 }
 
-// `chaos_bench --lyap-k FILE OUT`: our side of the side-by-side run, as lyap_k does it: read
-// the series, compute, write S(k) per dimension and radius.
-int lyap_k_process(const char* file, const char* out) {
-  const auto x = read_data_table(file).columns.at(0);
+double data_range(const std::vector<double>& x) {
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  return *hi - *lo;
+}
+
+// A TISEAN program and our side of the same work, run as processes on the same file. Our side
+// (`chaos_bench --run TOOL FILE OUT`) reads the series, computes and writes the result as the
+// TISEAN program does (start-up, reading and writing included).
+struct Tool {
+  const char* name;
+  void (*ours)(const std::vector<double>& x, std::FILE* out);
+  // TISEAN's command line (after the program) for the file, output and data.
+  std::vector<std::string> (*tisean_args)(const std::string& file, const std::string& out,
+                                          const std::vector<double>& x);
+};
+
+// lyap_k -m 2 -M 4: S(k) per dimension and radius.
+void lyap_k_ours(const std::vector<double>& x, std::FILE* f) {
   const auto scan = lyap_k_scan(x);
-  std::FILE* f = std::fopen(out, "w");
-  if (!f) return 1;
   for (std::size_t r = 0; r < scan.radii.size(); ++r)
     for (int m = scan.min_dimension; m <= scan.max_dimension; ++m) {
       std::fprintf(f, "#m= %d epsilon= %g\n", m, scan.radii[r]);
@@ -102,11 +123,71 @@ int lyap_k_process(const char* file, const char* out) {
       for (std::size_t k = 0; k < curve.size(); ++k) std::fprintf(f, "%zu %.8g\n", k, curve[k]);
       std::fprintf(f, "\n\n");
     }
+}
+std::vector<std::string> lyap_k_tisean(const std::string& file, const std::string& out,
+                                       const std::vector<double>&) {
+  return {"-m", "2", "-M", "4", "-V", "0", "-o", out, file};
+}
+
+// d2 -d 1 -M 1,10 -t 0 -N 0 -R (2 % of the range): every pair closer than 2 % of the range in
+// dimensions 1..10; C(r) per dimension.
+constexpr double d2_cut = 0.02;
+void d2_ours(const std::vector<double>& x, std::FILE* f) {
+  const auto sums = correlation_sums_within(x, 10, 1, 0, d2_cut);
+  const auto log_r = sums.log_radii();
+  for (int d = 1; d <= 10; ++d) {
+    std::fprintf(f, "#dim= %d\n", d);
+    const auto log_c = sums.log_correlation(d);
+    for (std::size_t k = 0; k < log_c.size(); ++k)
+      if (std::isfinite(log_c[k])) std::fprintf(f, "%.8g %.8g\n", std::exp(log_r[k]), std::exp(log_c[k]));
+    std::fprintf(f, "\n\n");
+  }
+}
+std::vector<std::string> d2_tisean(const std::string& file, const std::string& out,
+                                   const std::vector<double>& x) {
+  return {"-d", "1", "-M", "1,10", "-t", "0", "-N", "0",
+          "-R", fmt::format("{:.17g}", d2_cut * data_range(x)), "-V", "0", "-o", out, file};
+}
+
+// lyap_spec -m 1,2 -k 30 (delay 1, one-step Jacobians, every point a reference).
+void lyap_spec_ours(const std::vector<double>& x, std::FILE* f) {
+  const auto s = lyapunov_spectrum(x, 2, 1, 0, 1, 30, x.size());
+  for (double v : s.exponents) std::fprintf(f, "%.8g ", v);
+  std::fprintf(f, "\n");
+}
+std::vector<std::string> lyap_spec_tisean(const std::string& file, const std::string& out,
+                                          const std::vector<double>&) {
+  return {"-m", "1,2", "-k", "30", "-V", "0", "-o", out, file};
+}
+
+const Tool tools[] = {{"lyap_k", lyap_k_ours, lyap_k_tisean},
+                      {"d2", d2_ours, d2_tisean},
+                      {"lyap_spec", lyap_spec_ours, lyap_spec_tisean}};
+
+const Tool* find_tool(const std::string& name) {
+  for (const auto& t : tools)
+    if (name == t.name) return &t;
+  return nullptr;
+}
+
+int run_tool(const char* tool, const char* file, const char* out) {
+  const Tool* t = find_tool(tool);
+  if (!t) return 2;
+  const auto x = read_data_table(file).columns.at(0);
+  std::FILE* f = std::fopen(out, "w");
+  if (!f) return 1;
+  t->ours(x, f);
   return std::fclose(f) == 0 ? 0 : 1;
 }
 
-// Wall time of a child process (seconds), or a negative value if it failed.
-double run_process(const std::vector<std::string>& args) {
+// Wall and CPU time (user + system) of a child process, in seconds; negative if it failed. On
+// a shared machine the CPU time is the steadier measure (the wall time includes waiting for a
+// core); both include start-up, reading and writing.
+struct ProcessTime {
+  double wall = -1, cpu = -1;
+  bool ok() const { return wall >= 0; }
+};
+ProcessTime run_process(const std::vector<std::string>& args) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -118,12 +199,14 @@ double run_process(const std::vector<std::string>& args) {
   pid_t pid = 0;
   const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) return -1;
+  if (spawned != 0) return {};
   int status = 0;
-  waitpid(pid, &status, 0);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? seconds : -1;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return {};
+  auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return {wall, seconds(usage.ru_utime) + seconds(usage.ru_stime)};
 }
 
 // The signal written once to a file both programs read (one value per line, full precision).
@@ -137,45 +220,60 @@ std::string signal_file(const std::string& name, const std::vector<double>& x) {
   return file.string();
 }
 
-void BM_LyapKProcess(benchmark::State& state, const std::string& name,
-                     const std::function<std::vector<double>()>& make) {
-  const std::string file = signal_file(name, make());
+// Per iteration: our process, then TISEAN's (when TISEAN_BIN names its bin directory) on the
+// same file. The manual time is our CPU time; counters: our wall time, TISEAN's CPU and wall
+// times (means over the iterations) and the CPU-time ratio TISEAN / ours.
+void BM_Process(benchmark::State& state, const Tool* tool, const std::string& name,
+                const std::function<std::vector<double>()>& make) {
+  const auto x = make();
+  const std::string file = signal_file(name, x);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
-  const std::string ours_out = file + ".ours", tisean_out = file + ".lyap";
+  const std::string ours_out = file + ".ours", tisean_out = file + "." + tool->name;
   const char* tisean = std::getenv("TISEAN_BIN");
-  double tisean_total = 0, ours_total = 0;
+  ProcessTime ours_total{0, 0}, tisean_total{0, 0};
   std::size_t runs = 0;
   for (auto _ : state) {
-    const double ours = run_process({self, "--lyap-k", file, ours_out});
-    if (ours < 0) {
-      state.SkipWithError("chaos_bench --lyap-k failed");
+    const ProcessTime ours = run_process({self, "--run", tool->name, file, ours_out});
+    if (!ours.ok()) {
+      state.SkipWithError("chaos_bench --run failed");
       break;
     }
-    state.SetIterationTime(ours);
-    ours_total += ours;
+    state.SetIterationTime(ours.cpu);
+    ours_total.wall += ours.wall;
+    ours_total.cpu += ours.cpu;
     if (tisean) {
-      const double t = run_process({std::string(tisean) + "/lyap_k", "-m", "2", "-M", "4", "-V",
-                                    "0", "-o", tisean_out, file});
-      if (t < 0) {
-        state.SkipWithError("TISEAN lyap_k failed (TISEAN_BIN)");
+      std::vector<std::string> args{std::string(tisean) + "/" + tool->name};
+      for (auto& a : tool->tisean_args(file, tisean_out, x)) args.push_back(a);
+      const ProcessTime t = run_process(args);
+      if (!t.ok()) {
+        state.SkipWithError("the TISEAN program failed (TISEAN_BIN)");
         break;
       }
-      tisean_total += t;
+      tisean_total.wall += t.wall;
+      tisean_total.cpu += t.cpu;
     }
     ++runs;
   }
-  if (tisean && runs > 0) {
-    state.counters["tisean_s"] = tisean_total / double(runs);
-    state.counters["ratio"] = tisean_total / ours_total;
+  if (runs == 0) return;
+  state.counters["wall_s"] = ours_total.wall / double(runs);
+  if (tisean) {
+    state.counters["tisean_cpu_s"] = tisean_total.cpu / double(runs);
+    state.counters["tisean_wall_s"] = tisean_total.wall / double(runs);
+    state.counters["ratio"] = tisean_total.cpu / ours_total.cpu;
   }
 }
 
+// lyap_k on every validation signal; d2 and lyap_spec on the Henon map and the Lorenz flow.
 [[maybe_unused]] const bool registered = [] {
   for (const auto& [name, make] : signals())
-    benchmark::RegisterBenchmark(("BM_LyapKProcess/" + name).c_str(), BM_LyapKProcess, name, make)
-        ->Unit(benchmark::kMillisecond)
-        ->UseManualTime()
-        ->Iterations(1);
+    for (const auto& tool : tools) {
+      if (std::string(tool.name) != "lyap_k" && name != "henon" && name != "lorenz") continue;
+      benchmark::RegisterBenchmark(fmt::format("BM_Process/{}/{}", tool.name, name).c_str(),
+                                   BM_Process, &tool, name, make)
+          ->Unit(benchmark::kMillisecond)
+          ->UseManualTime()
+          ->Iterations(1);
+    }
   return true;
 }();
 
@@ -241,7 +339,7 @@ BENCHMARK(BM_LyapKLorenz)->Unit(benchmark::kMillisecond)->UseRealTime();
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::string(argv[1]) == "--lyap-k") return lyap_k_process(argv[2], argv[3]);
+  if (argc == 5 && std::string(argv[1]) == "--run") return run_tool(argv[2], argv[3], argv[4]);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -26,6 +26,7 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "analysis/nonlinear_common/test_signals.hpp"
 #include "analysis/signal_analysis/signal_analysis.hpp"
@@ -105,6 +106,26 @@ bool meets(const Json& e, const Accepted& a) {
          e["ci_low"].get<double>() <= a.high && e["ci_high"].get<double>() >= a.low;
 }
 
+// One row of the spectrum table in docs/analysis/chaos.md, prefixed "spectrum " in the output:
+// the genuine exponents (per time unit), how many were flagged spurious, their sum, the
+// Kaplan-Yorke dimension and the quality of the spectrum's largest exponent.
+void print_spectrum_row(const Case& c, const Json& spectrum) {
+  std::vector<std::string> genuine;
+  std::size_t spurious = 0;
+  for (const Json& e : spectrum["exponents_per_sample"]) {
+    if (e["spurious"].get<bool>())
+      ++spurious;
+    else
+      genuine.push_back(fmt::format("{:.3g}", e["value"].get<double>() / c.dt));
+  }
+  const Json& ky = spectrum["kaplan_yorke_dimension"];
+  std::cout << fmt::format("spectrum | {} | {} | {} | {:.3g} | {} | {} |\n", c.name,
+                           genuine.empty() ? "none" : fmt::format("{}", fmt::join(genuine, ", ")),
+                           spurious, spectrum["sum_per_sample"].get<double>() / c.dt,
+                           ky.is_number() ? fmt::format("{:.3g}", ky.get<double>()) : "-",
+                           spectrum["lyapunov_max_per_sample"]["quality"].get<std::string>());
+}
+
 void check(const Case& c) {
   const auto x = c.signal();
   const SampledSeries series = ts::series(x, c.dt, c.name.c_str());
@@ -126,6 +147,8 @@ void check(const Case& c) {
                            accepted_text(c.lambda), verdict_text(c.lambda, lambda),
                            interval_text(d2), d2["quality"].get<std::string>(),
                            accepted_text(c.d2), verdict_text(c.d2, d2), verdict);
+
+  print_spectrum_row(c, summary["methods"]["lyapunov_spectrum"]);
 
   // A "good" estimate meets the accepted range.
   if (c.lambda && lambda["quality"] == "good") {
