@@ -402,6 +402,10 @@ std::string cross_checks(const Json& context, const GenuineSpectrum& g, double l
     const bool agrees = inside || std::abs(largest - v) <= divergence_agreement * std::abs(v);
     checks += fmt::format("; the divergence estimate is {}{}", rate(v), agrees ? " (agrees)" : "");
     if (!agrees) doubts.push_back(fmt::format("the divergence curves give {}", rate(v)));
+    // Agreement with a doubtful estimate confirms nothing: what makes the divergence estimate
+    // uncertain (noise, a short series) biases the local fits as much.
+    if (e.value("quality", "") != "good")
+      doubts.push_back("the divergence estimate it is checked against is not good");
   } else if (divergence == "none" || divergence == "undetermined") {
     doubts.push_back(divergence == "none"
                          ? "the divergence curves show no exponential divergence"

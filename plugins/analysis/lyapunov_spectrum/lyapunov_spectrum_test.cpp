@@ -61,6 +61,25 @@ TEST(LyapunovSpectrum, TorusHasNoGenuinePositiveExponent) {
   EXPECT_TRUE(r["kaplan_yorke_dimension"].is_null());
 }
 
+// The spectrum's largest exponent is "good" only when it agrees with a divergence estimate that
+// is itself "good": agreeing with an uncertain one (noise, a short series) confirms nothing.
+TEST(LyapunovSpectrum, AgreementWithAnUncertainDivergenceEstimateIsNotGood) {
+  const auto x = series(test_signals::henon(5000), 1.0, "henon x");
+  auto context = [](const char* quality) {
+    return Json{{"lyapunov",
+                 {{"divergence", "exponential"},
+                  {"lyapunov_max_per_sample",
+                   {{"value", 0.419}, {"ci_low", 0.41}, {"ci_high", 0.43}, {"quality", quality}}}}}};
+  };
+  const Json good = make_analysis("lyapunov_spectrum")->analyse(x, context("good"));
+  EXPECT_EQ(good["lyapunov_max_per_sample"]["quality"], "good") << good["lyapunov_max_per_sample"];
+  const Json doubtful = make_analysis("lyapunov_spectrum")->analyse(x, context("uncertain"));
+  const Json& e = doubtful["lyapunov_max_per_sample"];
+  EXPECT_EQ(e["quality"], "uncertain") << e;
+  EXPECT_NE(e["reason"].get<std::string>().find("checked against is not good"), std::string::npos)
+      << e;
+}
+
 TEST(LyapunovSpectrumAccuracy, Lorenz) {
   const Json r = make_analysis("lyapunov_spectrum")->analyse(
       series(test_signals::lorenz(100000), 0.01, "lorenz x"), Json::object());
