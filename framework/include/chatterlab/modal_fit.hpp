@@ -86,4 +86,14 @@ ModalFit fit_modes(const MeasuredFrf& frf, const ModalFitSettings& settings);
 // Receptance of real modes at frequency_hz (G1's H(j w)).
 Complex modes_receptance(const std::vector<FittedMode>& modes, double frequency_hz);
 
+// A model capability (Model::measured_machine()): the model's machine compliance comes from a
+// measured FRF. Kinds show the measurement and the fit next to their results (kit::plot_modal_fit).
+class MeasuredMachine {
+ public:
+  virtual ~MeasuredMachine() = default;
+  virtual const MeasuredFrf& measured_frf() const = 0;
+  // The fit the model uses, or null when it uses the measured FRF directly.
+  virtual const ModalFit* modal_fit() const = 0;
+};
+
 }  // namespace chatterlab

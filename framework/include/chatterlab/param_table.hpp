@@ -77,6 +77,8 @@ class ParamTable {
     Field& fraction(bool one_excluded = false) { non_negative(); return one_excluded ? below(1.0) : at_most(1.0); }
     Field& choices(std::vector<std::string> names) { spec_->choices = std::move(names); return *this; }
     Field& min_items(std::size_t n) { spec_->min_items = n; return *this; }
+    // A data file name, relative to the study file (ParamSpec::data_file).
+    Field& data_file() { spec_->data_file = true; return *this; }
     // No default: the study must give it (the struct's initialiser is then only a placeholder).
     Field& required() { *required_ = true; return *this; }
 
