@@ -145,6 +145,25 @@ class ParamTable {
     return Field(&e.spec, &e.required);
   }
 
+  // An optional nested table: null (std::nullopt) when left out, e.g. one of two ways to give a
+  // setting (a list of values or a range table).
+  template <class Sub>
+  Field add_optional_table(std::optional<Sub> S::*member, std::string key, std::string description,
+                           const ParamTable<Sub>& fields) {
+    Entry& e = push(param_spec(key, ValueKind::table, "", std::move(description)));
+    e.spec.fields = fields.specs();
+    e.optional = true;
+    e.read = [member, key, fields](S& s, const Json& table) {
+      const Json& v = table.at(key);
+      if (v.is_null()) s.*member = std::nullopt;
+      else s.*member = fields.read(v);
+    };
+    e.write = [member, key, fields](const S& s, Json& table) {
+      table[key] = (s.*member) ? fields.write(*(s.*member)) : Json(nullptr);
+    };
+    return Field(&e.spec, &e.required);
+  }
+
   // A list of tables ([[<table>.<key>]] or key = [{...}, ...]), each declared by `fields`.
   template <class Sub>
   Field add_tables(std::vector<Sub> S::*member, std::string key, std::string description,
