@@ -326,8 +326,9 @@ std::string line_styles() {
 // The plot command's style of a series: the style word, its line style (palette place, or its own
 // colour and width) and, for an area, a translucent fill down to the bottom of the plot.
 std::string series_style(const Series& s, const SeriesLook& look, std::size_t index) {
-  const bool dashes = s.style == "dashes", area = s.style == "area";
-  std::string style = fmt::format("with {} ls {}", dashes ? "lines" : area ? "filledcurves x1" : s.style, index % 8 + 1);
+  const bool dashes = s.style == "dashes", area = s.style == "area" || s.style == "area_above";
+  const std::string word = dashes ? "lines" : s.style == "area" ? "filledcurves x1" : s.style == "area_above" ? "filledcurves x2" : s.style;
+  std::string style = fmt::format("with {} ls {}", word, index % 8 + 1);
   if (!look.colour.empty()) style += fmt::format(" lc rgb '{}'", look.colour);
   if (look.line_width > 0.0) style += fmt::format(" lw {}", number(look.line_width));
   // "dashes": a dash pattern (after the line style, which would reset it), for a curve drawn over
@@ -351,8 +352,8 @@ SeriesLook look_of(const std::vector<SeriesLook>& looks, std::size_t i, const Se
 }
 
 void render(const Curves& figure, const fs::path& out_dir, const std::string& stem) {
-  static constexpr std::array<std::string_view, 7> kStyles{"lines", "points", "linespoints", "impulses",
-                                                           "steps", "dashes", "area"};
+  static constexpr std::array<std::string_view, 8> kStyles{"lines", "points", "linespoints", "impulses",
+                                                           "steps", "dashes", "area", "area_above"};
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
   if (figure.equal_aspect && (figure.log_x || figure.log_y))
     throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));

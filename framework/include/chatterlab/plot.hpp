@@ -20,8 +20,9 @@ class PlotError : public std::runtime_error {
 struct Series {
   std::string label;
   std::vector<double> x, y;
-  // lines, points, linespoints, impulses, steps, dashes (dashed lines), area (the region between
-  // the curve and the bottom of the plot, filled translucent: put it first, it is drawn in order)
+  // lines, points, linespoints, impulses, steps, dashes (dashed lines), area / area_above (the
+  // region between the curve and the bottom / top of the plot, filled translucent: put it first,
+  // series are drawn in order)
   std::string style = "lines";
 };
 

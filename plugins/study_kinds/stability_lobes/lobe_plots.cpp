@@ -11,12 +11,18 @@ namespace chatterlab::lobes {
 
 namespace {
 
-// The envelope as a function of speed for the windows: +inf where nothing crosses in the range
-// (stable throughout), -inf where the range's lower end is already unstable, else the limit;
-// with the lobe intersections between speeds.
-std::vector<std::pair<double, double>> envelope_profile(const LobeDiagram& d) {
+// The margin of the window value from the limit along the speeds, > 0 where chatter-free: limit -
+// level where the stable side is below the limit, level - limit where it is above; +inf where
+// nothing crosses in the range (stable throughout), -inf where the whole range is unstable. The
+// lobe intersections between speeds are included.
+std::vector<std::pair<double, double>> margin_profile(const LobeDiagram& d, double level) {
   std::vector<std::pair<double, double>> profile;
-  for (const Crossing& c : d.envelope) profile.emplace_back(c.speed, c.parameter);
+  std::size_t next = 0;
+  for (const Crossing& c : d.envelope) {
+    while (next + 1 < d.speeds.size() && d.speeds[next] < c.speed) ++next;
+    const bool below = d.at[next].stable_below;
+    profile.emplace_back(c.speed, below ? c.parameter - level : level - c.parameter);
+  }
   for (std::size_t i = 0; i < d.speeds.size(); ++i) {
     if (d.at[i].limit) continue;
     const bool stable = d.at[i].note.rfind("no crossing", 0) == 0;
@@ -30,50 +36,68 @@ std::vector<std::pair<double, double>> envelope_profile(const LobeDiagram& d) {
 }  // namespace
 
 std::vector<Window> chatter_free_windows(const LobeDiagram& d, double level) {
-  const auto profile = envelope_profile(d);
+  const auto profile = margin_profile(d, level);
   std::vector<Window> windows;
   std::optional<Window> open;
-  auto crossing_speed = [&](const std::pair<double, double>& a, const std::pair<double, double>& b) {
+  auto zero_at = [&](const std::pair<double, double>& a, const std::pair<double, double>& b) {
     if (!std::isfinite(a.second) || !std::isfinite(b.second)) return std::isfinite(a.second) ? a.first : b.first;
-    return a.first + (level - a.second) / (b.second - a.second) * (b.first - a.first);
+    return a.first - a.second / (b.second - a.second) * (b.first - a.first);
   };
   for (std::size_t i = 0; i < profile.size(); ++i) {
-    const auto& [v, p] = profile[i];
-    const bool above = p > level;
-    if (above && !open) {
-      open = Window{i == 0 ? v : crossing_speed(profile[i - 1], profile[i]), 0.0, p, v};
-    } else if (!above && open) {
-      open->to = crossing_speed(profile[i - 1], profile[i]);
+    const auto& [v, m] = profile[i];
+    if (m > 0.0 && !open) open = Window{i == 0 ? v : zero_at(profile[i - 1], profile[i]), 0.0, m, v};
+    if (m <= 0.0 && open) {
+      open->to = zero_at(profile[i - 1], profile[i]);
       windows.push_back(*open);
       open.reset();
     }
-    if (above && open && p > open->peak_value) open->peak_value = p, open->peak_speed = v;
+    if (m > 0.0 && open && m > open->peak_value) open->peak_value = m, open->peak_speed = v;
   }
   if (open) {
     open->to = profile.back().first;
     windows.push_back(*open);
   }
+  // The peak as a limit value, not a margin.
+  for (Window& w : windows)
+    for (const Crossing& c : d.envelope)
+      if (c.speed == w.peak_speed) w.peak_value = c.parameter;
   return windows;
 }
+
+namespace {
+
+// The stable region: below the limit (filled to the bottom) or above it (filled to the top), as
+// most speeds have it; a speed with nothing crossing in the range is stable throughout.
+plot::Series stable_region(const LobeDiagram& d, double top) {
+  const auto above = std::count_if(d.at.begin(), d.at.end(), [](const SpeedResult& r) { return r.limit && !r.stable_below; });
+  const auto below = std::count_if(d.at.begin(), d.at.end(), [](const SpeedResult& r) { return r.limit && r.stable_below; });
+  plot::Series stable{"stable", {}, {}, above > below ? "area_above" : "area"};
+  for (const auto& [v, m] : margin_profile(d, 0.0)) {
+    stable.x.push_back(v);
+    // margin_profile at level 0 is the limit itself (below) or its negative (above)
+    stable.y.push_back(std::isinf(m) ? (m > 0 ? (above > below ? 0.0 : top) : (above > below ? top : 0.0))
+                                     : std::min(std::abs(m), top));
+  }
+  return stable;
+}
+
+}  // namespace
 
 void plot_lobe_diagram(const LobeStudy& study, const LobeResults& r, const std::filesystem::path& dir,
                        kit::Figures& figures) {
   const LobeDiagram& d = r.diagram;
-  const double p_hi = study.settings.parameter_range[1];
-  double highest = study.window_value;
+  double highest = 0.0;
   for (const Crossing& c : d.envelope) highest = std::max(highest, c.parameter);
-  const double top = std::min(p_hi, 1.6 * highest), bottom = 0.0;
+  if (!(highest > 0.0)) highest = study.settings.parameter_range[1];
+  // Room for the lobes above the limit, and for the window value when it is not far above.
+  double top = 2.5 * highest;
+  if (study.window_value > top && study.window_value < 8.0 * highest) top = 1.2 * study.window_value;
+  top = std::min(top, study.settings.parameter_range[1]);
   plot::Curves f;
   f.title = fmt::format("{}: lobe diagram ({} lobes traced)", study.title, d.lobes.size());
   f.x_label = kit::axis_label(study.settings.speed);
   f.y_label = "critical " + kit::axis_label(study.settings.parameter);
-  f.y_range = {{bottom, top}};
-  // Stable region: below the limit; up to the top where nothing crosses in the range.
-  plot::Series stable{"stable (below the limit)", {}, {}, "area"};
-  for (const auto& [v, p] : envelope_profile(d)) {
-    stable.x.push_back(v);
-    stable.y.push_back(std::isinf(p) ? (p > 0 ? top : bottom) : std::min(p, top));
-  }
+  f.y_range = {{0.0, top}};
   plot::Series lobes{fmt::format("lobes ({})", d.lobes.size()), {}, {}, "lines"};
   for (const Lobe& lobe : d.lobes) {
     for (const Crossing& c : lobe.points) {
@@ -88,21 +112,23 @@ void plot_lobe_diagram(const LobeStudy& study, const LobeResults& r, const std::
     limit.x.push_back(c.speed);
     limit.y.push_back(c.parameter);
   }
-  plot::Series windows{fmt::format("chatter-free at {:.4g} ({} window{})", study.window_value, r.windows.size(),
-                                   r.windows.size() == 1 ? "" : "s"),
-                       {}, {}, "lines"};
+  const bool shown = study.window_value <= top;
+  plot::Series windows{fmt::format("chatter-free at {:.4g}{} ({} window{})", study.window_value,
+                                   shown ? "" : " (above the plot)", r.windows.size(), r.windows.size() == 1 ? "" : "s"),
+                       {NAN}, {NAN}, "lines"};
   for (const Window& w : r.windows) {
     windows.x.insert(windows.x.end(), {w.from, w.to, NAN});
     windows.y.insert(windows.y.end(), {study.window_value, study.window_value, NAN});
   }
-  if (r.windows.empty()) {  // keep the key entry: "0 windows" is the message
-    windows.x = {NAN};
-    windows.y = {NAN};
+  // The model's own speed and parameter: where the study's machine runs.
+  plot::Series operating{fmt::format("operating point ({:.4g}, {:.4g})", study.operating_speed, study.window_value),
+                         {study.operating_speed}, {study.window_value}, "points"};
+  f.series = {stable_region(d, top), lobes, limit, windows, operating};
+  f.looks = {{"#56b4e9", 0.0}, {"#a8a8a8", 0.8}, {"#000000", 2.5}, {"#009e73", 6.0}, {"#d55e00", 3.0}};
+  if (shown) {
+    f.reference_y = study.window_value;
+    f.reference_label = fmt::format("{} = {:.4g}", kit::axis_label(study.settings.parameter), study.window_value);
   }
-  f.series = {stable, lobes, limit, windows};
-  f.looks = {{"#56b4e9", 0.0}, {"#9a9a9a", 1.0}, {"#000000", 2.5}, {"#009e73", 6.0}};
-  f.reference_y = study.window_value;
-  f.reference_label = fmt::format("{} = {:.4g}", kit::axis_label(study.settings.parameter), study.window_value);
   figures.render(f, dir, "lobe_diagram");
 }
 

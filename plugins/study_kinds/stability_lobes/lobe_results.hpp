@@ -22,6 +22,7 @@ struct LobeStudy {
   double band_hz = 0.0;
   std::vector<double> speeds;
   double window_value = 0.0;
+  double operating_speed = 0.0;  // the model's own value of the speed key
   std::string title;
 };
 

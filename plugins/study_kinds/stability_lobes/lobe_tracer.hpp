@@ -5,18 +5,23 @@
 // docs/studies.md ("stability_lobes") explains the method for users; in short:
 //
 //   crossing     G(w; p, v) = 0 with G = E(j w) (roots route: the model's characteristic function)
-//                or G = F(j w) (Nyquist route: the model's return difference); two real equations
-//                in (w, p) at speed v, polished by Newton with dG/dw from the model and dG/dp by a
-//                difference over p.
-//   bracketing   seeds at a speed come from sign changes over w of Im(G conj dG/dp) at a reference
-//                p: where G is affine in p (every stiffness-like parameter of G1) these are exactly
-//                the frequencies where a real p makes G vanish; samples are packed around the
-//                model's fast frequencies (delay lattices), where a crossing of the wheel chain
-//                hides in a neighbourhood a thousandth of a lattice spacing wide.
-//   continuation each lobe is followed from speed to speed: predicted from its last two points,
-//                corrected by Newton, with the speed step halved (points added between the user's
-//                speeds) when Newton fails or lands on another lobe; a seed no lobe reached starts
-//                a new lobe, which is also followed backwards.
+//                or G = F(j w) (Nyquist route: the model's return difference): two real equations
+//                in (w, p) at speed v.
+//   bracketing   when p enters G as a Moebius map (p -> (a + b p)/(c + d p), affine included: every
+//                stiffness of G1, in E and in F; checked against a fourth model), three models at
+//                p0, p1, p2 give at every w the p*(w) that makes G vanish, by the invariance of
+//                cross ratios; a crossing is where p*(w) is real. Sign changes of Im p*(w) over a
+//                grid bracket the crossings, the Illinois method polishes them to 1e-14 in w, and
+//                p = Re p*. Otherwise (a damping ratio, a natural frequency) sign changes of
+//                Im(G conj dG/dp) seed a Newton iteration on (w, p) with dG/dw from the model and
+//                dG/dp by a difference. Samples are packed around the model's fast frequencies
+//                (delay lattices): a crossing of the wheel chain hides in a neighbourhood a
+//                thousandth of a lattice spacing wide.
+//   continuation each lobe is followed from speed to speed: predicted from its last two points (from
+//                the tangent dG = 0 for a new lobe) and matched to the crossing nearest the
+//                prediction, within a third of a lattice spacing and not taken by another lobe;
+//                without one, the step is halved (points added between the user's speeds); a
+//                crossing no lobe reached starts a new lobe, which is also followed backwards.
 //   envelope     the lowest crossing at each speed; where the lowest lobe changes between two
 //                speeds, the intersection of the two lobes is located (secant on p_a - p_b).
 //
@@ -57,8 +62,12 @@ struct TraceSettings {
   Route route = Route::roots;
 };
 
+// The limit at one speed. Stable at the range's lower end: the lowest crossing, stable below it
+// (a stiffness, a width). Unstable there but stable at the upper end: the highest crossing,
+// stable above it (a damping ratio).
 struct SpeedResult {
-  std::optional<Crossing> limit;  // lowest crossing in range; nullopt: none (see note)
+  std::optional<Crossing> limit;  // nullopt: none (see note)
+  bool stable_below = true;       // which side of the limit is stable
   int lobe = -1;                  // id of the lobe giving the limit
   std::string note;               // why there is no limit ("stable over the whole range", ...)
 };
@@ -69,6 +78,7 @@ struct LobeDiagram {
   std::vector<Lobe> lobes;
   std::vector<Crossing> envelope;   // the limit at each speed plus the lobe intersections between
   int seeds = 0, corrections = 0;   // work counters (benchmarks, docs)
+  bool parameter_enters_as_moebius_map = false;  // crossings found without building more models
 };
 
 // Traces the lobes over `speeds` (sorted ascending, distinct). Throws PointFailure when the

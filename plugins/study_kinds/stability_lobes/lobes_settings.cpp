@@ -13,18 +13,18 @@ namespace chatterlab::lobes {
 const ParamTable<LobesSettings>& lobes_settings_table() {
   static const ParamTable<LobesSettings> table = [] {
     ParamTable<SpeedRange> range;
-    range.add(&SpeedRange::from, "from", "(speed key)", "first speed (the speed key's unit)").positive().required();
-    range.add(&SpeedRange::to, "to", "(speed key)", "last speed").positive().required();
+    range.add(&SpeedRange::from, "from", "1", "first speed (in the speed key's unit)").positive().required();
+    range.add(&SpeedRange::to, "to", "1", "last speed (in the speed key's unit)").positive().required();
     range.add(&SpeedRange::steps, "steps", "1", "number of speeds, ends included").at_least(2).at_most(100000);
     range.add(&SpeedRange::log, "log", "1", "geometric instead of linear spacing");
     using S = LobesSettings;
     ParamTable<S> t;
     t.add(&S::parameter, "parameter", "", "the limited parameter: a numeric key of [model], e.g. \"model.contact_stiffness_n_per_m\"").required();
-    t.add(&S::parameter_range, "parameter_range", "(parameter key)", "[low, high]: where to look for its critical value (the parameter's unit; > 0)").positive().min_items(2).required();
+    t.add(&S::parameter_range, "parameter_range", "1", "[low, high]: where to look for its critical value (the parameter's unit; > 0)").positive().min_items(2).required();
     t.add(&S::speed, "speed", "", "the [model] key swept along the x axis, e.g. \"work_speed_rpm\"").required();
-    t.add(&S::speed_values, "speed_values", "(speed key)", "the speeds (the speed key's unit); or speed_range").positive().min_items(2);
+    t.add(&S::speed_values, "speed_values", "1", "the speeds (the speed key's unit); or speed_range").positive().min_items(2);
     t.add_optional_table(&S::speed_range, "speed_range", "{ from, to, steps, log }: the speeds as a range; or speed_values", range);
-    t.add(&S::window_value, "window_value", "(parameter key)", "chatter-free windows are marked where the limit exceeds this value (default: the model's value of the parameter)").positive();
+    t.add(&S::window_value, "window_value", "1", "chatter-free windows are marked where the limit exceeds this value (default: the model's value of the parameter)").positive();
     t.add_choice(&S::route, "route", "stability route: auto (roots when the model has a characteristic function, else the Nyquist count), roots, nyquist",
                  {{"auto", RouteChoice::automatic}, {"roots", RouteChoice::roots}, {"nyquist", RouteChoice::nyquist}});
     t.add(&S::sensitivities, "sensitivities", "1", "compute the limit's sensitivity to every other real model parameter");
@@ -43,7 +43,7 @@ const ParamTable<TimeToChatterSettings>& time_to_chatter_table() {
     t.add(&T::dressing_interval_parts, "dressing_interval_parts", "1", "parts ground between two dressings of the wheel").at_least(1);
     t.add(&T::speed_steps, "speed_steps", "1", "map resolution along the speed range").at_least(2).at_most(1000);
     t.add(&T::parameter_steps, "parameter_steps", "1", "map resolution along the parameter").at_least(2).at_most(1000);
-    t.add(&T::parameter_range, "parameter_range", "(parameter key)", "[low, high] of the map (default: [lobes] parameter_range)").positive().min_items(2);
+    t.add(&T::parameter_range, "parameter_range", "1", "[low, high] of the map (default: [lobes] parameter_range)").positive().min_items(2);
     return t;
   }();
   return table;

@@ -77,17 +77,30 @@ double band_of(const Json& document, const Model& model, Route route) {
   return st.max_frequency_hz ? *st.max_frequency_hz : kit::default_band_multiple * natural_scale_hz(model, route);
 }
 
-// The model must accept the parameter and speed at the ends of their ranges.
+// The model must accept the parameter and speed at the ends of their ranges: its declared limits
+// and its construction.
 void check_extremes(const Json& document, const LobesSettings& s, const SourceMap& sources) {
   const VariedModel varied(document.at("model"), model_path(s.parameter), model_path(s.speed));
   const std::vector<double> speeds = speeds_of(s);
+  const PluginInfo& info = model_registry().at(document.at("model").at("type").get<std::string>()).info;
+  struct NoLines final : SourceMap {
+    SourceLocation locate(std::string_view) const override { return {}; }
+  } no_lines;
   for (double p : s.parameter_range)
     for (double v : {speeds.front(), speeds.back()}) {
       try {
+        Json table = document.at("model");
+        table[pointer_of(model_path(s.parameter))] = p;
+        table[pointer_of(model_path(s.speed))] = v;
+        table.erase("type");
+        validate_params(table, info.params, "model", no_lines);
         varied.at(p, v);
       } catch (const std::exception& e) {
+        std::string why = e.what();
+        const std::string unlocated = SourceLocation{}.str() + ": ";  // validate_params' prefix without lines
+        if (why.rfind(unlocated, 0) == 0) why.erase(0, unlocated.size());
         refuse(sources, "lobes", fmt::format("[lobes]: the model at {} = {:g}, {} = {:g} cannot be built: {}", s.parameter,
-                                             p, s.speed, v, e.what()));
+                                             p, s.speed, v, why));
       }
     }
 }
@@ -104,6 +117,7 @@ LobeStudy read_study(const Json& document) {
   study.band_hz = band_of(document, *model, study.route);
   study.speeds = speeds_of(s);
   study.window_value = s.window_value ? *s.window_value : study.model.value(model_path(s.parameter));
+  study.operating_speed = study.model.value(model_path(s.speed));
   study.title = kit::study_title(document, "stability_lobes");
   return study;
 }
