@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "models/model_params.hpp"
@@ -258,6 +259,18 @@ PluginInfo PlungeRegenerative::info() {
                      { "frequency_hz": 305.6, "damping_ratio": 0.04, "stiffness_n_per_m": 8.0e7 } ]
       })"),
   };
+}
+
+// A regeneration switched off has an infinite stiffness (its term vanishes from eq 2-16).
+std::optional<StiffnessChain> PlungeRegenerative::stiffness_chain() const {
+  constexpr double off = std::numeric_limits<double>::infinity();
+  const PlungeRegenerativeParameters& p = parameters_;
+  StiffnessChain chain;
+  chain.contact_stiffness_n_per_m = p.contact_stiffness_n_per_m;
+  chain.wheel_wear_stiffness_n_per_m = p.wheel_regeneration ? p.wheel_wear_stiffness_n_per_m : off;
+  chain.work_removal_stiffness_n_per_m = p.work_regeneration ? p.work_removal_stiffness_n_per_m : off;
+  for (const StructuralMode& m : p.modes) chain.modes.push_back({m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
+  return chain;
 }
 
 std::unique_ptr<CharacteristicFunction> PlungeRegenerative::characteristic() const {

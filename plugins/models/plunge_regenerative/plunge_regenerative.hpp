@@ -81,6 +81,7 @@ class PlungeRegenerative final : public Model {
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
   std::unique_ptr<TimeDomainModel> time_domain() const override;  // G1 time domain
+  std::optional<StiffnessChain> stiffness_chain() const override;
   const PlungeRegenerativeParameters& parameters() const { return parameters_; }
 
  private:
