@@ -40,7 +40,9 @@ std::vector<Window> chatter_free_windows(const LobeDiagram& d, double level) {
   std::vector<Window> windows;
   std::optional<Window> open;
   auto zero_at = [&](const std::pair<double, double>& a, const std::pair<double, double>& b) {
-    if (!std::isfinite(a.second) || !std::isfinite(b.second)) return std::isfinite(a.second) ? a.first : b.first;
+    // Next to a speed where nothing crosses (or everything is unstable) the edge is that speed:
+    // the windows claim only what was computed.
+    if (!std::isfinite(a.second) || !std::isfinite(b.second)) return std::isfinite(a.second) ? b.first : a.first;
     return a.first - a.second / (b.second - a.second) * (b.first - a.first);
   };
   for (std::size_t i = 0; i < profile.size(); ++i) {
@@ -142,26 +144,29 @@ void plot_time_to_chatter(const LobeStudy& study, const LobeResults& r, const st
   h.title = fmt::format("{}: time for {:g} um to grow to {:g} um", study.title, s.initial_waviness_um, s.tolerance_um);
   h.x_label = kit::axis_label(study.settings.speed);
   h.y_label = kit::axis_label(study.settings.parameter);
-  h.z_label = fmt::format("log10(time to chatter / dressing cycle of {} x {:g} s)", s.dressing_interval_parts, s.part_time_s);
+  // Red where chatter comes first, as on every chatter map of the plot service: the colour is
+  // log10(dressing cycle / time to chatter), > 0 when the tolerance is reached within the cycle.
+  h.z_label = fmt::format("log10(dressing cycle ({} x {:g} s) / time to chatter)", s.dressing_interval_parts,
+                          s.part_time_s);
   h.x = g.speeds;
   h.y = g.parameters;
   h.log_y = g.parameters.back() / g.parameters.front() > 10.0;
   for (double sigma : g.growth_rate_per_s) {
     const double t = time_to_chatter_s(sigma, s);
-    h.z.push_back(std::isnan(sigma) ? NAN : std::clamp(std::log10(t / cycle), -decades, decades));
+    h.z.push_back(std::isnan(sigma) ? NAN : std::clamp(std::log10(cycle / t), -decades, decades));
   }
   h.contour_level = 0.0;
-  h.contour_label = "tolerance reached at the dressing interval";
+  h.contour_label = "tolerance reached at dressing";
   h.diverging = true;
-  h.low_label = "chatter first";
-  h.high_label = "dressed in time";
-  plot::Series limit{"stability limit (traced lobes)", {}, {}, "lines"};
+  h.low_label = "dressed in time";
+  h.high_label = "chatter first";
+  plot::Series limit{"stability limit", {}, {}, "dashes"};
   for (const Crossing& c : r.diagram.envelope) {
     limit.x.push_back(c.speed);
     limit.y.push_back(c.parameter);
   }
   h.overlays.push_back(limit);
-  h.overlay_looks.push_back({"#000000", 2.0});
+  h.overlay_looks.push_back({"#000000", 1.5});
   figures.render(h, dir, "time_to_chatter_map");
 }
 

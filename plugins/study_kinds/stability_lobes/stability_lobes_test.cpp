@@ -59,6 +59,16 @@ std::vector<Json> run(const Study& study, const fs::path& out = {}) {
   return kind.run_point(study.point_document(0), context);
 }
 
+// The point's files into a fresh `out`, without plots.
+void run_tables(const Study& study, const fs::path& out) {
+  fs::remove_all(out);
+  fs::create_directories(out);
+  PointContext context;
+  context.artifact_dir = out;
+  context.plots = false;
+  kind.run_point(study.point_document(0), context);
+}
+
 std::vector<std::vector<std::string>> csv(const fs::path& file) {
   std::ifstream in(file);
   std::vector<std::vector<std::string>> rows;
@@ -181,12 +191,7 @@ TEST(StabilityLobesAccuracy, CriticalValueAgreesWithBisectionOnGrowthRates) {
                                                   c.parameter, kw ? "1e4, 1e10" : "1e5, 1e9", c.speed,
                                                   fmt::join(c.speeds, ", ")));
     const fs::path out = dir.path() / "out";
-    fs::remove_all(out);
-    fs::create_directories(out);
-    PointContext context;
-    context.artifact_dir = out;
-    context.plots = false;
-    kind.run_point(study.point_document(0), context);
+    run_tables(study, out);
     const auto limit = csv(out / "limit.csv");
     ASSERT_EQ(limit.size(), c.speeds.size() + 1);
     for (std::size_t i = 0; i < c.speeds.size(); ++i) {
@@ -200,6 +205,175 @@ TEST(StabilityLobesAccuracy, CriticalValueAgreesWithBisectionOnGrowthRates) {
       EXPECT_GT(growth_rate(dir, g8_model, c.parameter, 1.001 * traced, "model." + c.speed, c.speeds[i]), 0.0);
       std::printf("%s at %s = %g: traced %.9g, bisection %.9g\n", c.parameter.c_str(), c.speed.c_str(), c.speeds[i],
                   traced, reference);
+    }
+  }
+}
+
+// The two stability routes on the same machine: G1 with the true G8 modes (roots), measured_frf on
+// a noise-free synthetic tap test of those modes through its fitted modes (roots and Nyquist), and
+// through the measured FRF itself (Nyquist only, the spline between 0.25 Hz lines).
+TEST(StabilityLobesAccuracy, MeasuredAndFittedRoutesAgreeWithTheTrueModes) {
+  TempDir dir;
+  dir.write("tap.uff", uff58_bytes(testing::synthetic_frf(testing::g8_modes(), 20.0, 400.0, 0.25),
+                                   UffEncoding::binary_little_endian, FrfQuantity::accelerance));
+  const std::string lobes =
+      "[lobes]\nparameter = \"model.contact_stiffness_n_per_m\"\nparameter_range = [1e5, 1e9]\n"
+      "speed = \"work_speed_rpm\"\nspeed_values = [33.3, 61.7]\nsensitivities = false\n";
+  const std::string process =
+      "wheel_speed_rpm = 1450\nwork_speed_rpm = 55\ncontact_stiffness_n_per_m = 2.0e8\n"
+      "wheel_wear_stiffness_n_per_m = 6.3e10\nwork_removal_stiffness_n_per_m = 2.0e7\n";
+  auto limits = [&](const std::string& model, const std::string& route) {
+    const Study study = load(dir, model + lobes + "route = \"" + route + "\"\n", "routes.toml");
+    const fs::path out = dir.path() / "out";
+    run_tables(study, out);
+    std::vector<double> v;
+    for (const auto& row : csv(out / "limit.csv"))
+      if (row[0] != "work_speed_rpm") v.push_back(std::stod(row[1]));
+    return v;
+  };
+  const std::vector<double> truth = limits(g8_model, "roots");
+  const std::string measured = "[model]\ntype = \"measured_frf\"\nfrf_file = \"tap.uff\"\n" + process;
+  const std::vector<double> fitted_roots = limits(measured, "roots");
+  const std::vector<double> fitted_nyquist = limits(measured, "nyquist");
+  const std::vector<double> direct = limits(measured + "machine_compliance = \"measured\"\n", "nyquist");
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_NEAR(fitted_roots[i], truth[i], 1e-6 * truth[i]);
+    EXPECT_NEAR(fitted_nyquist[i], fitted_roots[i], 1e-8 * truth[i]);
+    EXPECT_NEAR(direct[i], truth[i], 1e-3 * truth[i]);
+    std::printf("critical kc: true modes %.9g, fitted (roots) %.9g, fitted (Nyquist) %.9g, measured FRF (Nyquist) %.9g\n",
+                truth[i], fitted_roots[i], fitted_nyquist[i], direct[i]);
+  }
+}
+
+// The boundary's sensitivity from the null vectors (here: the 1 x 1 characteristic matrix) agrees
+// with a central difference of the traced limit.
+TEST(StabilityLobesAccuracy, SensitivityAgreesWithDifferencesOfTheTracedLimit) {
+  TempDir dir;
+  auto limit_and_elasticity = [&](double kw) {
+    std::string model = g8_model;
+    model.replace(model.find("work_removal_stiffness_n_per_m = 2.0e7"), 38,
+                  fmt::format("work_removal_stiffness_n_per_m = {:.17g}", kw));
+    const Study study = load(dir, model +
+                                      "[lobes]\nparameter = \"model.contact_stiffness_n_per_m\"\nparameter_range = "
+                                      "[1e5, 1e9]\nspeed = \"work_speed_rpm\"\nspeed_values = [47.91, 47.93]\n");
+    const fs::path out = dir.path() / "out";
+    run_tables(study, out);
+    const auto rows = csv(out / "sensitivity.csv");
+    std::size_t column = 0;
+    for (std::size_t c = 0; c < rows[0].size(); ++c)
+      if (rows[0][c] == "elasticity work_removal_stiffness_n_per_m") column = c;
+    EXPECT_GT(column, 0u);
+    return std::pair{std::stod(rows[1][1]), std::stod(rows[1][column])};
+  };
+  const double h = 1e-4;
+  const auto [limit, elasticity] = limit_and_elasticity(2e7);
+  const double up = limit_and_elasticity(2e7 * (1 + h)).first, down = limit_and_elasticity(2e7 * (1 - h)).first;
+  const double difference = (std::log(up) - std::log(down)) / (std::log1p(h) - std::log1p(-h));
+  EXPECT_NEAR(elasticity, difference, 1e-3 * std::abs(difference));
+  EXPECT_LT(elasticity, 0.0);  // a stiffer removal (more force per depth) lowers the limit
+  std::printf("elasticity of the critical kc (%.6g) to kw: null vectors %.6f, difference %.6f\n", limit, elasticity,
+              difference);
+}
+
+// time_to_chatter.csv over the lobe speeds: the growth rate is negative below the traced limit and
+// positive above it (same speeds, parameter values either side).
+TEST(StabilityLobes, TimeToChatterMapAgreesWithTheLimit) {
+  TempDir dir;
+  const Study study = load(dir, std::string(g8_model) +
+                                    "[lobes]\nparameter = \"model.contact_stiffness_n_per_m\"\nparameter_range = [1e5, "
+                                    "1e9]\nspeed = \"work_speed_rpm\"\nspeed_range = { from = 40, to = 41, steps = 3 }\n"
+                                    "sensitivities = false\n[time_to_chatter]\nspeed_steps = 3\nparameter_steps = 4\n"
+                                    "parameter_range = [5e6, 4e7]\n");
+  const fs::path out = dir.path() / "out";
+  run(study, out);
+  const auto limit = csv(out / "limit.csv");
+  const auto map = csv(out / "time_to_chatter.csv");
+  EXPECT_EQ(map[0], (std::vector<std::string>{"work_speed_rpm", "model.contact_stiffness_n_per_m", "growth_rate_per_s",
+                                              "chatter_frequency_hz", "time_to_chatter_s", "parts_before_chatter",
+                                              "dressed_in_time"}));
+  ASSERT_EQ(map.size(), 13u);
+  int checked = 0;
+  for (std::size_t r = 1; r < map.size(); ++r) {
+    const double v = std::stod(map[r][0]), p = std::stod(map[r][1]), sigma = std::stod(map[r][2]);
+    for (std::size_t l = 1; l < limit.size(); ++l)
+      if (std::stod(limit[l][0]) == v) {
+        EXPECT_EQ(sigma < 0.0, p < std::stod(limit[l][1])) << "speed " << v << " kc " << p;
+        ++checked;
+      }
+    if (sigma > 0.0) {
+      EXPECT_NEAR(std::stod(map[r][4]), std::log(10.0) / sigma, 1e-9 / sigma);
+    }
+  }
+  EXPECT_EQ(checked, 12);
+  EXPECT_TRUE(fs::exists(out / "time_to_chatter_map.png"));
+}
+
+}  // namespace
+}  // namespace chatterlab
+
+namespace chatterlab {
+namespace {
+
+// The classical single-mode lobe diagram (Tobias, Tlusty; Altintas eq 3.19 for turning) as G1's
+// limit: with the wheel chain off, eq 2-16 on s = j w reads 1/kc + G + 1/(kw (1 - e^{-j w Tw})) = 0
+// and Re 1/(1 - e^{-j theta}) = 1/2 at every theta, so each lobe's critical removal stiffness is
+// kw = -1/(2 (Re G + 1/kc)) (the turning formula -1/(2 K Re G) with kw as K b, kc -> infinity), and
+// the lowest value of every lobe is at min Re G = -1/(4 k zeta (1 + zeta)), r = sqrt(1 + 2 zeta).
+// The imaginary part places that minimum: cot(theta/2) = -Im G/(Re G + 1/kc), theta = w Tw, so
+// lobe m has its minimum at n_w = 60 w/(theta_0 + 2 pi m) rpm. Independent of the tracer: these
+// closed forms, and the certified rightmost root of the model at the lobe minimum.
+TEST(StabilityLobesAccuracy, SingleModeLobeMinimaMatchTheClassicalFormula) {
+  TempDir dir;
+  const double f_n = 100.0, zeta = 0.03, k = 5e7, kc = 1e10;
+  const std::string model = fmt::format(
+      "[model]\ntype = \"plunge_regenerative\"\nwheel_speed_rpm = 1450\nwork_speed_rpm = 60\n"
+      "contact_stiffness_n_per_m = {}\nwheel_wear_stiffness_n_per_m = 1e12\nwork_removal_stiffness_n_per_m = 2e6\n"
+      "wheel_regeneration = false\nmodes = [{{ frequency_hz = {}, damping_ratio = {}, stiffness_n_per_m = {} }}]\n"
+      "[stability]\nmax_frequency_hz = 400\n",
+      kc, f_n, zeta, k);
+  const double r = std::sqrt(1.0 + 2.0 * zeta), f_c = r * f_n;
+  const double re_g = -1.0 / (4.0 * k * zeta * (1.0 + zeta)), im_g = r * re_g;
+  const double kw_min = -1.0 / (2.0 * (re_g + 1.0 / kc));
+  const double theta0 = 2.0 * std::atan2(1.0, -im_g / (re_g + 1.0 / kc));  // in (pi, 2 pi)
+  auto lobe_minimum_rpm = [&](int m) { return 60.0 * 2.0 * M_PI * f_c / (theta0 + 2.0 * M_PI * m); };
+  const std::vector<double> speeds{lobe_minimum_rpm(104), lobe_minimum_rpm(103), lobe_minimum_rpm(102)};
+  const Study study = load(dir, model + fmt::format("[lobes]\nparameter = \"model.work_removal_stiffness_n_per_m\"\n"
+                                                    "parameter_range = [1e5, 1e8]\nspeed = \"work_speed_rpm\"\n"
+                                                    "speed_values = [{:.17g}]\nsensitivities = false\n",
+                                                    fmt::join(speeds, ", ")));
+  const fs::path out = dir.path() / "out";
+  run_tables(study, out);
+  const auto limit = csv(out / "limit.csv");
+  const auto lobes = csv(out / "lobes.csv");
+  ASSERT_EQ(limit.size(), speeds.size() + 1);
+  for (std::size_t i = 0; i < speeds.size(); ++i) {
+    const double traced = std::stod(limit[i + 1][1]);
+    EXPECT_NEAR(traced, kw_min, 1e-7 * kw_min) << "lobe minimum at " << speeds[i] << " rpm";
+    double frequency = NAN;
+    for (std::size_t row = 1; row < lobes.size(); ++row)
+      if (std::stod(lobes[row][0]) == std::stod(limit[i + 1][0]) && std::stod(lobes[row][1]) == traced)
+        frequency = std::stod(lobes[row][2]);
+    EXPECT_NEAR(frequency, f_c, 1e-6 * f_c) << "chatter frequency at " << speeds[i] << " rpm";
+    std::printf("lobe minimum at %.6f rpm: traced kw %.9g (closed form %.9g), %.6f Hz (closed form %.6f Hz)\n",
+                speeds[i], traced, kw_min, frequency, f_c);
+  }
+  // Between the minima the limit rises above kw_min and never falls below it.
+  for (std::size_t row = 1; row < lobes.size(); ++row) EXPECT_GE(std::stod(lobes[row][1]), kw_min * (1 - 1e-9));
+  // The certified root search (stability_map's route) at the lobe minimum: a root on the axis at
+  // the chatter frequency; 0.1 % either side of kw_min the rightmost root is stable / unstable.
+  const std::string speed_path = "model.work_speed_rpm", kw_path = "model.work_removal_stiffness_n_per_m";
+  Study map = load_study(dir.write("map.toml", "[study]\nkind = \"stability_map\"\n" + model));
+  for (double factor : {1.0, 0.999, 1.001}) {
+    Json document = map.point_document(0);
+    set_at_path(document, kw_path, factor * kw_min);
+    set_at_path(document, speed_path, speeds[1]);
+    const std::vector<Json> row = StabilityMap{}.run_point(document, {});
+    const double sigma = row[0].get<double>(), f = row[1].get<double>();
+    if (factor == 1.0) {
+      EXPECT_NEAR(sigma, 0.0, 1e-6);
+      EXPECT_NEAR(f, f_c, 1e-6 * f_c);
+    } else {
+      EXPECT_EQ(sigma < 0.0, factor < 1.0) << "kw = " << factor << " kw_min: growth rate " << sigma;
     }
   }
 }
