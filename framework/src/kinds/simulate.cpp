@@ -10,11 +10,13 @@
 
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/fit_validity.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/kit/model.hpp"
 #include "chatterlab/spectrum.hpp"
+#include "chatterlab/time_series_file.hpp"
 
 namespace chatterlab {
 
@@ -27,6 +29,9 @@ constexpr const char* col_frequency = "dominant_frequency_hz";
 constexpr const char* col_max_displacement = "max_displacement_m";
 constexpr const char* col_contact_loss = "contact_loss_fraction";
 constexpr const char* col_outcome = "simulation_outcome";
+constexpr const char* col_fit_valid = "fit_valid";
+constexpr const char* col_fit_regime = "fit_regime";
+constexpr const char* col_fit_reason = "fit_reason";
 constexpr const char* col_work_wt = "work_waviness_wt_um";
 constexpr const char* col_work_wz = "work_waviness_wz_um";
 constexpr const char* col_work_ront = "work_roundness_ront_um";
@@ -90,13 +95,39 @@ std::shared_ptr<const SpeedLaw> speed_law(const Json& sim, const std::string& ro
                               sim.at(rotor + "_speed_frequency_hz").get<double>());
 }
 
-double fit_start(const Json& sim) {
-  const Json& v = sim.at("fit_start_s");
-  return v.is_null() ? 0.5 * sim.at("duration_s").get<double>() : v.get<double>();
+bool one_sided_contact(const Json& sim) {
+  const Json& v = sim.at("one_sided_contact");
+  return v.is_null() ? sim.at("infeed_rate_m_per_s").get<double>() > 0.0 : v.get<bool>();
 }
-double fit_end(const Json& sim) {
+
+// The default fit window is the later half of the linear regime: it ends where the one-sided
+// contact first opens after the first revolution of the slowest rotor (after that the amplitude is
+// limited by lift-off, not by the roots; lift-offs while the infeed builds the first cut do not
+// count) or at the end of the run, and starts half-way there but not before one such revolution
+// (only then are the regenerated surfaces under the contact). Explicit fit_start_s / fit_end_s
+// are taken as given; assess_fit judges either.
+double fit_end(const Json& sim, const SimulationResult& r, double delay_s) {
   const Json& v = sim.at("fit_end_s");
-  return v.is_null() ? sim.at("duration_s").get<double>() : v.get<double>();
+  if (!v.is_null()) return std::min(v.get<double>(), r.end_time_s);
+  for (const auto& [from, to] : r.contact_loss_intervals)
+    if (from >= delay_s) return std::min(from, r.end_time_s);
+  return r.end_time_s;
+}
+double fit_start(const Json& sim, double end_s, double delay_s) {
+  const Json& v = sim.at("fit_start_s");
+  if (!v.is_null()) return v.get<double>();
+  const double half = 0.5 * end_s;
+  return half < delay_s && delay_s < end_s ? delay_s : half;
+}
+
+// The longest regenerative delay of the model: one revolution of its slowest rotor.
+double longest_delay_s(const TimeDomainModel& model) {
+  double delay = 0.0;
+  for (Rotor r : {Rotor::wheel, Rotor::work}) {
+    const double rpm = model.nominal_speed_rpm(r);
+    if (rpm > 0) delay = std::max(delay, 60.0 / rpm);
+  }
+  return delay;
 }
 
 // Keeps at most ~2 x buckets points of a long series for a plot: the minimum and maximum of each
@@ -215,20 +246,29 @@ WorkSurfaceQuality evaluate_work_surface(const SimulationResult& r, const Json& 
 
 struct PointAnalysis {
   std::optional<EnvelopeFit> fit;
+  std::optional<FitValidity> validity;  // with fit
   std::string fit_problem;
   std::optional<Spectrum> spectrum;
   std::vector<SpectralPeak> peaks;
   double max_displacement = 0.0;
 };
 
-PointAnalysis analyse(const SimulationResult& r, const Json& sim) {
+PointAnalysis analyse(const SimulationResult& r, const Json& sim, double delay_s) {
   PointAnalysis a;
   for (double x : r.displacement_m) a.max_displacement = std::max(a.max_displacement, std::abs(x));
-  const double start = fit_start(sim), end = std::min(fit_end(sim), r.end_time_s);
+  const double end = fit_end(sim, r, delay_s), start = fit_start(sim, end, delay_s);
   try {
     a.fit = fit_envelope(r.t_s, r.displacement_m, start, end, sim.at("min_frequency_hz").get<double>());
+    a.validity = assess_fit(*a.fit, r.t_s, r.in_contact, delay_s);
   } catch (const std::invalid_argument& e) {
-    a.fit_problem = e.what();
+    a.fit_problem = fmt::format("no fit in the window {:.4g}..{:.4g} s: {}", start, end, e.what());
+    if (sim.at("fit_end_s").is_null() && end < r.end_time_s)
+      a.fit_problem += fmt::format(
+          " (the contact first opened at t = {:.4g} s, ending the linear regime{})", end,
+          sim.at("infeed_rate_m_per_s").get<double>() > 0.0
+              ? ""
+              : "; with no infeed the depth of cut is zero and any vibration lifts the wheel: set "
+                "infeed_rate_m_per_s, or one_sided_contact = false for the linear growth");
   }
   // Spectrum of the fit window (where chatter has developed), Hann-windowed.
   auto first = std::lower_bound(r.t_s.begin(), r.t_s.end(), start) - r.t_s.begin();
@@ -252,6 +292,42 @@ PointAnalysis analyse(const SimulationResult& r, const Json& sim) {
   return a;
 }
 
+// Lift-off statistics and the amplitude the response settles at once the contact has opened: the
+// nonlinear outcome that the (then invalid) linear growth rate does not describe.
+Json after_contact_loss(const SimulationResult& r) {
+  const double first = r.contact_loss_intervals.front().first;
+  double open = 0.0, longest = 0.0;
+  for (const auto& [from, to] : r.contact_loss_intervals) {
+    open += to - from;
+    longest = std::max(longest, to - from);
+  }
+  const double span = std::max(r.end_time_s - first, 1e-300);
+  // Half peak-to-peak of x over the last tenth of the run, about its least-squares line (infeed).
+  const std::size_t n = r.displacement_m.size(), from = n - n / 10;
+  double amplitude = 0.0;
+  if (n / 10 >= 8) {
+    double st = 0, sx = 0, stt = 0, stx = 0, m = static_cast<double>(n - from);
+    for (std::size_t i = from; i < n; ++i) {
+      st += r.t_s[i]; sx += r.displacement_m[i]; stt += r.t_s[i] * r.t_s[i]; stx += r.t_s[i] * r.displacement_m[i];
+    }
+    const double slope = (m * stx - st * sx) / (m * stt - st * st), offset = (sx - slope * st) / m;
+    double lo = INFINITY, hi = -INFINITY;
+    for (std::size_t i = from; i < n; ++i) {
+      const double d = r.displacement_m[i] - offset - slope * r.t_s[i];
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    amplitude = 0.5 * (hi - lo);
+  }
+  return {{"first_contact_loss_s", first},
+          {"open_fraction_after_first_loss", open / span},
+          {"lift_off_count", r.contact_loss_intervals.size()},
+          {"mean_lift_off_s", open / static_cast<double>(r.contact_loss_intervals.size())},
+          {"longest_lift_off_s", longest},
+          {"final_amplitude_m", amplitude},
+          {"final_amplitude_window_s", n / 10 >= 8 ? Json::array({r.t_s[from], r.t_s[n - 1]}) : Json()}};
+}
+
 void write_point_files(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
                        const Json& document, const PointContext& context) {
   const fs::path& dir = context.artifact_dir;
@@ -260,22 +336,25 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
                                   "wheel_speed_rpm", "work_speed_rpm", "wheel_surface_at_contact_m",
                                   "work_surface_at_contact_m", "in_contact"};
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
-  std::vector<std::vector<double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
-                                           r.speed_rpm[wheel], r.speed_rpm[work],
-                                           r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
-                                           r.in_contact};
+  std::vector<std::span<const double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
+                                               r.speed_rpm[wheel], r.speed_rpm[work],
+                                               r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
+                                               r.in_contact};
+  std::vector<double> measured;
   if (const double noise = sim.at("measurement_noise_m").get<double>(); noise > 0) {
     // A displacement sensor's reading: x plus white Gaussian noise (never fed back to the
     // dynamics). Monitors built for measured signals (C1-C3) need it: a noise-free simulated
     // signal has no stable "texture", and amplitude-normalised criteria flag any pure sine.
     std::mt19937_64 random(sim.at("seed").get<std::uint64_t>() + 0x5eed);
     std::normal_distribution<double> gauss(0.0, noise);
-    std::vector<double> measured = r.displacement_m;
+    measured = r.displacement_m;
     for (double& x : measured) x += gauss(random);
     header.emplace_back("measured_displacement_m");
-    columns.push_back(std::move(measured));
+    columns.push_back(measured);
   }
-  write_file_atomically(dir / "timeseries.csv", csv_text(header, columns));
+  const std::string timeseries_file =
+      write_time_series(dir, "timeseries", header, columns, parse_time_series_format(sim.at("timeseries_format").get<std::string>()),
+                        sim.at("timeseries_decimation").get<std::size_t>());
   Json snapshots = Json::array();
   for (std::size_t i = 0; i < r.snapshots.size(); ++i) {
     const SurfaceSnapshot& s = r.snapshots[i];
@@ -291,13 +370,25 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
   Json summary;
   summary["model"] = document.at("model").at("type");
   summary["status"] = r.status;
+  summary["one_sided_contact"] = one_sided_contact(sim);
   summary["end_time_s"] = r.end_time_s;
+  summary["timeseries"] = {{"file", timeseries_file}, {"columns", header},
+                           {"sample_rate_hz", sim.at("sample_rate_hz").get<double>() /
+                                                  sim.at("timeseries_decimation").get<double>()}};
   summary["fitted_growth_rate_per_s"] = a.fit ? Json(a.fit->growth_rate_per_s) : Json();
   if (a.fit)
     summary["fit"] = {{"window_s", {a.fit->start_s, a.fit->end_s}},
                       {"method", "ln of the per-period envelope (half peak-to-peak per period of the dominant "
                                  "frequency), least squares"},
-                      {"residual_rms", a.fit->residual_rms}};
+                      {"residual_rms", a.fit->residual_rms},
+                      {"valid", a.validity->valid},
+                      {"regime", to_string(a.validity->regime)},
+                      {"reason", a.validity->reason},
+                      {"contact_loss_fraction_in_window", a.validity->contact_loss_fraction},
+                      {"longest_delays_in_window", a.validity->delays_in_window},
+                      {"growth_rate_first_half_per_s", a.validity->first_half_growth_per_s},
+                      {"growth_rate_second_half_per_s", a.validity->second_half_growth_per_s},
+                      {"final_envelope_m", a.validity->final_amplitude_m}};
   else
     summary["fit"] = {{"problem", a.fit_problem}};
   summary["dominant_frequency_hz"] = a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz);
@@ -310,6 +401,8 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
   for (std::size_t i = 0; i < r.contact_loss_intervals.size() && i < 200; ++i)
     intervals.push_back({r.contact_loss_intervals[i].first, r.contact_loss_intervals[i].second});
   summary["contact_loss_intervals_s"] = intervals;
+  if (!r.contact_loss_intervals.empty())
+    summary["after_contact_loss"] = after_contact_loss(r);
   summary["contact_loss_interval_count"] = r.contact_loss_intervals.size();
   summary["surface_snapshots"] = snapshots;
   summary["work_surface_quality"] = quality.summary;
@@ -319,6 +412,7 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
                             {"contact_events", r.contact_events},
                             {"wheel_surface_samples_per_rev", r.surface_samples_per_rev[wheel]},
                             {"work_surface_samples_per_rev", r.surface_samples_per_rev[work]},
+                            {"method", r.method},
                             {"relative_tolerance", sim.at("relative_tolerance")}};
   write_json_file(dir / "summary.json", summary);
 
@@ -346,7 +440,11 @@ void write_point_files(const SimulationResult& r, const PointAnalysis& a, const 
   render(force, "force");
   if (a.fit) {
     plot::Curves env;
-    env.title = fmt::format("{}: envelope and fit (growth {:.4g} /s)", title, a.fit->growth_rate_per_s);
+    env.title = a.validity->valid
+                    ? fmt::format("{}: envelope and fit (growth {:.4g} /s, {})", title, a.fit->growth_rate_per_s,
+                                  to_string(a.validity->regime))
+                    : fmt::format("{}: envelope and fit (growth {:.4g} /s NOT VALID: {})", title,
+                                  a.fit->growth_rate_per_s, to_string(a.validity->regime));
     env.x_label = "time t [s]";
     env.y_label = "envelope of x [m]";
     env.log_y = true;
@@ -414,21 +512,44 @@ PluginInfo Simulate::info() {
   ParamSpec seed = param_spec("seed", ValueKind::integer, "1", "seed of the random initial waviness");
   seed.default_value = 1;
   seed.min = 0;
+  // Default: one-sided exactly when there is a cut to lose. Without an infeed the mean depth of cut
+  // is zero, so a one-sided contact opens at the first vibration and never carries the linear
+  // growth (issue 19: 97 % of the time open, a fitted -0.1 /s where the root grows at 4.79 /s);
+  // the bilateral contact is then the linearisation the roots describe.
   ParamSpec one_sided = param_spec("one_sided_contact", ValueKind::boolean, "1",
                                    "the force cannot pull: the wheel leaves the work and re-enters "
-                                   "(false: bilateral, linear contact)");
-  one_sided.default_value = true;
+                                   "(false: bilateral, linear contact; default: true with an infeed, "
+                                   "false without one)");
+  one_sided.optional = true;
   ParamSpec snapshots = param_spec("snapshot_times_s", ValueKind::real_list, "s",
                                    "times at which wheel and work surfaces are written (default: the end)");
   snapshots.optional = true;
   snapshots.min = 0.0;
-  ParamSpec tolerance = real_spec("relative_tolerance", "1", "integrator relative tolerance", 1e-6, 0.0, true);
+  ParamSpec tolerance = real_spec("relative_tolerance", "1",
+                                  "relative tolerance of the adaptive integrators (explicit_runge_kutta, adams)",
+                                  1e-6, 0.0, true);
   tolerance.max = 1e-3;
   ParamSpec integrator = param_spec("integrator", ValueKind::string, "",
-                                    "time integrator (docs/dynamics.md): explicit_runge_kutta "
-                                    "(ARKODE Dormand-Prince 5(4)) or adams (CVODE Adams)");
-  integrator.choices = {"explicit_runge_kutta", "adams"};
-  integrator.default_value = "explicit_runge_kutta";
+                                    "time integrator (docs/dynamics.md): fixed_step (fixed steps; exact "
+                                    "exponential propagation of linear models, Runge-Kutta otherwise), "
+                                    "explicit_runge_kutta (adaptive ARKODE Dormand-Prince 5(4), the reference) "
+                                    "or adams (CVODE Adams)");
+  integrator.choices = {"fixed_step", "explicit_runge_kutta", "adams"};
+  integrator.default_value = "fixed_step";
+  ParamSpec steps_per_wave = real_spec("fixed_steps_per_wave", "1",
+                                       "fixed_step: steps per wave at the model's highest frequency (0: the "
+                                       "default, 10 exponential (40 with one-sided contact) / 60 Runge-Kutta; with initial_waviness_m > 0 never more than 3/4 of the time "
+                                       "between surface samples)", 0.0, 0.0, false);
+  ParamSpec format = param_spec("timeseries_format", ValueKind::string, "",
+                                "time-series file: csv (timeseries.csv) or npy (timeseries.npy, a NumPy "
+                                "structured array with one float64 field per column: long runs)");
+  format.choices = {"csv", "npy"};
+  format.default_value = "csv";
+  ParamSpec decimation = param_spec("timeseries_decimation", ValueKind::integer, "1",
+                                    "write every k-th output sample to the time-series file (exact samples, "
+                                    "no filter; the fit and spectrum use every sample)");
+  decimation.default_value = 1;
+  decimation.min = 1;
   ParamSpec files = param_spec("write_point_files", ValueKind::boolean, "1",
                                "in a grid, also write each point's files into points/<i>/");
   files.default_value = false;
@@ -448,10 +569,13 @@ PluginInfo Simulate::info() {
       real_spec("work_contact_arc_deg", "deg",
                 "geometric filtering (G4): work surface averaged over this arc (0: point contact)", 0.0, 0.0, false),
       snapshots,
-      optional_real("fit_start_s", "s", "start of the envelope-fit window (default: duration/2)"),
-      optional_real("fit_end_s", "s", "end of the envelope-fit window (default: the end)"),
+      optional_real("fit_start_s", "s", "start of the envelope-fit window (default: half-way to its end)"),
+      optional_real("fit_end_s", "s", "end of the envelope-fit window (default: where the contact first opens, else the end of the run)"),
       tolerance,
       integrator,
+      steps_per_wave,
+      format,
+      decimation,
       real_spec("min_frequency_hz", "Hz",
                 "spectral peaks below this are not the dominant (chatter) frequency: the infeed "
                 "transient and work-revolution waviness live there", 10.0, 0.0, false),
@@ -504,7 +628,9 @@ void Simulate::validate(Json& document, const SourceMap& sources) const {
     if (t.get<double>() > duration)
       throw InputError(fmt::format("{}: simulation.snapshot_times_s = {}: a time is beyond duration_s = {}",
                                    where("snapshot_times_s"), t.dump(), duration));
-  const double start = fit_start(sim), end = fit_end(sim);
+  // The window as given (the defaults follow the run: fit_end below).
+  const double end = sim["fit_end_s"].is_null() ? duration : sim["fit_end_s"].get<double>();
+  const double start = fit_start(sim, end, 0.0);
   if (!(start < end) || end > duration)
     throw InputError(fmt::format("{}: simulation.fit_start_s/fit_end_s = {}/{}: the envelope-fit window "
                                  "must satisfy fit_start_s < fit_end_s <= duration_s = {}",
@@ -581,13 +707,13 @@ SimulationSettings Simulate::settings(const Json& document, const TimeDomainMode
   s.initial_waviness_m = sim.at("initial_waviness_m").get<double>();
   s.seed = sim.at("seed").get<std::uint64_t>();
   s.infeed_rate_m_per_s = sim.at("infeed_rate_m_per_s").get<double>();
-  s.one_sided_contact = sim.at("one_sided_contact").get<bool>();
+  s.one_sided_contact = one_sided_contact(sim);
   s.contact_arc_deg[static_cast<std::size_t>(Rotor::wheel)] = sim.at("wheel_contact_arc_deg").get<double>();
   s.contact_arc_deg[static_cast<std::size_t>(Rotor::work)] = sim.at("work_contact_arc_deg").get<double>();
   for (const Json& t : sim.at("snapshot_times_s")) s.snapshot_times_s.push_back(t.get<double>());
   s.relative_tolerance = sim.at("relative_tolerance").get<double>();
-  s.integrator = sim.at("integrator").get<std::string>() == "adams" ? TimeIntegrator::adams
-                                                                    : TimeIntegrator::explicit_runge_kutta;
+  s.integrator = parse_time_integrator(sim.at("integrator").get<std::string>());
+  s.fixed_steps_per_wave = sim.at("fixed_steps_per_wave").get<double>();
   s.divergence_limit_m = sim.at("divergence_limit_m").get<double>();
   for (Rotor r : {Rotor::wheel, Rotor::work})
     if (!model.angle_state(r))
@@ -596,8 +722,8 @@ SimulationSettings Simulate::settings(const Json& document, const TimeDomainMode
 }
 
 std::vector<std::string> Simulate::output_columns(const Json&) const {
-  return {col_growth, col_frequency, col_max_displacement, col_contact_loss, col_outcome,
-          col_work_wt, col_work_wz, col_work_ront};
+  return {col_growth, col_fit_valid, col_fit_regime, col_fit_reason, col_frequency, col_max_displacement,
+          col_contact_loss, col_outcome, col_work_wt, col_work_wz, col_work_ront};
 }
 
 std::vector<Json> Simulate::run_point(const Json& document, const PointContext& context) const {
@@ -610,11 +736,12 @@ std::vector<Json> Simulate::run_point(const Json& document, const PointContext& 
     throw PointFailure(e.what());
   }
   const Json& sim = document.at("simulation");
-  PointAnalysis a = analyse(result, sim);
+  PointAnalysis a = analyse(result, sim, longest_delay_s(*model));
   const WorkSurfaceQuality quality = evaluate_work_surface(result, document);
   if (!context.artifact_dir.empty() && (context.single_point() || sim.at("write_point_files").get<bool>()))
     write_point_files(result, a, quality, document, context);
-  return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(),
+  return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(), a.validity ? Json(a.validity->valid) : Json(false),
+          a.validity ? to_string(a.validity->regime) : "no fit", a.validity ? a.validity->reason : a.fit_problem,
           a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz), a.max_displacement,
           result.end_time_s > 0 ? result.contact_loss_time_s / result.end_time_s : 0.0,
           result.diverged ? std::string("diverged") : std::string("completed"),

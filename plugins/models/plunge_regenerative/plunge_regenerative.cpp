@@ -285,6 +285,27 @@ std::unique_ptr<TimeDomainModel> PlungeRegenerative::time_domain() const {
   return std::make_unique<PlungeTimeDomain>(parameters_);
 }
 
+// G1 process conditions (process_conditions.hpp) for kinds that vary them (suppression_map).
+ProcessConditions PlungeRegenerative::nominal_conditions() const {
+  ProcessConditions c;
+  c.wheel_speed_rpm = parameters_.wheel_speed_rpm;
+  c.work_speed_rpm = parameters_.work_speed_rpm;
+  return c;
+}
+Json PlungeRegenerative::parameters_at(const ProcessConditions&, const ProcessConditions& c,
+                                       const ProcessScaling& scaling) const {
+  const auto& p = parameters_;
+  const double s = 1.0 - 0.5 * scaling.thickness_exponent * (c.depth_of_cut_ratio - 1.0);
+  Json modes = Json::array();
+  for (const auto& m : p.modes)
+    modes.push_back({{"frequency_hz", m.frequency_hz}, {"damping_ratio", m.damping_ratio}, {"stiffness_n_per_m", m.stiffness_n_per_m}});
+  return {{"wheel_speed_rpm", c.wheel_speed_rpm}, {"work_speed_rpm", c.work_speed_rpm},
+          {"contact_stiffness_n_per_m", s * p.contact_stiffness_n_per_m},
+          {"wheel_wear_stiffness_n_per_m", s * p.wheel_wear_stiffness_n_per_m},
+          {"work_removal_stiffness_n_per_m", p.work_removal_stiffness_n_per_m},
+          {"modes", modes}, {"wheel_regeneration", p.wheel_regeneration}, {"work_regeneration", p.work_regeneration}};
+}
+
 CHATTERLAB_REGISTER_MODEL(PlungeRegenerative);
 
 }  // namespace chatterlab

@@ -13,6 +13,7 @@
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/process_conditions.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
@@ -71,7 +72,7 @@ class PlungeCharacteristic final : public CharacteristicFunction {
   std::vector<Mode> modes_;
 };
 
-class PlungeRegenerative final : public Model {
+class PlungeRegenerative final : public Model, public ProcessConditionsModel {
  public:
   explicit PlungeRegenerative(const ParamValues& values);
   explicit PlungeRegenerative(PlungeRegenerativeParameters parameters);
@@ -83,6 +84,10 @@ class PlungeRegenerative final : public Model {
   std::unique_ptr<TimeDomainModel> time_domain() const override;  // G1 time domain
   std::optional<StiffnessChain> stiffness_chain() const override;
   const PlungeRegenerativeParameters& parameters() const { return parameters_; }
+  const ProcessConditionsModel* process_conditions() const override { return this; }
+  ProcessConditions nominal_conditions() const override;
+  Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                     const ProcessScaling& scaling) const override;
 
  private:
   PlungeRegenerativeParameters parameters_;
