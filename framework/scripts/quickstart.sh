@@ -55,7 +55,7 @@ if [ "$mode" = run ]; then
   cmake --preset release >/dev/null
   cmake --build --preset release -j "$jobs"
   ./build/release/framework/chatterlab run studies/default.toml --out out/default
-  echo "chatterlab: default study written to $root/out/default (results.csv, meta.json, growth_rate_map.png/.svg)"
+  echo "chatterlab: default study written to $root/out/default (results.csv, summary.json, lobe_diagram.png/.svg)"
 else
   for preset in ci asan; do
     echo "chatterlab: === test preset '$preset' ===" >&2

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -384,9 +385,48 @@ std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
 
 }  // namespace
 
+// Line styles 1-8: the Okabe-Ito colours, distinguishable with the common colour-vision
+// deficiencies.
+std::string line_styles() {
+  constexpr std::array<std::string_view, 8> kColours{"#0072b2", "#d55e00", "#009e73", "#cc79a7",
+                                                     "#e69f00", "#56b4e9", "#000000", "#f0e442"};
+  std::string gp;
+  for (std::size_t i = 0; i < kColours.size(); ++i)
+    gp += fmt::format("set style line {} lc rgb '{}' lw 2 pt 7 ps 0.9\n", i + 1, kColours[i]);
+  return gp;
+}
+
+// The plot command's style of a series: the style word, its line style (palette place, or its own
+// colour and width) and, for an area, a translucent fill down to the bottom of the plot.
+std::string series_style(const Series& s, const SeriesLook& look, std::size_t index) {
+  const bool dashes = s.style == "dashes", area = s.style == "area" || s.style == "area_above";
+  const std::string word = dashes ? "lines" : s.style == "area" ? "filledcurves x1" : s.style == "area_above" ? "filledcurves x2" : s.style;
+  std::string style = fmt::format("with {} ls {}", word, index % 8 + 1);
+  if (!look.colour.empty()) style += fmt::format(" lc rgb '{}'", look.colour);
+  if (look.line_width > 0.0) style += fmt::format(" lw {}", number(look.line_width));
+  // "dashes": a dash pattern (after the line style, which would reset it), for a curve drawn over
+  // another that may hide it.
+  if (dashes) style += " dt 2";
+  if (area) style += " fs transparent solid 0.25 noborder";
+  return style;
+}
+
+// The look of series i (defaults when the list is shorter), checked.
+SeriesLook look_of(const std::vector<SeriesLook>& looks, std::size_t i, const Series& s) {
+  const SeriesLook look = i < looks.size() ? looks[i] : SeriesLook{};
+  const bool hex = look.colour.size() == 7 && look.colour[0] == '#' &&
+                   std::all_of(look.colour.begin() + 1, look.colour.end(),
+                               [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+  if (!look.colour.empty() && !hex)
+    throw PlotError(fmt::format("series '{}': colour '{}' is not #rrggbb", s.label, look.colour));
+  if (!(look.line_width >= 0.0 && look.line_width <= 20.0))
+    throw PlotError(fmt::format("series '{}': line width {} is not in [0, 20]", s.label, look.line_width));
+  return look;
+}
+
 void render(const Curves& figure, const fs::path& out_dir, const std::string& stem) {
-  static constexpr std::array<std::string_view, 6> kStyles{"lines", "points", "linespoints",
-                                                           "impulses", "steps", "dashes"};
+  static constexpr std::array<std::string_view, 8> kStyles{"lines", "points", "linespoints", "impulses",
+                                                           "steps", "dashes", "area", "area_above"};
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
   if (figure.equal_aspect && (figure.log_x || figure.log_y))
     throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));
@@ -405,15 +445,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
     if (std::find(kStyles.begin(), kStyles.end(), s.style) == kStyles.end())
       throw PlotError(fmt::format("series '{}': unknown style '{}' (valid: {})", s.label, s.style,
                                   fmt::join(kStyles, ", ")));
+    const SeriesLook look = look_of(figure.looks, i, s);
     data += fmt::format("{}# series {}: {}\n", i == 0 ? "" : "\n\n", i, s.label);
     for (std::size_t k = 0; k < s.x.size(); ++k)
       data += fmt::format("{} {}\n", number(s.x[k]), number(s.y[k]));
-    // "dashes": lines with a dash pattern (after the line style, which would reset it), for a
-    // curve drawn over another that may hide it.
-    const bool dashes = s.style == "dashes";
-    plots.push_back(fmt::format("'{}.dat' index {} using 1:2{} with {} ls {}{} title {}", stem, i,
-                                s.right_axis ? " axes x1y2" : "", dashes ? "lines" : s.style,
-                                i % 8 + 1, dashes ? " dt 2" : "", gp_string(s.label)));
+    plots.push_back(fmt::format("'{}.dat' index {} using 1:2{} {} title {}", stem, i, s.right_axis ? " axes x1y2" : "",
+                                series_style(s, look, i), s.label.empty() ? "\"\"" : gp_string(s.label)));
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
   const bool reference = figure.reference_y && !(figure.log_y && *figure.reference_y <= 0);
@@ -464,11 +501,7 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
       gp += log_axis('y', lo, hi);
     }
   }
-  // Okabe-Ito colours: distinguishable with the common colour-vision deficiencies.
-  constexpr std::array<std::string_view, 8> kColours{"#0072b2", "#d55e00", "#009e73", "#cc79a7",
-                                                     "#e69f00", "#56b4e9", "#000000", "#f0e442"};
-  for (std::size_t i = 0; i < kColours.size(); ++i)
-    gp += fmt::format("set style line {} lc rgb '{}' lw 2 pt 7 ps 0.9\n", i + 1, kColours[i]);
+  gp += line_styles();
   // The key sits below the x label, two entries per row, with the bottom margin reserved for its
   // rows: beside the plot a long label ("stability limit (Re s = 0)") would squeeze the curves.
   const std::size_t key_rows = (plots.size() + 1) / 2;
@@ -488,6 +521,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
                             : figure.integer_x
                                   ? "set offsets 0.5, 0.5, graph 0.05, graph 0.05\n"
                                   : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
+  if (figure.y_range) {
+    if (!(figure.y_range->first < figure.y_range->second) || (figure.log_y && !(figure.y_range->first > 0.0)))
+      throw PlotError(fmt::format("plot '{}': y range [{}, {}] is empty or not positive on a log axis", stem,
+                                  figure.y_range->first, figure.y_range->second));
+    gp += fmt::format("set yrange [{}:{}]\n", number(figure.y_range->first), number(figure.y_range->second));
+  }
   // Whole-number ticks: gnuplot would label an index axis 1, 1.2, 1.4, ... over a short range.
   if (figure.integer_x) gp += "set xtics 1\nset mxtics 1\n";
   // The integer axis' reference line; the y range still reaches it ("*<y": the autoscaled
@@ -600,8 +639,20 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
   if (any_failed)
     plots.push_back(fmt::format(
         "'{}.dat' using (strcol(3) eq 'NaN' ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
-        "fillstyle solid 1.0 border title 'failed point'",
-        stem, kFailedGrey));
+        "fillstyle solid 1.0 border title {}",
+        stem, kFailedGrey, gp_string(figure.missing_label)));
+  // Curves over the map, as inline data blocks (the map's data file is read whole).
+  if (!figure.overlays.empty()) gp += line_styles();
+  for (std::size_t i = 0; i < figure.overlays.size(); ++i) {
+    const Series& o = figure.overlays[i];
+    const SeriesLook look = look_of(figure.overlay_looks, i, o);
+    if (o.x.size() != o.y.size() || (o.style != "lines" && o.style != "points" && o.style != "dashes"))
+      throw PlotError(fmt::format("overlay '{}': needs as many x as y values and style lines, points or dashes", o.label));
+    gp += fmt::format("$overlay{} << EOD\n", i);
+    for (std::size_t k = 0; k < o.x.size(); ++k) gp += fmt::format("{} {}\n", number(o.x[k]), number(o.y[k]));
+    gp += "EOD\n";
+    plots.push_back(fmt::format("$overlay{} using 1:2 {} title {}", i, series_style(o, look, i + 6), gp_string(o.label)));
+  }
   if (!any_finite) gp += "set label 'no point succeeded' at graph 0.5, graph 0.5 center front\n";
   // A map with a level to compare against but no point on one side of it has no boundary to
   // draw: say so in the picture, or a reader looks for a boundary that is not there.

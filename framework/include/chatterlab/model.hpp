@@ -4,12 +4,14 @@
 //
 // Capabilities beyond the physics are typed interfaces a model class may also derive from; study
 // kinds reach them through the accessors below (the model returns `this`), never by the model's
-// name or by casting to a plugin's class:
+// name or by casting to a plugin's class (stability routes: characteristic() for the roots,
+// return_difference() for the Nyquist count on the imaginary axis):
 //   ClosedFormIndicators (closed_form.hpp)    closed-form criteria reported beside the roots
 //   ProcessConditionsModel (process_conditions.hpp)  parameters that follow the process conditions
 //   StiffnessChain (below)                    the G1 stiffness chain, for the closed forms
 //   LinearisedModel (linearised_model.hpp)    the linearisation derived from the physics written
 //                                             once (derived_model.hpp): roots, Floquet
+//   MeasuredMachine (modal_fit.hpp)           the measured FRF (and modal fit) the model is built on
 #include <limits>
 #include <memory>
 #include <optional>
@@ -17,12 +19,14 @@
 
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/dynamics.hpp"
+#include "chatterlab/nyquist.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
 
 class ClosedFormIndicators;
 class LinearisedModel;
+class MeasuredMachine;
 class ProcessConditionsModel;
 
 // A structural mode as the closed forms of MODELS.md G1/G3/S1 see it.
@@ -50,6 +54,12 @@ class Model {
   // model has none (e.g. a purely nonlinear model).
   virtual std::unique_ptr<CharacteristicFunction> characteristic() const { return nullptr; }
 
+  // Linear stability on the imaginary axis alone (chatterlab/nyquist.hpp): the return difference
+  // F(j w) whose Nyquist count is the number of unstable roots, or null. A model known only at
+  // s = j w (a measured FRF) has this and no characteristic function; a model with both offers
+  // two independent routes to the same boundary.
+  virtual std::unique_ptr<ReturnDifference> return_difference() const { return nullptr; }
+
   // Wheel revolution period Tg [s] if the model has a wheel; gives growth per wheel revolution
   // rho = Tg Re(s) / 2 pi (MODELS.md G3).
   virtual std::optional<double> wheel_period_s() const { return std::nullopt; }
@@ -61,6 +71,7 @@ class Model {
   // ---- capabilities (null / nullopt: the model does not have it)
   virtual const ClosedFormIndicators* closed_forms() const { return nullptr; }
   virtual const ProcessConditionsModel* process_conditions() const { return nullptr; }
+  virtual const MeasuredMachine* measured_machine() const { return nullptr; }
   // The G1 stiffness chain, for models of the Snoeys family (plunge_regenerative, thompson, ...).
   virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
   // The linearisation of a model written once (DerivedModel provides it).

@@ -77,6 +77,8 @@ class ParamTable {
     Field& fraction(bool one_excluded = false) { non_negative(); return one_excluded ? below(1.0) : at_most(1.0); }
     Field& choices(std::vector<std::string> names) { spec_->choices = std::move(names); return *this; }
     Field& min_items(std::size_t n) { spec_->min_items = n; return *this; }
+    // A data file name, relative to the study file (ParamSpec::data_file).
+    Field& data_file() { spec_->data_file = true; return *this; }
     // No default: the study must give it (the struct's initialiser is then only a placeholder).
     Field& required() { *required_ = true; return *this; }
 
@@ -140,6 +142,25 @@ class ParamTable {
     e.spec.fields = fields.specs();
     e.read = [member, key, fields](S& s, const Json& table) { s.*member = fields.read(table.at(key)); };
     e.write = [member, key, fields](const S& s, Json& table) { table[key] = fields.write(s.*member); };
+    return Field(&e.spec, &e.required);
+  }
+
+  // An optional nested table: null (std::nullopt) when left out, e.g. one of two ways to give a
+  // setting (a list of values or a range table).
+  template <class Sub>
+  Field add_optional_table(std::optional<Sub> S::*member, std::string key, std::string description,
+                           const ParamTable<Sub>& fields) {
+    Entry& e = push(param_spec(key, ValueKind::table, "", std::move(description)));
+    e.spec.fields = fields.specs();
+    e.optional = true;
+    e.read = [member, key, fields](S& s, const Json& table) {
+      const Json& v = table.at(key);
+      if (v.is_null()) s.*member = std::nullopt;
+      else s.*member = fields.read(v);
+    };
+    e.write = [member, key, fields](const S& s, Json& table) {
+      table[key] = (s.*member) ? fields.write(*(s.*member)) : Json(nullptr);
+    };
     return Field(&e.spec, &e.required);
   }
 
