@@ -99,13 +99,13 @@ const ParamTable<PenetrationDampingParameters>& parameters_table() {
         .non_negative()
         .required();
     t.add(&P::work_diameter_mm, "work_diameter_mm", "mm",
-          "workpiece diameter dw (G4 indicators: v_w, de; optional)")
+          "workpiece diameter dw (G4 indicators: v_w, de)")
         .positive();
     t.add(&P::wheel_diameter_mm, "wheel_diameter_mm", "mm",
-          "wheel diameter dg (G4 indicators: de = dw dg/(dw + dg), external; optional)")
+          "wheel diameter dg (G4 indicators: de = dw dg/(dw + dg), external)")
         .positive();
     t.add(&P::depth_of_cut_mm, "depth_of_cut_mm", "mm",
-          "depth of cut u0 per work revolution (G4 indicators: contact length sqrt(de u0); optional)")
+          "depth of cut u0 per work revolution (G4 indicators: contact length sqrt(de u0))")
         .positive();
     return t;
   }();

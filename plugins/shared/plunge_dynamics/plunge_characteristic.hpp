@@ -34,8 +34,9 @@ class PlungeCharacteristic final : public CharacteristicFunction {
   double real_part_bound() const override;
   double natural_frequency_scale_hz() const override;
 
-  // Machine compliance H(s) = sum_i (1/k_i)/P_i(s) [m/N] (G1), used by the guesses and by tests of
-  // the closed-form criteria (G1 eq 2-21, G3 eq 2-68).
+  // Machine compliance H(s) = sum_i (1/k_i)/P_i(s) [m/N] (G1), used by the guesses, by the models'
+  // StructuralCompliance capability (the compliance chart) and by tests of the closed-form
+  // criteria (G1 eq 2-21, G3 eq 2-68).
   Complex structural_compliance(Complex s) const;
 
  private:

@@ -166,7 +166,7 @@ void ComplianceChartKind::write_artifacts(const Study& study, const ResultTable&
   // varying axis, a map over two.
   const std::vector<kit::PlotAxis> axes = kit::varying_axes(study);
   kit::ColumnFigure figure{"line_depth_ratio",
-                           kit::study_title(study) + ": depth of the compliance curve beyond the process line",
+                           kit::study_title(study) + ": leftmost Re H over the process line",
                            "leftmost Re H / process line (> 1: they meet)"};
   figure.reference = 1.0;
   figure.reference_label = "line touches the curve";

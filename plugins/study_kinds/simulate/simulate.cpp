@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
-#include "chatterlab/kit/capabilities.hpp"
 #include "study_kinds/simulate/simulate_point.hpp"
 
 namespace chatterlab {

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "chatterlab/kit.hpp"
-#include "chatterlab/kit/simulation.hpp"
 
 namespace chatterlab {
 

@@ -7,7 +7,6 @@
 #include <random>
 
 #include "chatterlab/errors.hpp"
-#include "chatterlab/kit/capabilities.hpp"
 #include "chatterlab/output_files.hpp"
 
 namespace chatterlab::simulate_point {

@@ -35,6 +35,7 @@ duration_s = 1.2
 sample_rate_hz = 10000
 one_sided_contact = false
 initial_waviness_m = 1e-9
+relative_tolerance = 1e-4
 )";
 
 TEST(Simulate, TheSimulationTableKeepsTheUserVisibleKeys) {
@@ -57,7 +58,8 @@ TEST(Simulate, ValidationWritesTheDefaultsAndIsIdempotent) {
   const Study study = load_study(dir.write("g1.toml", g1_study));
   const Json& sim = study.document.at("simulation");
   EXPECT_EQ(sim.at("snapshot_times_s"), Json::array({1.2}));  // the end
-  EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-6));
+  EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-4));
+  EXPECT_EQ(sim.at("divergence_limit_m"), Json(0.01));
   EXPECT_EQ(sim.at("integrator"), Json("explicit_runge_kutta"));
   Json again = study.document;
   auto kind = study_kind_registry().at("simulate").create(ParamValues{});
@@ -77,7 +79,8 @@ TEST(Simulate, ThePartQualityComesFromTheAnalysisWithTheCapability) {
 
 TEST(Simulate, ALinearG1RunGrowsAtTheCertifiedRoot) {
   // docs/models/plunge_regenerative.md: the certified rightmost root of this machine is
-  // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear.
+  // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear (rtol 1e-4 reproduces the
+  // growth to 0.03 %, docs/dynamics.md).
   TempDir dir;
   const Study study = load_study(dir.write("g1.toml", g1_study));
   auto kind = study_kind_registry().at("simulate").create(ParamValues{});
