@@ -1,4 +1,5 @@
-// The `chatterlab` command: list, describe, validate, run.
+// The `chatterlab` command: list, describe, validate, run; the SDK commands (new-plugin,
+// check-plugin, init, completion) are in sdk_commands.cpp.
 //
 // Exit codes (docs/studies.md): 0 every grid point ok, 1 some points failed (each recorded in
 // results.csv and meta.json), 2 the study could not be run at all: bad input, a usage error, an
@@ -24,6 +25,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
+#include "sdk_commands.hpp"
 
 namespace {
 
@@ -115,6 +117,7 @@ int run(CLI::App& app, const Arguments& args) {
     return 0;
   }
   chatterlab::Study study = chatterlab::load_study(args.study_file, {.allow_large = args.allow_large});
+  chatterlab::cli::record_command_line_plugins(study, args.plugin_libraries);
   if (app.got_subcommand("validate")) {
     if (is_root()) print_summary(study);
     return 0;
@@ -182,6 +185,11 @@ int main(int argc, char** argv) {
                                          "Show a progress bar (default: only on a terminal)");
   run_command->add_flag("--no-progress", args.no_progress, "Never show a progress bar")
       ->excludes(progress);
+  for (auto* command : {validate, run_command})
+    command->add_option("--plugin", args.plugin_libraries,
+                        "Also load this out-of-tree plugin library (repeatable)");
+  chatterlab::cli::SdkArguments sdk;
+  chatterlab::cli::add_sdk_commands(app, sdk);
 
   // CLI11 would report an unknown command as "a subcommand is required".
   if (argc > 1 && argv[1][0] != '-') {
@@ -204,6 +212,7 @@ int main(int argc, char** argv) {
     return exit_bad_input;
   }
   try {
+    if (auto code = chatterlab::cli::run_sdk_command(app, sdk)) return *code;
     return run(app, args);
   } catch (const chatterlab::InputError& e) {
     return report_error(e.what());

@@ -17,6 +17,7 @@ packages=(
   libeigen3-dev libsundials-dev libfftw3-dev libopenmpi-dev openmpi-bin
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libmuparser-dev libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
+  file  # cpack's Debian generator (the sdk test packages chatterlab) inspects binaries with it
 )
 
 missing=()

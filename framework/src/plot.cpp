@@ -38,6 +38,7 @@ constexpr std::string_view kTitleFont = ",16";
 // Cells of failed points: a neutral grey that is neither a "stable" blue nor a "chatter" red, nor
 // the near-white of the boundary.
 constexpr std::string_view kFailedGrey = "#969696";
+constexpr std::string_view kNeutralWhite = "#f7f7f7";
 
 // A gnuplot double-quoted string. Not single-quoted: gnuplot 5.4 mis-parses the runs of doubled
 // quotes that a title like "x'' + x = ..." becomes. Inside double quotes a backslash starts an
@@ -226,9 +227,11 @@ std::vector<Cell> cell_edges(const std::vector<double>& sorted_values, bool log_
     cells[0] = {from_axis(t[0] - half), from_axis(t[0] + half)};
     return cells;
   }
+  // The outer cells end at the first and last grid values: a cell never claims values outside
+  // the swept range (a map from 0 Hz would otherwise show cells at negative frequencies).
   for (std::size_t i = 0; i < t.size(); ++i) {
-    double lo = i > 0 ? 0.5 * (t[i - 1] + t[i]) : t[0] - 0.5 * (t[1] - t[0]);
-    double hi = i + 1 < t.size() ? 0.5 * (t[i] + t[i + 1]) : t[i] + 0.5 * (t[i] - t[i - 1]);
+    double lo = i > 0 ? 0.5 * (t[i - 1] + t[i]) : t[0];
+    double hi = i + 1 < t.size() ? 0.5 * (t[i] + t[i + 1]) : t[i];
     cells[i] = {from_axis(lo), from_axis(hi)};
   }
   return cells;
@@ -273,9 +276,13 @@ bool crosses_level(const Heatmap& f, double level) {
   return false;
 }
 
-// The colour scale. Diverging: ColorBrewer RdBu, white exactly at the centre level, each side
-// stretched over its own data range so a small chatter region next to a deep stable one is still
-// clearly red. Otherwise: viridis (perceptually uniform, readable in grey print).
+// The colour scale. Diverging: ColorBrewer RdBu split at the centre level: blues below it, reds
+// above it, with a jump between a clearly blue and a clearly red shade exactly at the level, so a
+// value just above it (weak chatter) is never drawn in the near-white a reader takes for the
+// other side. Each side is stretched over its own data range (so a small chatter region next to a
+// deep stable one is still clearly red) unless `symmetric`, where the colour bar runs over the
+// same distance either side (ratio maps: a factor of 2 up and down look alike). Otherwise:
+// viridis (perceptually uniform, readable in grey print).
 std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
   if (!f.diverging) {
     if (z_min == z_max) {
@@ -289,22 +296,27 @@ std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
   }
   const double centre = f.contour_level.value_or(0.0);
   double lo = std::min(z_min, centre), hi = std::max(z_max, centre);
+  if (f.symmetric) {
+    const double reach = std::max(centre - lo, hi - centre);
+    lo = centre - reach;
+    hi = centre + reach;
+  }
   if (lo == hi) {
     lo = centre - 1;
     hi = centre + 1;
   }
-  constexpr std::array<std::string_view, 3> blues{"#2166ac", "#67a9cf", "#d1e5f0"};
-  constexpr std::array<std::string_view, 3> reds{"#fddbc7", "#ef8a62", "#b2182b"};
+  constexpr std::array<std::string_view, 3> blues{"#2166ac", "#4393c3", "#92c5de"};
+  constexpr std::array<std::string_view, 3> reds{"#f4a582", "#d6604d", "#b2182b"};
   std::vector<std::string> stops;
+  // Below the level: dark blue far from it, light blue at it; above: light red at it, dark red
+  // far from it. Two stops at the level itself make the jump. gnuplot stretches the stops' span
+  // over the colour bar's range, so only a side the range covers gets stops.
   if (lo < centre)
     for (std::size_t k = 0; k < blues.size(); ++k)
-      stops.push_back(
-          fmt::format("{} '{}'", number(lo + (centre - lo) * double(k) / 3.0), blues[k]));
-  stops.push_back(fmt::format("{} '#f7f7f7'", number(centre)));
+      stops.push_back(fmt::format("{} '{}'", number(lo + (centre - lo) * double(k) / 2.0), blues[k]));
   if (hi > centre)
     for (std::size_t k = 0; k < reds.size(); ++k)
-      stops.push_back(
-          fmt::format("{} '{}'", number(centre + (hi - centre) * double(k + 1) / 3.0), reds[k]));
+      stops.push_back(fmt::format("{} '{}'", number(centre + (hi - centre) * double(k) / 2.0), reds[k]));
   return fmt::format("set palette defined ({})\nset cbrange [{}:{}]\n", fmt::join(stops, ", "),
                      number(lo), number(hi));
 }
@@ -481,6 +493,15 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
       "'{}.dat' using (strcol(3) eq 'NaN' ? NaN : $1):2:4:5:6:7:3 with boxxyerror lc palette lw 1 "
       "fillstyle solid 1.0 border notitle",
       stem)};
+  // A diverging palette jumps from blue to red at the level, so a value exactly at it (no effect,
+  // e.g. a modulation of amplitude 0) would take one side's colour: such cells are drawn neutral.
+  if (figure.diverging && figure.contour_level &&
+      std::any_of(figure.z.begin(), figure.z.end(), [&](double z) { return z == *figure.contour_level; }))
+    plots.push_back(fmt::format(
+        "'{}.dat' using ($3 == {} ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
+        "fillstyle solid 1.0 border title {}",
+        stem, number(*figure.contour_level), kNeutralWhite,
+        gp_string(fmt::format("exactly {}", number(*figure.contour_level)))));
   if (figure.contour_level && nx >= 2 && ny >= 2 && crosses_level(figure, *figure.contour_level)) {
     // gnuplot computes the contour itself (set table into a datablock), from the same data file.
     // The table is written with the axes' tick formats: full precision while it is computed, or
@@ -506,6 +527,16 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
         "fillstyle solid 1.0 border title 'failed point'",
         stem, kFailedGrey));
   if (!any_finite) gp += "set label 'no point succeeded' at graph 0.5, graph 0.5 center front\n";
+  // A map with a level to compare against but no point on one side of it has no boundary to
+  // draw: say so in the picture, or a reader looks for a boundary that is not there.
+  if (any_finite && figure.contour_level && (z_min > *figure.contour_level || z_max < *figure.contour_level)) {
+    const bool above = z_min > *figure.contour_level;
+    const std::string side = above ? figure.high_label : figure.low_label;
+    gp += fmt::format(
+        "set style textbox opaque border\nset label {} at graph 0.5, graph 0.5 center front boxed\n",
+        gp_string(fmt::format("every point {} {}{}", above ? ">" : "<", number(*figure.contour_level),
+                              side.empty() ? "" : ": " + side)));
+  }
   gp += script_png_terminal(stem);
   gp += fmt::format("plot {}\n", fmt::join(plots, ", \\\n     "));
   gp += script_svg_replot(stem);

@@ -1,7 +1,9 @@
-// Loading out-of-tree plugin libraries (plugin_api.hpp). A library registers first into private
-// staging registries; only when the entry succeeded, reported the host's API version and none of
-// its names collides with a registered plugin are its entries moved into the global registries.
-// A failed load therefore leaves the registries exactly as they were.
+// Loading out-of-tree plugin libraries (plugin_api.hpp). The library's build record is read first:
+// a library built for another plugin API or another chatterlab major.minor version is refused
+// before any of its code is called. It then registers into private staging registries; only when
+// the entry succeeded, reported the host's API version and none of its names collides with a
+// registered plugin are its entries moved into the global registries. A failed load therefore
+// leaves the registries exactly as they were.
 #include <dlfcn.h>
 
 #include <filesystem>
@@ -15,6 +17,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plugin_api.hpp"
+#include "chatterlab/version.hpp"
 
 namespace chatterlab {
 namespace {
@@ -67,7 +70,88 @@ struct StagingRegistries {
   Registry<Kinematics> kinematics{kinematics_registry().kind()};
   Registry<Suppression> suppression{suppression_registry().kind()};
   Registry<Analysis> analysis{analysis_registry().kind()};
+  Registry<StudyKind> study_kinds{study_kind_registry().kind()};
 };
+
+// The library's path as it is identified from now on: the canonical path, so that loading it
+// again under another spelling (relative path, symlink) is the same no-op, and what
+// `chatterlab list` shows as the origin.
+std::string canonical_library(const std::string& path) {
+  std::error_code ec;
+  const fs::path given(path);
+  if (!fs::exists(given, ec)) throw InputError(fmt::format("plugin library '{}' not found", path));
+  if (!fs::is_regular_file(given, ec))
+    throw InputError(fmt::format("plugin library '{}' is not a file", path));
+  std::string library = fs::canonical(given, ec).string();
+  if (ec) throw InputError(fmt::format("plugin library '{}': {}", path, ec.message()));
+  return library;
+}
+
+void* open_library(const std::string& library) {
+  // RTLD_NOW: an unresolved symbol is reported here, not as a crash in the middle of a run.
+  // RTLD_LOCAL: two plugin libraries cannot interpose each other's symbols.
+  dlerror();
+  void* handle = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr)
+    throw InputError(fmt::format("cannot load plugin library '{}': {}", library, dl_error_text()));
+  return handle;
+}
+
+chatterlab_plugin_entry_fn entry_point(void* handle, const std::string& library) {
+  void* symbol = dlsym(handle, "chatterlab_plugin_entry");
+  if (symbol == nullptr) {
+    throw InputError(fmt::format(
+        "'{}' is not a chatterlab plugin: it has no symbol chatterlab_plugin_entry (define it "
+        "with CHATTERLAB_PLUGIN_ENTRY from <chatterlab/plugin_api.hpp>)",
+        library));
+  }
+  // POSIX guarantees that a dlsym() result converts to a function pointer.
+  return reinterpret_cast<chatterlab_plugin_entry_fn>(symbol);
+}
+
+// The build record. A library of plugin API 1 has none; its entry, called with this host's
+// version and no registries, registers nothing and reports the version it was built for (the
+// API 1 protocol).
+PluginLibraryBuild read_build(void* handle, chatterlab_plugin_entry_fn entry) {
+  PluginLibraryBuild build;
+  if (void* symbol = dlsym(handle, "chatterlab_plugin_build")) {
+    const chatterlab_plugin_build_info* info =
+        reinterpret_cast<chatterlab_plugin_build_fn>(symbol)();
+    if (info != nullptr) {
+      build.plugin_api_version = info->plugin_api_version;
+      build.chatterlab_version = info->chatterlab_version ? info->chatterlab_version : "";
+      build.compiler = info->compiler ? info->compiler : "";
+      return build;
+    }
+  }
+  build.plugin_api_version = entry(CHATTERLAB_PLUGIN_API_VERSION, nullptr);
+  return build;
+}
+
+// "0.1.3" -> "0.1": libraries of one major.minor version share the C++ ABI.
+std::string major_minor(const std::string& version) {
+  const std::size_t first = version.find('.');
+  if (first == std::string::npos) return version;
+  return version.substr(0, version.find('.', first + 1));
+}
+
+std::string describe_build(const PluginLibraryBuild& build) {
+  if (build.chatterlab_version.empty())
+    return fmt::format("plugin API {} (a chatterlab that records no version)",
+                       build.plugin_api_version);
+  return fmt::format("chatterlab {} (plugin API {})", build.chatterlab_version,
+                     build.plugin_api_version);
+}
+
+void check_compatible(const PluginLibraryBuild& build, const std::string& library) {
+  if (build.plugin_api_version == CHATTERLAB_PLUGIN_API_VERSION &&
+      major_minor(build.chatterlab_version) == major_minor(CHATTERLAB_VERSION))
+    return;
+  throw InputError(fmt::format(
+      "plugin library '{}' was built for {}; this chatterlab is {} (plugin API {}): rebuild the "
+      "library against this version",
+      library, describe_build(build), CHATTERLAB_VERSION, CHATTERLAB_PLUGIN_API_VERSION));
+}
 
 }  // namespace
 
@@ -78,37 +162,17 @@ void load_plugin_library(const std::string& path) {
   static std::set<std::string> loaded;
   std::lock_guard lock(mutex);
 
-  std::error_code ec;
-  const fs::path given(path);
-  if (!fs::exists(given, ec)) throw InputError(fmt::format("plugin library '{}' not found", path));
-  if (!fs::is_regular_file(given, ec))
-    throw InputError(fmt::format("plugin library '{}' is not a file", path));
-  // The canonical path identifies the library: loading it again under another spelling (relative
-  // path, symlink) is the same no-op, and it is what `chatterlab list` shows as the origin.
-  const std::string library = fs::canonical(given, ec).string();
-  if (ec) throw InputError(fmt::format("plugin library '{}': {}", path, ec.message()));
+  const std::string library = canonical_library(path);
   if (loaded.count(library) != 0) return;
 
-  // RTLD_NOW: an unresolved symbol is reported here, not as a crash in the middle of a run.
-  // RTLD_LOCAL: two plugin libraries cannot interpose each other's symbols.
-  dlerror();
-  LibraryHandle handle(dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL));
-  if (handle.get() == nullptr)
-    throw InputError(fmt::format("cannot load plugin library '{}': {}", library, dl_error_text()));
-
-  void* symbol = dlsym(handle.get(), "chatterlab_plugin_entry");
-  if (symbol == nullptr) {
-    throw InputError(fmt::format(
-        "'{}' is not a chatterlab plugin: it has no symbol chatterlab_plugin_entry (define it "
-        "with CHATTERLAB_PLUGIN_ENTRY from <chatterlab/plugin_api.hpp>)",
-        library));
-  }
-  // POSIX guarantees that a dlsym() result converts to a function pointer.
-  auto entry = reinterpret_cast<chatterlab_plugin_entry_fn>(symbol);
+  LibraryHandle handle(open_library(library));
+  const chatterlab_plugin_entry_fn entry = entry_point(handle.get(), library);
+  const PluginLibraryBuild build = read_build(handle.get(), entry);
+  check_compatible(build, library);
 
   StagingRegistries staging;
-  Registries registries{staging.models, staging.kinematics, staging.suppression, staging.analysis,
-                        library};
+  Registries registries{staging.models,   staging.kinematics,  staging.suppression,
+                        staging.analysis, staging.study_kinds, library};
   int library_version = 0;
   try {
     library_version = entry(CHATTERLAB_PLUGIN_API_VERSION, &registries);
@@ -116,17 +180,19 @@ void load_plugin_library(const std::string& path) {
     // Registry::add throws std::logic_error for a name registered twice inside the library.
     throw InputError(fmt::format("plugin library '{}' failed to register: {}", library, e.what()));
   }
+  // The record said the API agrees, so the entry must have registered; if it reports another
+  // version after all, nothing it did can be trusted.
   if (library_version != CHATTERLAB_PLUGIN_API_VERSION) {
-    throw InputError(fmt::format(
-        "plugin library '{}' was built for plugin API {}, this chatterlab has {}: rebuild it "
-        "against this version",
-        library, library_version, CHATTERLAB_PLUGIN_API_VERSION));
+    PluginLibraryBuild reported = build;
+    reported.plugin_api_version = library_version;
+    check_compatible(reported, library);
   }
 
   for (const std::string& clash : {first_clash(staging.models, model_registry()),
                                    first_clash(staging.kinematics, kinematics_registry()),
                                    first_clash(staging.suppression, suppression_registry()),
-                                   first_clash(staging.analysis, analysis_registry())}) {
+                                   first_clash(staging.analysis, analysis_registry()),
+                                   first_clash(staging.study_kinds, study_kind_registry())}) {
     if (!clash.empty())
       throw InputError(fmt::format("plugin library '{}' cannot be loaded: {}", library, clash));
   }
@@ -134,8 +200,15 @@ void load_plugin_library(const std::string& path) {
   move_entries(staging.kinematics, kinematics_registry());
   move_entries(staging.suppression, suppression_registry());
   move_entries(staging.analysis, analysis_registry());
+  move_entries(staging.study_kinds, study_kind_registry());
   handle.keep_loaded();
   loaded.insert(library);
+}
+
+PluginLibraryBuild plugin_library_build(const std::string& path) {
+  const std::string library = canonical_library(path);
+  LibraryHandle handle(open_library(library));
+  return read_build(handle.get(), entry_point(handle.get(), library));
 }
 
 }  // namespace chatterlab

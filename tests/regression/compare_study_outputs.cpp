@@ -1,9 +1,12 @@
 // Regression references of the shipped studies (tests/regression/README.md).
 //
-//   compare_study_outputs snapshot OUT_DIR REF_DIR   copies OUT_DIR's result files into REF_DIR:
-//                                                    small ones whole, large CSV tables as digests
-//   compare_study_outputs compare REF_DIR OUT_DIR    checks OUT_DIR against REF_DIR; prints every
-//                                                    difference; exit 1 if there is one
+//   compare_study_outputs snapshot OUT_DIR REF_DIR SOURCE_DIR   copies OUT_DIR's result files into
+//                                         REF_DIR: small ones whole, large CSV tables as digests
+//   compare_study_outputs compare REF_DIR OUT_DIR SOURCE_DIR    checks OUT_DIR against REF_DIR;
+//                                         prints every difference; exit 1 if there is one
+// Results name input files by absolute path (a study's data file): SOURCE_DIR, the checkout the
+// studies ran from, is written as "<source>" in references and compared that way, so references
+// made in one checkout hold in any other.
 //
 // Result files are every *.csv and *.json under an output directory except meta.json (timings,
 // host), the resume journal, simulated time series and surface snapshots (megabytes of samples;
@@ -34,6 +37,27 @@ constexpr double relative_tolerance = 1e-12;
 constexpr double scale_tolerance = 1e-15;
 constexpr std::uintmax_t whole_file_limit_bytes = 64 * 1024;  // larger CSV tables: digests
 constexpr const char* digest_file = "digests.json";
+constexpr const char* source_placeholder = "<source>";
+
+// The checkout the studies ran from (set once in main).
+std::string source_dir;
+
+std::string portable(std::string text) {
+  if (source_dir.empty()) return text;
+  for (std::size_t at = 0; (at = text.find(source_dir, at)) != std::string::npos;) {
+    text.replace(at, source_dir.size(), source_placeholder);
+    at += std::string_view(source_placeholder).size();
+  }
+  return text;
+}
+
+void make_portable(Json& value) {
+  if (value.is_string()) {
+    value = portable(value.get<std::string>());
+  } else if (value.is_structured()) {
+    for (auto& item : value) make_portable(item);
+  }
+}
 
 bool is_result_file(const fs::path& relative) {
   const std::string name = relative.filename().string();
@@ -118,7 +142,7 @@ Table read_csv(const fs::path& file) {
       continue;
     }
     cells.resize(table.header.size());
-    for (std::size_t c = 0; c < cells.size(); ++c) table.columns[c].push_back(cells[c]);
+    for (std::size_t c = 0; c < cells.size(); ++c) table.columns[c].push_back(portable(cells[c]));
   }
   return table;
 }
@@ -323,7 +347,7 @@ int snapshot(const fs::path& out_dir, const fs::path& ref_dir) {
       continue;
     }
     fs::create_directories((ref_dir / relative).parent_path());
-    fs::copy_file(source, ref_dir / relative, fs::copy_options::overwrite_existing);
+    std::ofstream(ref_dir / relative, std::ios::binary) << portable(read_text(source));
   }
   std::ofstream(ref_dir / digest_file) << digests.dump(1) << '\n';
   return 0;
@@ -354,8 +378,9 @@ int compare(const fs::path& ref_dir, const fs::path& out_dir) {
     } else if (fs::path(file).extension() == ".csv") {
       compare_tables(read_csv(ref_dir / file), read_csv(out_file), file, report);
     } else {
-      compare_json(Json::parse(read_text(ref_dir / file)), Json::parse(read_text(out_file)), file,
-                   0.0, report);
+      Json written = Json::parse(read_text(out_file));
+      make_portable(written);
+      compare_json(Json::parse(read_text(ref_dir / file)), written, file, 0.0, report);
     }
   }
   if (report.count() > 40) std::cout << "... " << report.count() - 40 << " more differences\n";
@@ -366,13 +391,14 @@ int compare(const fs::path& ref_dir, const fs::path& out_dir) {
 
 int main(int argc, char** argv) {
   const std::string usage =
-      "usage: compare_study_outputs snapshot OUT_DIR REF_DIR | compare REF_DIR OUT_DIR\n";
-  if (argc != 4) {
+      "usage: compare_study_outputs snapshot OUT_DIR REF_DIR SOURCE_DIR | compare REF_DIR OUT_DIR SOURCE_DIR\n";
+  if (argc != 5) {
     std::cerr << usage;
     return 2;
   }
   try {
     const std::string mode = argv[1];
+    source_dir = fs::weakly_canonical(argv[4]).string();
     if (mode == "snapshot") return snapshot(argv[2], argv[3]);
     if (mode == "compare") return compare(argv[2], argv[3]);
     std::cerr << usage;

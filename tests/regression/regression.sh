@@ -17,7 +17,7 @@ for study in "$studies"/*.toml; do
     continue
   fi
   mkdir -p "$work/ref/$name" && tar -xJf "$archive" -C "$work/ref/$name"
-  if ! "$compare" compare "$work/ref/$name" "$work/out/$name" >"$work/$name.diff"; then
+  if ! "$compare" compare "$work/ref/$name" "$work/out/$name" "$(dirname "$studies")" >"$work/$name.diff"; then
     echo "FAIL: $name differs from its reference:" >&2
     sed 's/^/  | /' "$work/$name.diff" >&2
     failed=$((failed + 1))

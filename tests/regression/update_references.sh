@@ -11,7 +11,7 @@ bash "$root/tests/regression/run_studies.sh" "$build/framework/chatterlab" "$roo
 rm -f "$root"/tests/regression/references/*.tar.xz
 for dir in "$work"/out/*/; do
   name=$(basename "$dir")
-  "$build/tests/regression/compare_study_outputs" snapshot "$dir" "$work/ref/$name"
+  "$build/tests/regression/compare_study_outputs" snapshot "$dir" "$work/ref/$name" "$root"
   # Sorted names and fixed metadata: the same results give the same archive bytes.
   tar --sort=name --mtime=@0 --owner=0 --group=0 --numeric-owner -C "$work/ref/$name" -cf - . |
     xz -9e >"$root/tests/regression/references/$name.tar.xz"

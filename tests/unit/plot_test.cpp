@@ -117,9 +117,12 @@ TEST(Plot, HeatmapWritesPngSvgScriptAndData) {
     ++grey_boxes;
   EXPECT_EQ(grey_boxes, 3u);
   std::string gp = read_all(dir / "stability_map.gp");
-  // The contour is drawn at the requested level and the palette is white exactly there.
+  // The contour is drawn at the requested level, and the palette jumps there from a clearly blue
+  // to a clearly red shade (weak chatter never looks like the near-white of "stable").
   EXPECT_NE(gp.find("set cntrparam levels discrete 0\n"), std::string::npos) << gp;
-  EXPECT_NE(gp.find("0 '#f7f7f7'"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("0 '#92c5de', 0 '#f4a582'"), std::string::npos) << gp;
+  EXPECT_EQ(gp.find("#f7f7f7"), std::string::npos) << gp;
+  EXPECT_EQ(gp.find("every point"), std::string::npos) << gp;  // it has a boundary
   // The title goes into a double-quoted gnuplot string; a single quote needs no escaping there.
   EXPECT_NE(gp.find("\"Plunge grinding stability map (operator's test)\""), std::string::npos);
   std::string dat = read_all(dir / "stability_map.dat");
@@ -143,6 +146,32 @@ TEST(Plot, HeatmapOnLogAxisAndWithoutCrossingSkipsContour) {
   expect_png(dir / "all_stable.png", 20000);
   EXPECT_EQ(read_all(dir / "all_stable.gp").find("set contour"), std::string::npos);
   EXPECT_EQ(read_all(dir / "all_stable.svg").find("stability boundary"), std::string::npos);
+  // ... and the picture says that every point is on one side, in blues only: the palette's stops
+  // span just the colour bar's range (gnuplot stretches the stops over it).
+  EXPECT_NE(read_all(dir / "all_stable.svg").find("every point &lt; 0: stable"), std::string::npos);
+  EXPECT_EQ(read_all(dir / "all_stable.gp").find("#f4a582"), std::string::npos);
+  for (double& z : map.z) z = std::abs(z) + 1.0;
+  render(map, dir, "all_chatter");
+  EXPECT_EQ(read_all(dir / "all_chatter.gp").find("#92c5de"), std::string::npos);
+  EXPECT_NE(read_all(dir / "all_chatter.svg").find("every point > 0: chatter"), std::string::npos);
+
+  // A ratio map centred on 1 with a symmetric colour bar: 0.5 and 1.5 are as far from 1.
+  Heatmap ratio;
+  ratio.title = "amplitude ratio";
+  ratio.x = {0.0, 1.0};
+  ratio.y = {1.0, 2.0};
+  ratio.z = {0.5, 1.2, 0.9, 1.1};
+  ratio.contour_level = 1.0;
+  ratio.diverging = true;
+  ratio.symmetric = true;
+  render(ratio, dir, "ratio");
+  EXPECT_NE(read_all(dir / "ratio.gp").find("set cbrange [0.5:1.5]"), std::string::npos)
+      << read_all(dir / "ratio.gp");
+  // A cell exactly at the level (no effect) is neither blue nor red.
+  ratio.z[3] = 1.0;
+  render(ratio, dir, "ratio_exact");
+  EXPECT_NE(read_all(dir / "ratio_exact.svg").find("exactly 1"), std::string::npos);
+  EXPECT_EQ(read_all(dir / "ratio.svg").find("exactly 1"), std::string::npos);
 }
 
 // Runs the contour pass of a written heatmap script on its own and returns the boundary points
@@ -211,8 +240,9 @@ TEST(Plot, HeatmapCellsFollowDescendingAndNonUniformGrids) {
   map.z_label = "z";
   render(map, dir, "order");
   std::string dat = read_all(dir / "order.dat");
-  // Ascending x with its own z; cell edges at the midpoints 1 and 2.5, outer cells mirrored.
-  EXPECT_NE(dat.find("0 1 0 -1 1 0.5 1.5\n2 1 20 1 2.5 0.5 1.5\n3 1 30 2.5 3.5 0.5 1.5\n"),
+  // Ascending x with its own z; cell edges at the midpoints 1 and 2.5, outer cells ending at the
+  // first and last values (never outside the swept range).
+  EXPECT_NE(dat.find("0 1 0 0 1 1 1.5\n2 1 20 1 2.5 1 1.5\n3 1 30 2.5 3 1 1.5\n"),
             std::string::npos)
       << dat;
 }

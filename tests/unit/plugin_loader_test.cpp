@@ -124,14 +124,49 @@ TEST(PluginLoader, LibraryWithoutTheEntrySymbolIsNotAPlugin) {
                 "with CHATTERLAB_PLUGIN_ENTRY from <chatterlab/plugin_api.hpp>)");
 }
 
+// The host as the messages name it: "0.1.0 (plugin API 2)".
+std::string host() {
+  return std::string(CHATTERLAB_VERSION) + " (plugin API " +
+         std::to_string(CHATTERLAB_PLUGIN_API_VERSION) + ")";
+}
+
 TEST(PluginLoader, LibraryForAnotherApiVersionMustBeRebuilt) {
   const std::string path = fs::canonical(CHATTERLAB_WRONG_API_PLUGIN).string();
   EXPECT_EQ(input_error_of([] { load_plugin_library(CHATTERLAB_WRONG_API_PLUGIN); }),
-            "plugin library '" + path + "' was built for plugin API 999, this chatterlab has " +
-                std::to_string(CHATTERLAB_PLUGIN_API_VERSION) +
-                ": rebuild it against this version");
+            "plugin library '" + path + "' was built for chatterlab " + CHATTERLAB_VERSION +
+                " (plugin API 999); this chatterlab is " + host() +
+                ": rebuild the library against this version");
   // Refused, not remembered: asking again gives the same answer.
   EXPECT_NE(input_error_of([] { load_plugin_library(CHATTERLAB_WRONG_API_PLUGIN); }), "");
+}
+
+TEST(PluginLoader, LibraryForAnotherChatterlabVersionMustBeRebuilt) {
+  // Same plugin API, another minor version: refused from the build record, before its entry
+  // (which would throw) is called.
+  const std::string path = fs::canonical(CHATTERLAB_WRONG_VERSION_PLUGIN).string();
+  EXPECT_EQ(input_error_of([] { load_plugin_library(CHATTERLAB_WRONG_VERSION_PLUGIN); }),
+            "plugin library '" + path + "' was built for chatterlab 9.9.0 (plugin API " +
+                std::to_string(CHATTERLAB_PLUGIN_API_VERSION) + "); this chatterlab is " + host() +
+                ": rebuild the library against this version");
+  const PluginLibraryBuild build = plugin_library_build(CHATTERLAB_WRONG_VERSION_PLUGIN);
+  EXPECT_EQ(build.chatterlab_version, "9.9.0");
+  EXPECT_EQ(build.compiler, "GCC 99");
+}
+
+TEST(PluginLoader, LibraryOfPluginApi1MustBeRebuilt) {
+  // API 1 libraries carry no build record; their entry reports the version they were built for.
+  const std::string path = fs::canonical(CHATTERLAB_API1_PLUGIN).string();
+  EXPECT_EQ(input_error_of([] { load_plugin_library(CHATTERLAB_API1_PLUGIN); }),
+            "plugin library '" + path +
+                "' was built for plugin API 1 (a chatterlab that records no version); this "
+                "chatterlab is " + host() + ": rebuild the library against this version");
+}
+
+TEST(PluginLoader, BuildRecordOfTheExampleNamesThisVersion) {
+  const PluginLibraryBuild build = plugin_library_build(CHATTERLAB_EXAMPLE_PLUGIN);
+  EXPECT_EQ(build.plugin_api_version, CHATTERLAB_PLUGIN_API_VERSION);
+  EXPECT_EQ(build.chatterlab_version, CHATTERLAB_VERSION);
+  EXPECT_EQ(build.compiler.rfind("GCC ", 0), 0u) << build.compiler;
 }
 
 TEST(PluginLoader, DuplicatePluginNameNamesBothLibraries) {
@@ -218,7 +253,7 @@ TEST(PluginLoader, BadLibraryInAStudyIsBadInput) {
       dir.write("study.toml", "plugins = [\"" + path + "\"]\n[study]\nkind = \"stability_map\"\n");
   std::string message = input_error_of([&] { load_study(file); });
   EXPECT_NE(message.find("study.toml:1: "), std::string::npos) << message;
-  EXPECT_NE(message.find("was built for plugin API 999, this chatterlab has"), std::string::npos)
+  EXPECT_NE(message.find("(plugin API 999); this chatterlab is " + host()), std::string::npos)
       << message;
 }
 

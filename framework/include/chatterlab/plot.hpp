@@ -46,9 +46,11 @@ struct Heatmap {
   bool log_x = false, log_y = false;
   std::optional<double> contour_level;  // e.g. 0 = stability boundary, drawn as a black line
   bool diverging = false;               // palette centred on contour_level (blue stable, red not)
+  bool symmetric = false;               // diverging colour bar over equal distances either side
   std::string contour_label;  // key entry of the contour line; empty: "<z_label> = <level>"
   // Words at the low and high ends of the colour bar, e.g. "stable" / "chatter", so the meaning
-  // of the colours needs no caption. Empty: none.
+  // of the colours needs no caption; a map entirely on one side of contour_level says so in the
+  // picture with them ("every point > 0: chatter"). Empty: none.
   std::string low_label, high_label;
 };
 

@@ -143,7 +143,8 @@ TEST(KitPlots, AxisLabelsAreWordsWithTheUnitOfTheKeySuffix) {
   EXPECT_EQ(kit::axis_label("model.contact_stiffness_n_per_m"), "contact stiffness [N/m]");
   EXPECT_EQ(kit::axis_label("model.modes.0.damping_ratio"), "mode 1 damping ratio");
   EXPECT_EQ(kit::axis_label("growth_rate_per_s"), "growth rate [1/s]");
-  EXPECT_EQ(kit::axis_label("suppression.amplitude_ratio"), "amplitude ratio");
+  EXPECT_EQ(kit::axis_label("suppression.amplitude_ratio"), "suppression amplitude ratio");
+  EXPECT_EQ(kit::axis_label("suppression.frequency_hz"), "suppression frequency [Hz]");
   EXPECT_EQ(kit::axis_label("penetration_damping_n_s_per_m"), "penetration damping [N s/m]");
   EXPECT_EQ(kit::axis_label("waviness_um"), "waviness [µm]");
   EXPECT_EQ(kit::axis_label("seed"), "seed");

@@ -70,8 +70,9 @@ std::string words(std::string_view snake) {
 }  // namespace
 
 std::string axis_label(std::string_view key) {
-  // Dotted paths: the leading table (model, simulation, ...) is implied by the study; an index
-  // follows a plural ("modes.0" -> "mode 1").
+  // Dotted paths: the model's keys are the study's parameters and need no prefix; another table
+  // names what the key belongs to ("suppression.amplitude_ratio" -> "suppression amplitude
+  // ratio"); an index follows a plural ("modes.0" -> "mode 1").
   std::vector<std::string_view> parts;
   for (std::size_t start = 0;;) {
     const std::size_t dot = key.find('.', start);
@@ -79,7 +80,7 @@ std::string axis_label(std::string_view key) {
     if (dot == std::string_view::npos) break;
     start = dot + 1;
   }
-  if (parts.size() > 1) parts.erase(parts.begin());
+  if (parts.size() > 1 && parts.front() == "model") parts.erase(parts.begin());
   std::string prefix;
   for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
     if (all_digits(parts[i])) continue;

@@ -1,5 +1,8 @@
 #include "runner/build_info.hpp"
 
+#include "build_revision.hpp"  // generated: CHATTERLAB_GIT_REVISION
+#include "chatterlab/version.hpp"
+
 #include <fftw3.h>
 #include <fmt/format.h>
 #include <mpi.h>
@@ -7,57 +10,10 @@
 #include <toml++/impl/version.h>
 
 #include <Eigen/Core>
-#include <algorithm>
-#include <cctype>
-#include <fstream>
-#include <sstream>
 
 namespace chatterlab::runner {
 
 namespace {
-
-namespace fs = std::filesystem;
-
-std::string first_line(const fs::path& file) {
-  std::ifstream in(file);
-  std::string line;
-  std::getline(in, line);
-  while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
-  return line;
-}
-
-bool is_commit_id(const std::string& text) {
-  return text.size() == 40 && std::all_of(text.begin(), text.end(), [](char c) {
-           return std::isxdigit(static_cast<unsigned char>(c)) != 0;
-         });
-}
-
-// A branch ref: loose file first (newest), then packed-refs.
-std::string resolve_ref(const fs::path& git_dir, const fs::path& common_dir,
-                        const std::string& ref) {
-  for (const fs::path& dir : {git_dir, common_dir}) {
-    std::string id = first_line(dir / ref);
-    if (is_commit_id(id)) return id;
-  }
-  std::ifstream packed(common_dir / "packed-refs");
-  std::string line;
-  while (std::getline(packed, line)) {
-    std::istringstream fields(line);
-    std::string id, name;
-    if (fields >> id >> name && name == ref && is_commit_id(id)) return id;
-  }
-  return "unknown";
-}
-
-std::string compiler() {
-#if defined(__clang__)
-  return fmt::format("clang {}", __clang_version__);
-#elif defined(__GNUC__)
-  return fmt::format("GCC {}", __VERSION__);
-#else
-  return "unknown";
-#endif
-}
 
 std::string mpi_library() {
 #if defined(OMPI_MAJOR_VERSION)
@@ -69,25 +25,6 @@ std::string mpi_library() {
 }
 
 }  // namespace
-
-std::string git_revision(const fs::path& source_dir) {
-  fs::path git_dir = source_dir / ".git";
-  std::error_code ec;
-  if (fs::is_regular_file(git_dir, ec)) {  // worktree or submodule: "gitdir: <path>"
-    std::string line = first_line(git_dir);
-    if (line.rfind("gitdir: ", 0) != 0) return "unknown";
-    fs::path target = line.substr(8);
-    git_dir = target.is_absolute() ? target : source_dir / target;
-  }
-  if (!fs::is_directory(git_dir, ec)) return "unknown";
-  fs::path common_dir = git_dir;
-  if (std::string common = first_line(git_dir / "commondir"); !common.empty())
-    common_dir = fs::path(common).is_absolute() ? fs::path(common) : git_dir / common;
-  std::string head = first_line(git_dir / "HEAD");
-  if (is_commit_id(head)) return head;  // detached HEAD
-  if (head.rfind("ref: ", 0) == 0) return resolve_ref(git_dir, common_dir, head.substr(5));
-  return "unknown";
-}
 
 Json build_info() {
   Json deps = Json::object();
@@ -104,15 +41,16 @@ Json build_info() {
   deps["openmp"] = fmt::format("{} (_OPENMP)", _OPENMP);
   Json info = Json::object();
   info["chatterlab"] = CHATTERLAB_VERSION;
-  info["compiler"] = compiler();
+  info["compiler"] = CHATTERLAB_COMPILER;
 #if defined(NDEBUG)
   info["assertions"] = false;
 #else
   info["assertions"] = true;
 #endif
   info["dependencies"] = std::move(deps);
-  info["source_dir"] = CHATTERLAB_SOURCE_DIR;
-  info["git_revision"] = git_revision(CHATTERLAB_SOURCE_DIR);
+  // Recorded at build time (cmake/build_revision.cmake): an installed chatterlab has no source
+  // tree to look at, and reading one at run time would name a commit the binary may not be.
+  info["git_revision"] = CHATTERLAB_GIT_REVISION;
   return info;
 }
 

@@ -212,6 +212,9 @@ Json vector_json(const std::vector<double>& v) { return Json(v); }
 
 EmbeddingParameters resolve_embedding(const ParamValues& params, const SampledSeries& series,
                                       const Json& context) {
+  // The automatic choices histogram the samples before any other check: a NaN would index
+  // outside the bins (found by the conformance suite's NaN check).
+  nonlinear::check_finite(series.values, series.name);
   EmbeddingParameters out;
   const Json& p = params.json();
   auto given = [&](const char* key) { return p.contains(key) && p[key].is_number_integer(); };

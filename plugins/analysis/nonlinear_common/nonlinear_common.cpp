@@ -45,11 +45,15 @@ std::size_t minimum_samples(int dimension, int delay) {
          minimum_vectors;
 }
 
-void check_series(const std::vector<double>& x, int dimension, int delay, const std::string& what) {
+void check_finite(const std::vector<double>& x, const std::string& what) {
   for (std::size_t i = 0; i < x.size(); ++i)
     if (!std::isfinite(x[i]))
       throw InputError(fmt::format("{}: sample {} is {}: every sample must be a finite number",
                                    what, i + 1, x[i]));
+}
+
+void check_series(const std::vector<double>& x, int dimension, int delay, const std::string& what) {
+  check_finite(x, what);
   const std::size_t needed = minimum_samples(dimension, delay);
   if (x.size() < needed)
     throw InputError(fmt::format(

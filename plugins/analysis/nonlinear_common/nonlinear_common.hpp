@@ -43,6 +43,8 @@ std::optional<double> context_value(const Json& context, const std::string& meth
 inline constexpr std::size_t minimum_vectors = 100;
 // Samples needed to embed in `dimension` with `delay` and still have minimum_vectors vectors.
 std::size_t minimum_samples(int dimension, int delay);
+// Throws InputError when a sample is not finite, naming its index.
+void check_finite(const std::vector<double>& x, const std::string& what);
 // Throws InputError when a sample is not finite (naming its index), the series is constant, or
 // it is shorter than minimum_samples(dimension, delay) (naming the minimum). `what` names the
 // series in the message (e.g. the input column).

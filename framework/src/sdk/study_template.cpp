@@ -1,0 +1,249 @@
+// `chatterlab init KIND` (chatterlab/study_template.hpp). The kind's own validate() decides what is
+// complete: the template is the document it accepted, so every default it fills in is written
+// down, and `chatterlab validate` accepts the file by construction.
+#include "chatterlab/study_template.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/kinematics.hpp"
+#include "chatterlab/model.hpp"
+#include "chatterlab/study_kind.hpp"
+#include "chatterlab/suppression.hpp"
+#include "chatterlab/version.hpp"
+#include "study/source_map.hpp"
+#include "toml_text.hpp"
+
+namespace chatterlab {
+namespace {
+
+// A component table of a study ([model] type = ...) and the plugins that can fill it.
+struct Component {
+  std::string table;
+  std::string registry_kind;
+  std::vector<const PluginInfo*> plugins;  // in preference order
+  std::vector<std::string> origins;
+};
+
+// The component tables of docs/studies.md: [model], [machine] (kinematics), [suppression].
+template <class Product>
+Component component(const std::string& table, const Registry<Product>& registry,
+                    const std::string& preferred_origin) {
+  Component c{table, registry.kind(), {}, {}};
+  for (int pass = 0; pass < 2; ++pass)  // the kind's own library first, then the rest by name
+    for (const auto* entry : registry.sorted())
+      if ((entry->origin == preferred_origin) == (pass == 0)) {
+        c.plugins.push_back(&entry->info);
+        c.origins.push_back(entry->origin);
+      }
+  return c;
+}
+
+std::optional<Component> component_of(const std::string& table, const std::string& origin) {
+  if (table == "model") return component(table, model_registry(), origin);
+  if (table == "machine" || table == "kinematics") return component(table, kinematics_registry(), origin);
+  if (table == "suppression") return component(table, suppression_registry(), origin);
+  return std::nullopt;
+}
+
+Json component_table(const PluginInfo& plugin) {
+  Json table = Json::object();
+  table["type"] = plugin.name;
+  for (const auto& [key, value] : plugin.example_params.items()) table[key] = value;
+  return table;
+}
+
+// How much of a model's interface a plugin implements: the example of a kind shows the most
+// capable model it accepts (its outputs then include closed forms, wheel revolutions, ...).
+int capability_score(const std::string& registry_kind, const PluginInfo& plugin) {
+  if (registry_kind != model_registry().kind()) return 0;
+  try {
+    LineSourceMap sources("example of " + plugin.name);
+    const auto model = model_registry().at(plugin.name).create(
+        ParamValues(validate_params(plugin.example_params, plugin.params, "model", sources)));
+    return (model->characteristic() ? 1 : 0) + (model->time_domain() ? 1 : 0) +
+           (model->wheel_period_s() ? 1 : 0) + (model->closed_forms() ? 1 : 0) +
+           (model->process_conditions() ? 1 : 0) + (model->stiffness_chain() ? 1 : 0);
+  } catch (const std::exception&) {
+    return -1;
+  }
+}
+
+// The kind's validate() on a copy; "" when it accepts the document.
+std::string refusal(const StudyKind& kind, const Json& document, const std::string& kind_name) {
+  Json copy = document;
+  LineSourceMap sources("`chatterlab init " + kind_name + "`");
+  try {
+    kind.validate(copy, sources);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
+}
+
+const PluginInfo* find_plugin(const Component& c, const std::string& name) {
+  for (const PluginInfo* p : c.plugins)
+    if (p->name == name) return p;
+  return nullptr;
+}
+
+// A commented-out [grid] over the first real parameter of the model's example: +/- 20 %.
+std::string grid_suggestion(const Json& document) {
+  std::string text =
+      "\n# [grid] varies parameters over a grid of points (a bare key is a [model] parameter;\n"
+      "# dotted paths reach any table, e.g. \"model.modes.0.damping_ratio\"). For example:\n";
+  if (document.contains("model"))
+    for (const auto& [key, value] : document["model"].items())
+      if (value.is_number_float() && value.get<double>() > 0.0) {
+        const double v = value.get<double>();
+        return text + fmt::format("# [grid]\n# {} = {{ from = {}, to = {}, steps = 11 }}\n", key,
+                                  toml_value(0.8 * v, true), toml_value(1.2 * v, true));
+      }
+  return text + "# [grid]\n# \"<table>.<key>\" = [value1, value2, value3]\n";
+}
+
+}  // namespace
+
+StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOptions& options) {
+  const auto& entry = study_kind_registry().at(kind_name);
+  const auto kind = entry.create(ParamValues{});
+  const PluginInfo& info = entry.info;
+
+  // The kind's own settings table: the one table it reads that is not a component.
+  std::vector<Component> components;
+  std::vector<std::string> settings_tables;
+  for (const std::string& table : kind->tables()) {
+    if (auto c = component_of(table, entry.origin)) components.push_back(std::move(*c));
+    else settings_tables.push_back(table);
+  }
+  for (const auto& [table, plugin] : options.components) {
+    auto it = std::find_if(components.begin(), components.end(), [&](const Component& c) { return c.table == table; });
+    if (it == components.end())
+      throw InputError(fmt::format("study kind '{}' has no component table [{}]", kind_name, table));
+    if (!find_plugin(*it, plugin))
+      throw InputError(fmt::format("unknown {} '{}' for [{}]", it->registry_kind, plugin, table));
+  }
+
+  Json document = Json::object();
+  document["study"] = {{"kind", kind_name}, {"name", options.name.empty() ? kind_name + " study" : options.name},
+                       {"description", ""}};
+  for (const std::string& table : kind->tables()) document[table] = Json::object();  // the kind's order
+  // The kind's example_params belong to one of its settings tables: the only one, or the one
+  // where the kind accepts them (placed in another table they are unknown keys).
+  std::string example_table = settings_tables.size() == 1 ? settings_tables.front() : std::string();
+  if (example_table.empty() && !info.example_params.empty()) {
+    for (const Component& c : components)
+      if (!c.plugins.empty()) document[c.table] = component_table(*c.plugins.front());
+    for (const std::string& table : settings_tables) {
+      Json trial = document;
+      trial[table] = info.example_params;
+      const std::string why = refusal(*kind, trial, kind_name);
+      if (why.find("unknown key") == std::string::npos) {
+        example_table = table;
+        break;
+      }
+    }
+  }
+  if (!example_table.empty()) document[example_table] = info.example_params;
+  // Each component: the chosen plugin, or the first whose example the kind accepts.
+  std::vector<std::vector<std::string>> accepted(components.size());
+  for (const Component& c : components)
+    if (!c.plugins.empty()) document[c.table] = component_table(*c.plugins.front());
+  for (std::size_t i = 0; i < components.size(); ++i) {
+    const Component& c = components[i];
+    if (auto chosen = options.components.find(c.table); chosen != options.components.end()) {
+      document[c.table] = component_table(*find_plugin(c, chosen->second));
+      continue;
+    }
+    // The kind's own library first (c.plugins is in that order), then the most capable.
+    const PluginInfo* best = nullptr;
+    int best_score = -2;
+    bool best_own = false;
+    for (std::size_t p = 0; p < c.plugins.size(); ++p) {
+      const PluginInfo* plugin = c.plugins[p];
+      Json trial = document;
+      trial[c.table] = component_table(*plugin);
+      if (!refusal(*kind, trial, kind_name).empty()) continue;
+      accepted[i].push_back(plugin->name);
+      const bool own = c.origins[p] == entry.origin && entry.origin != "built-in";
+      const int score = capability_score(c.registry_kind, *plugin);
+      if (best == nullptr || (own && !best_own) || (own == best_own && score > best_score)) {
+        best = plugin;
+        best_score = score;
+        best_own = own;
+      }
+    }
+    if (best) document[c.table] = component_table(*best);
+  }
+
+  StudyTemplate out;
+  Json validated = document;
+  LineSourceMap sources("`chatterlab init " + kind_name + "`");
+  try {
+    kind->validate(validated, sources);
+    out.validated = true;
+  } catch (const std::exception& e) {
+    out.error = e.what();
+    validated = document;
+  }
+
+  // ---- the text
+  std::string& t = out.toml;
+  t += fmt::format("# A {} study: {}\n", kind_name, info.description);
+  t += fmt::format("# Written by `chatterlab init {}` (chatterlab {}). Every key the kind reads is set to its\n"
+                   "# default or an example value; the comment above a key gives its meaning, unit, limits\n"
+                   "# and default. `chatterlab describe <name>` documents any kind or plugin.\n",
+                   kind_name, CHATTERLAB_VERSION);
+  t += "#   chatterlab validate <this file>\n#   chatterlab run <this file> --out out/<name>\n";
+  if (!out.validated)
+    t += "#\n# NOT YET VALID: " + out.error + "\n# Fill in what it names, then validate.\n";
+  std::vector<std::string> libraries;
+  if (entry.origin != "built-in") libraries.push_back(entry.origin);
+  for (std::size_t i = 0; i < components.size(); ++i) {
+    const Component& c = components[i];
+    const std::string type = validated.contains(c.table) ? validated[c.table].value("type", "") : "";
+    for (std::size_t p = 0; p < c.plugins.size(); ++p)
+      if (c.plugins[p]->name == type && c.origins[p] != "built-in" &&
+          std::find(libraries.begin(), libraries.end(), c.origins[p]) == libraries.end())
+        libraries.push_back(c.origins[p]);
+  }
+  if (!libraries.empty()) {
+    std::vector<std::string> quoted;
+    for (const auto& l : libraries) quoted.push_back(Json(l).dump());
+    t += fmt::format("\n# Out-of-tree plugin libraries, loaded before any table is read.\nplugins = [{}]\n",
+                     fmt::join(quoted, ", "));
+  }
+  t += "\n[study]\n";
+  append_toml_table(t, validated["study"], "study", {}, false);
+  for (const auto& [table, value] : validated.items()) {
+    if (table == "study" || table == "plugins" || !value.is_object()) continue;
+    t += fmt::format("\n[{}]\n", toml_key(table));
+    std::vector<ParamSpec> specs;
+    auto c = std::find_if(components.begin(), components.end(), [&](const Component& x) { return x.table == table; });
+    if (c != components.end()) {
+      const PluginInfo* plugin = find_plugin(*c, value.value("type", ""));
+      if (plugin) {
+        t += fmt::format("# {} ({}): `chatterlab describe {}`\n", plugin->name, plugin->description, plugin->name);
+        specs = plugin->params;
+      }
+      const auto& others = accepted[static_cast<std::size_t>(c - components.begin())];
+      if (others.size() > 1)
+        t += fmt::format("# {} plugins this kind accepts: {}\n", c->registry_kind, fmt::join(others, ", "));
+    } else if (table == example_table) {
+      specs = info.params;  // the kind's own settings
+    }
+    append_toml_table(t, value, toml_key(table), specs, true);
+  }
+  t += grid_suggestion(validated);
+  return out;
+}
+
+}  // namespace chatterlab
