@@ -90,7 +90,10 @@ class RootSearch {
   std::optional<Complex> rightmost_in_band() const;
   int known_in(const Box& box) const;
   Complex known_sum(const Box& box) const;
+  Complex known_square_sum(const Box& box) const;
   bool is_neutral(Complex s) const;
+  // Distance from the rightmost root s* to the certificate's left edge (see (b) above).
+  double certificate_gap(Complex rightmost) const;
   bool locate(const Box& box, const BoxCount& count, int depth);
   bool locate_real(const Box& box);
   RightmostRoot finish(Complex rightmost, bool certified, double sigma_c, int unknown,
@@ -110,6 +113,13 @@ class RootSearch {
   int repaired_ = 0;
   bool repairing_ = false;
 };
+
+double RootSearch::certificate_gap(Complex rightmost) const {
+  const double sigma = rightmost.real();
+  const double floor = kGapFloor * std::max(std::abs(rightmost), length_scale_);
+  const double gap = std::max(kRelativeGap * std::abs(sigma), floor);
+  return sigma < 0.0 ? std::max(std::min(gap, 0.5 * std::abs(sigma)), floor) : gap;
+}
 
 bool RootSearch::is_neutral(Complex s) const {
   for (Complex n : neutral_)
@@ -221,6 +231,20 @@ Complex RootSearch::known_sum(const Box& box) const {
   return sum;
 }
 
+Complex RootSearch::known_square_sum(const Box& box) const {
+  Complex sum = 0.0;
+  auto add = [&](Complex r) {
+    int m = box.multiplicity(r);
+    if (m == 0) return;
+    const Complex square = r * r;
+    // In a mirrored box a complex root brings its conjugate: r^2 + conj(r)^2 = 2 Re r^2.
+    sum += box.symmetric() ? Complex(m == 2 ? 2.0 * square.real() : square.real(), 0.0) : square;
+  };
+  for (Complex r : roots_.roots()) add(r);
+  for (Complex r : neutral_) add(r);
+  return sum;
+}
+
 // A mirrored box holding exactly one zero, and it is unknown: E is real on the real axis and
 // changes sign across that zero, so bisection brackets it before Newton polishes it.
 bool RootSearch::locate_real(const Box& box) {
@@ -260,6 +284,19 @@ bool RootSearch::locate(const Box& box, const BoxCount& count, int depth) {
     }
     for (Complex guess : {estimate, centre}) {
       if (!box.symmetric() && !box.contains(guess)) continue;
+      try_newton(guess);
+      if (count.zeros - known_in(box) == 0) return true;
+    }
+  }
+
+  if (unknown == 2) {
+    // Two unknown zeros (in a mirrored box typically a conjugate pair): their sum p and the sum of
+    // their squares q make them the roots of z^2 - p z + (p^2 - q) / 2. Newton from both; only
+    // if that fails is the box subdivided.
+    const Complex p = count.root_sum - known_sum(box), q = count.root_square_sum - known_square_sum(box);
+    const Complex disc = roots_detail::square_root(2.0 * q - p * p);
+    for (Complex guess : {0.5 * (p + disc), 0.5 * (p - disc)}) {
+      if (!roots_detail::is_finite(guess)) continue;
       try_newton(guess);
       if (count.zeros - known_in(box) == 0) return true;
     }
@@ -339,9 +376,7 @@ RightmostRoot RootSearch::run() {
             "root search: no characteristic root found with |Im s| <= {:.6g} rad/s "
             "({} evaluations)", band_, evaluate_.count()));
       const double sigma = rightmost->real();
-      const double floor = kGapFloor * std::max(std::abs(*rightmost), length_scale_);
-      double gap = std::max(kRelativeGap * std::abs(sigma), floor);
-      if (sigma < 0.0) gap = std::max(std::min(gap, 0.5 * std::abs(sigma)), floor);
+      double gap = certificate_gap(*rightmost);
       double top = band_;
 
       BoxCount count;
@@ -387,6 +422,19 @@ RightmostRoot RootSearch::run() {
       int before = repaired_;
       locate(box, count, 0);
       repairing_ = false;
+      if (repaired_ > before && count.zeros - known_in(box) == 0) {
+        // Every zero this count saw right of sigma_c is now known, so the new rightmost root is
+        // among them and nothing unknown lies right of sigma_c: the same contour certifies it (a
+        // second contour round the new root would only recount what is known).
+        const Complex located = *rightmost_in_band();
+        const double certified = located.real() + certificate_gap(located);
+        return finish(located, true, certified, 0,
+                      fmt::format("ok: argument principle on Re s in [{:.6g}, {:.6g}], |Im s| <= "
+                                  "{:.6g}: {} zeros, all known ({} located by the repair, {} neutral or "
+                                  "beyond the band); no root right of Re s = {:.6g}",
+                                  box.re_min, box.re_max, box.im_max, count.zeros, repaired_ - before, known,
+                                  certified));
+      }
       if (repaired_ == before)
         return finish(*rightmost, false, sigma_c, unknown,
                       fmt::format("uncertified: {} zero(s) right of Re s = {:.6g} could not be "

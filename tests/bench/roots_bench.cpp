@@ -72,6 +72,28 @@ void BM_LinearDdeTwoDelays(benchmark::State& state) {
 }
 BENCHMARK(BM_LinearDdeTwoDelays)->Arg(10)->Arg(30)->Arg(60)->ArgName("tau_max");
 
+// The neuron system of DDE-BIFTOOL's tutorial (demo1, Shayer and Campbell 2000) linearised at its
+// trivial equilibrium (tanh' = 1): x1' = -kappa x1 + beta x1(t - tau_s) + a12 x2(t - tau2),
+// x2' = -kappa x2 + beta x2(t - tau_s) + a21 x1(t - tau1), kappa 0.5, beta -1, a12 1,
+// tau1 = tau2 = 0.2: two states, three delays. The tutorial's Hopf plane a21 in [0, 4] x tau_s in
+// [0, 10] as a 100 x 100 grid (a21 the fast axis, as a stability_map [grid] runs it), default
+// band (4 x the natural frequency scale).
+std::vector<Json> neuron_grid() {
+  std::vector<Json> tables;
+  for (int j = 0; j < 100; ++j)
+    for (int i = 0; i < 100; ++i) {
+      const double a21 = 0.04 * (i + 1), tau_s = 0.1 * (j + 1);
+      tables.push_back({{"a0", {{-0.5, 0.0}, {0.0, -0.5}}},
+                        {"delayed", {{{"delay_s", 0.2}, {"matrix", {{0.0, 0.0}, {a21, 0.0}}}},
+                                     {{"delay_s", 0.2}, {"matrix", {{0.0, 1.0}, {0.0, 0.0}}}},
+                                     {{"delay_s", tau_s}, {"matrix", {{-1.0, 0.0}, {0.0, -1.0}}}}}}});
+    }
+  return tables;
+}
+
+void BM_LinearDdeNeuronGrid(benchmark::State& state) { run_points<LinearDde>(state, neuron_grid(), 0.0); }
+BENCHMARK(BM_LinearDdeNeuronGrid);
+
 // MODELS.md G8: wheel 1450 rpm, work 55 rpm (Tw = 1.09 s; Tw / structural period = 74..333), the
 // seven measured modes; a grid of wheel speed 1350..1550 rpm x contact stiffness 1e6..1e8 N/m
 // (stable and chattering points). Band in Hz from the benchmark argument; 0 = the default band,

@@ -6,7 +6,11 @@
 #   rotation frequency 1450/60 = 24.17 Hz within 0.1 Hz;
 # - studies/simulate_regeneration_dominance.toml: growth and frequency with both chains and with
 #   the wheel chain alone equal the rightmost roots of eq 2-16 (1 % / 0.5 %);
-# - the same with integrator = "adams" (CVODE instead of the default ARKODE ERK): the same roots;
+# - the same with integrator = "adams" (CVODE instead of the default fixed-step engine): the same
+#   roots;
+# - the G7 study with timeseries_format = "npy" and timeseries_decimation = 7: timeseries.npy is a
+#   NumPy 1.0 structured array (magic, header naming every column and the row count, float64
+#   records) holding every 7th row of the CSV the same run writes without the keys;
 # - bad input exits 2 with the limit named and nothing written: an unknown integrator, a run too
 #   long for its output rate, a model without a time-domain form.
 # Usage: simulate.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
@@ -62,6 +66,35 @@ growth=($(csv_column "$out/results.csv" fitted_growth_rate_per_s))
 freq=($(csv_column "$out/results.csv" dominant_frequency_hz))
 close_to "${growth[0]:-x}" 4.790137 0.048 || fail "adams: both chains growth ${growth[0]:-none}"
 close_to "${freq[0]:-x}" 361.7148 1.8 || fail "adams: both chains frequency ${freq[0]:-none}"
+
+# ---- binary, decimated time series (read with od: no NumPy needed)
+out=$work/g7_csv
+expect_exit 0 "$work/g7_csv" "$bin" run "$src/studies/simulate_g7_sidebands.toml" --out "$out"
+sed 's/^min_frequency_hz = 100/min_frequency_hz = 100\ntimeseries_format = "npy"\ntimeseries_decimation = 7/' \
+  "$src/studies/simulate_g7_sidebands.toml" > "$work/g7_npy.toml"
+npy=$work/g7_npy
+expect_exit 0 "$work/g7_npy" "$bin" run "$work/g7_npy.toml" --out "$npy"
+[ -s "$npy/timeseries.npy" ] && [ ! -e "$npy/timeseries.csv" ] || fail "npy: timeseries.npy missing or a CSV written too"
+[ "$(head -c 6 "$npy/timeseries.npy" | tail -c 5)" = "NUMPY" ] || fail "npy: no NUMPY magic"
+header_length=$(od -A n -t u2 -j 8 -N 2 "$npy/timeseries.npy" | tr -d ' ')
+[ $(((10 + header_length) % 64)) -eq 0 ] || fail "npy: header not padded to 64 bytes ($header_length)"
+rows=$(($(wc -l < "$out/timeseries.csv") - 1))
+kept=$(((rows + 6) / 7))
+columns=$(head -n 1 "$out/timeseries.csv" | tr ',' '\n' | wc -l)
+header=$(dd if="$npy/timeseries.npy" bs=1 skip=10 count="$header_length" 2>/dev/null)
+for c in $(head -n 1 "$out/timeseries.csv" | tr ',' ' '); do
+  echo "$header" | grep -q "('$c', '<f8')" || fail "npy: column $c missing from the header"
+done
+echo "$header" | grep -q "'shape': ($kept,)" || fail "npy: shape is not ($kept,): $header"
+[ $(stat -c %s "$npy/timeseries.npy") -eq $((10 + header_length + kept * columns * 8)) ] || fail "npy: file size"
+# Every value equals the CSV's row 7 i (to the 17 digits od prints).
+od -A n -v -t f8 -w$((columns * 8)) -j $((10 + header_length)) "$npy/timeseries.npy" |
+  awk 'NR == FNR { for (c = 1; c <= NF; c++) v[NR, c] = $c; n = NR; next }
+       FNR > 1 && (FNR - 2) % 7 == 0 { r = (FNR - 2) / 7 + 1; split($0, f, ",")
+         for (c = 1; c <= length(f); c++) { d = v[r, c] - f[c]; if (d < 0) d = -d; a = f[c] < 0 ? -f[c] : f[c]
+           if (d > 1e-15 * a + 1e-300) bad++ }; m++ }
+       END { exit bad > 0 || m != n }' - FS=, "$out/timeseries.csv" || fail "npy: values differ from the CSV's every 7th row"
+grep -q '"file": "timeseries.npy"' "$npy/summary.json" || fail "npy: summary.json does not name the file"
 
 # ---- bad input
 bad=$work/bad_integrator.toml

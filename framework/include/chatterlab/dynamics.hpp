@@ -1,14 +1,17 @@
 #pragma once
 // The grinding dynamics engine (MODELS.md G1, G5..G7 in the time domain): a model's structural
-// dynamics integrated by SUNDIALS (ARKODE ERKStep, or CVODE Adams), with the wheel and work
-// surfaces stored by rotation angle. The regenerative term reads a surface "one revolution ago"
-// by angle, so any speed law n(t) is exact (constant, modulated, scheduled, or a state of the
-// model as in G5), not a constant-delay approximation. docs/dynamics.md describes the method and its settings.
+// dynamics integrated with the wheel and work surfaces stored by rotation angle. The regenerative
+// term reads a surface "one revolution ago" by angle, so any speed law n(t) is exact (constant,
+// modulated, scheduled, or a state of the model as in G5), not a constant-delay approximation.
+// Two routes (docs/dynamics.md): the fixed-step engine (default; exact exponential propagation
+// for models that declare a LinearForm, classical Runge-Kutta otherwise) and the adaptive
+// SUNDIALS reference (ARKODE ERKStep or CVODE Adams) that its equivalence tests compare against.
 //
 // A model supplies physics only (TimeDomainModel): its state size, the contact law (penetration,
 // force and removal per surface from the state and the surfaces one revolution ago) and the
 // state derivatives given the contact force. The engine owns integration, surface memory,
 // one-sided contact (events), output sampling, divergence and step-size checks.
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -95,6 +98,25 @@ struct Disturbance {
   double velocity_m_per_s = 0.0;
 };
 
+// Optional structure of a model, used by the fixed-step engine (docs/dynamics.md): between
+// contact events its state equation is linear with constant coefficients and driven by one scalar
+// forcing f that never depends on the state:
+//
+//   in contact:      dx/dt = contact_matrix x + contact_input f(t)
+//   out of contact:  dx/dt = free_matrix x + free_input f(t)        (one-sided contact only)
+//
+// f = TimeDomainModel::linear_forcing(in) may depend on t, the infeed, the speeds and angles and
+// the surfaces one revolution ago (the engine evaluates it ahead of the state, at times whose
+// surfaces are already written). G1: contact_matrix = A - k b c^T (the contact spring k =
+// 1/(1/kc + 1/kg + 1/kw) folded into the modal matrix A), contact_input = k b, f = U0 - Wg(t - Tg)
+// - Ww(t - Tw); free_matrix = A, free_input = 0. The engine then propagates the state exactly (a
+// matrix exponential per step) and evaluates the model only where it needs the contact output;
+// derivatives() must agree with the form (checked at the start of every run).
+struct LinearForm {
+  std::vector<double> contact_matrix, free_matrix;  // state_size x state_size, row-major
+  std::vector<double> contact_input, free_input;    // state_size
+};
+
 class TimeDomainModel {
  public:
   virtual ~TimeDomainModel() = default;
@@ -127,6 +149,19 @@ class TimeDomainModel {
   virtual double displacement_m(std::span<const double> state) const = 0;
   // Model-specific diagnostics gathered during a run (e.g. G5: wheel speed near zero).
   virtual std::vector<std::string> diagnostics() const { return {}; }
+
+  // The linear form (above) in force at t_s, if the model has one; models whose parameters
+  // change at known times (a feed plan's segments) return the form of the segment holding t_s and
+  // announce the changes through next_linear_form_change_s. Default: none (the fixed-step engine
+  // then integrates derivatives() by classical Runge-Kutta).
+  virtual std::optional<LinearForm> linear_form(double /*t_s*/) const { return std::nullopt; }
+  // Identifies equal forms (the engine keeps the propagators of each id it met); a model with one
+  // form returns 0.
+  virtual std::size_t linear_form_id(double /*t_s*/) const { return 0; }
+  // First time > t_s at which the linear form changes (infinity: never).
+  virtual double next_linear_form_change_s(double /*t_s*/) const;
+  // The scalar forcing f of the linear form. `in.state` is empty: f must not depend on the state.
+  virtual double linear_forcing(const ContactInput& /*in*/) const { return 0.0; }
 };
 
 // ------------------------------------------------------------------ simulation
@@ -139,9 +174,14 @@ struct OutputSample {
   bool in_contact = true;
 };
 
-// Time integrator of the dynamics engine (docs/dynamics.md, settings): SUNDIALS CVODE Adams
-// (fixed-point iteration) or ARKODE ERKStep, an explicit Runge-Kutta pair with dense output.
-enum class TimeIntegrator { adams, explicit_runge_kutta };
+// Time integrator of the dynamics engine (docs/dynamics.md, settings). fixed_step: the fast
+// engine (fixed steps tuned to the model's highest frequency; exact exponential propagation of a
+// LinearForm, classical fourth-order Runge-Kutta otherwise). The adaptive SUNDIALS reference route:
+// ARKODE ERKStep (explicit_runge_kutta, Dormand-Prince 5(4) with error control) or CVODE Adams
+// (fixed-point iteration).
+enum class TimeIntegrator { fixed_step, adams, explicit_runge_kutta };
+const char* to_string(TimeIntegrator integrator);
+TimeIntegrator parse_time_integrator(const std::string& name);  // std::invalid_argument
 
 struct SimulationSettings {
   double duration_s = 1.0;
@@ -158,10 +198,15 @@ struct SimulationSettings {
   // Speed laws per rotor; null: constant at the model's nominal speed.
   std::shared_ptr<const SpeedLaw> speed[rotor_count];
   std::vector<double> snapshot_times_s;  // surfaces recorded at these times (<= duration)
-  double relative_tolerance = 1e-6;  // growth rate to ~1e-5 relative (docs/dynamics.md)
-  TimeIntegrator integrator = TimeIntegrator::explicit_runge_kutta;
+  TimeIntegrator integrator = TimeIntegrator::fixed_step;
+  // Fixed-step engine: steps per wave at highest_frequency_hz (h <= 1/(this f_max); 0 = the
+  // documented default: 10 exponential, 40 exponential with one-sided contact, 60 Runge-Kutta).
+  // With random initial waviness the step is also at most 3/4 of the time between two surface
+  // samples; it is shortened so that output samples fall on step ends where the interval allows.
+  double fixed_steps_per_wave = 0.0;
+  double relative_tolerance = 1e-6;  // SUNDIALS routes: growth rate to ~1e-5 relative (docs/dynamics.md)
   double samples_per_wave = 16.0;   // surface samples per wave at highest_frequency_hz
-  double max_steps_per_wave = 4.0;  // largest step <= 1/(this * highest_frequency_hz)
+  double max_steps_per_wave = 4.0;  // SUNDIALS routes: largest step <= 1/(this * highest_frequency_hz)
   double divergence_limit_m = 1.0;  // |displacement| beyond this ends the run as "diverged"
   // Streaming (long runs, e.g. a 3000 s feed plan): on_sample, when set, is called with every
   // output sample in time order; with store_samples = false the series of SimulationResult stay
@@ -192,6 +237,10 @@ struct SimulationResult {
   std::vector<std::string> diagnostics;
   long steps = 0, rhs_evaluations = 0, contact_events = 0;
   std::size_t surface_samples_per_rev[rotor_count] = {0, 0};
+  // How the run was integrated, e.g. "fixed step 1.6667e-04 s, exact exponential (linear form)"
+  // or "ARKODE ERKStep (Dormand-Prince 5(4)), rtol 1e-06".
+  std::string method;
+  double fixed_step_s = 0.0;  // the fixed-step engine's step (0 for the SUNDIALS routes)
 };
 
 // Output samples of a run beyond which it is refused before it starts (memory of the series).
@@ -199,8 +248,10 @@ inline constexpr double max_output_samples = 5e7;
 
 // Integrates the model. Throws std::invalid_argument for settings outside their limits (the
 // study kind checks them first, with file and line) and PointFailure when the integrator fails
-// (step-size collapse, too much work), naming the time and step size. A divergent response is
-// not an error: the run stops there and status/diverged say so, all outputs finite.
+// (SUNDIALS: a set-up call refused, naming the routine and its flag; step-size collapse, too much
+// work, naming the time and step size; any route: a right-hand side that is not finite). A
+// divergent response is not an error: the run stops there and status/diverged say so, all
+// outputs finite.
 SimulationResult simulate(const TimeDomainModel& model, const SimulationSettings& settings);
 
 // ------------------------------------------------------------------ growth-rate fit

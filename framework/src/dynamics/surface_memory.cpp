@@ -98,6 +98,44 @@ double SurfaceMemory::arc_mean(double theta, double arc) const {
   return (interpolate(theta + 0.5 * arc, true) - interpolate(theta - 0.5 * arc, true)) / arc;
 }
 
+double SurfaceMemory::average(double theta_a, double theta_b) const {
+  const double xa = theta_a * samples_per_rad_, xb = theta_b * samples_per_rad_;
+  if (!(xb > xa)) return at(0.5 * (theta_a + theta_b));
+  if (flat_ && xb < -2.0) return 0.0;
+  const auto first = static_cast<std::int64_t>(std::floor(xa)), last = static_cast<std::int64_t>(std::floor(xb));
+  if (last + 2 >= next_) return at(0.5 * (theta_a + theta_b));  // the stencil would reach unwritten samples
+  // Antiderivatives (from 0) of the cubic Lagrange weights through i-1..i+2 on the interval
+  // [i, i + 1], local u in [0, 1] (cubic_weights): their sum of values times samples integrates
+  // the interpolant exactly.
+  auto antiderivatives = [](double u, double w[4]) {
+    const double u2 = u * u, u3 = u2 * u, u4 = u3 * u;
+    w[0] = -(0.25 * u4 - u3 + u2) / 6.0;
+    w[1] = 0.5 * (0.25 * u4 - 2.0 * u3 / 3.0 - 0.5 * u2 + 2.0 * u);
+    w[2] = -0.5 * (0.25 * u4 - u3 / 3.0 - u2);
+    w[3] = (0.25 * u4 - 0.5 * u2) / 6.0;
+  };
+  // Samples i-1 .. i+2 of each interval: from the ring directly when all are written (the usual
+  // case: reads one revolution back), else through value() (initial profile).
+  const bool in_ring = first >= 1;
+  const std::size_t mask = capacity_ - 1;
+  double integral = 0.0;
+  for (std::int64_t i = first; i <= last; ++i) {
+    const double u0 = std::max(xa - static_cast<double>(i), 0.0), u1 = std::min(xb - static_cast<double>(i), 1.0);
+    if (!(u1 > u0)) continue;
+    double w0[4], w1[4];
+    antiderivatives(u0, w0);
+    antiderivatives(u1, w1);
+    if (in_ring) {
+      const auto k = static_cast<std::size_t>(i);
+      integral += (w1[0] - w0[0]) * ring_[(k - 1) & mask] + (w1[1] - w0[1]) * ring_[k & mask] +
+                  (w1[2] - w0[2]) * ring_[(k + 1) & mask] + (w1[3] - w0[3]) * ring_[(k + 2) & mask];
+    } else {
+      for (int j = 0; j < 4; ++j) integral += (w1[j] - w0[j]) * value(i - 1 + j);
+    }
+  }
+  return integral / (xb - xa);
+}
+
 std::vector<double> SurfaceMemory::last_revolution() const {
   std::vector<double> out(n_);
   const auto n = static_cast<std::int64_t>(n_);

@@ -75,6 +75,11 @@ class SurfaceMemory {
     return arc_rad <= 0.0 ? at(theta_rad) : arc_mean(theta_rad, arc_rad);
   }
 
+  // Mean of the interpolated surface (the cubic that at() reads) over the angles [theta_a,
+  // theta_b] (theta_a <= theta_b, both well behind the newest sample), integrated exactly: the
+  // fixed-step engine's forcing over a step (a point sample would alias a rough surface).
+  double average(double theta_a_rad, double theta_b_rad) const;
+
   // The surface over the last revolution: samples k = next - n .. next - 1 by body angle
   // (k mod n) * spacing, returned in body-angle order 0 .. n - 1.
   std::vector<double> last_revolution() const;

@@ -121,6 +121,13 @@ void accumulate(const std::vector<planner::SegmentConditions>& plan, const RiskT
 
 struct AlongPlanSettings {
   double sample_rate_hz = 4000.0;
+  // The dynamics engine's route: the fixed-step engine (exact propagation of each segment's linear
+  // G1 form) or the adaptive ARKODE reference (relative_tolerance applies to it only).
+  TimeIntegrator integrator = TimeIntegrator::fixed_step;
+  // Its steps per wave of the model's highest frequency: 5, half the engine's default, which is
+  // set for pointwise surfaces over long runs; the plan needs per-revolution envelopes and growth
+  // rates (docs/feed_risk.md: 0.1 % from the finer steps' growth rate).
+  double fixed_steps_per_wave = 5.0;
   double relative_tolerance = 1e-4;
   double samples_per_wave = 8.0;  // surface samples per wave at the highest frequency (engine: 16)
   double initial_waviness_m = 1e-6;  // initial structural displacement (the disturbance)

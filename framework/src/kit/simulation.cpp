@@ -112,11 +112,22 @@ const ParamTable<IntegratorSettings>& integrator_table() {
   using S = IntegratorSettings;
   static const ParamTable<S> table = [] {
     ParamTable<S> t;
-    t.add(&S::relative_tolerance, "relative_tolerance", "1", "integrator relative tolerance").positive().at_most(1e-3);
+    t.add(&S::relative_tolerance, "relative_tolerance", "1",
+          "relative tolerance of the adaptive integrators (explicit_runge_kutta, adams)")
+        .positive()
+        .at_most(1e-3);
     t.add_choice(&S::integrator, "integrator",
-                 "time integrator (docs/dynamics.md): explicit_runge_kutta (ARKODE Dormand-Prince 5(4)) or adams "
-                 "(CVODE Adams)",
-                 {{"explicit_runge_kutta", TimeIntegrator::explicit_runge_kutta}, {"adams", TimeIntegrator::adams}});
+                 "time integrator (docs/dynamics.md): fixed_step (fixed steps; exact exponential propagation of "
+                 "linear models, Runge-Kutta otherwise), explicit_runge_kutta (adaptive ARKODE Dormand-Prince "
+                 "5(4), the reference) or adams (CVODE Adams)",
+                 {{"fixed_step", TimeIntegrator::fixed_step},
+                  {"explicit_runge_kutta", TimeIntegrator::explicit_runge_kutta},
+                  {"adams", TimeIntegrator::adams}});
+    t.add(&S::fixed_steps_per_wave, "fixed_steps_per_wave", "1",
+          "fixed_step: steps per wave at the model's highest frequency (0: the default, 10 exponential (40 with "
+          "one-sided contact) / 60 Runge-Kutta; with initial_waviness_m > 0 never more than 3/4 of the time "
+          "between surface samples)")
+        .non_negative();
     t.add(&S::divergence_limit_m, "divergence_limit_m", "m", "|displacement| beyond this stops the run as diverged")
         .positive();
     return t;
@@ -239,6 +250,7 @@ void apply(const ContactSettings& s, SimulationSettings& engine) {
 void apply(const IntegratorSettings& s, SimulationSettings& engine) {
   engine.relative_tolerance = s.relative_tolerance;
   engine.integrator = s.integrator;
+  engine.fixed_steps_per_wave = s.fixed_steps_per_wave;
   engine.divergence_limit_m = s.divergence_limit_m;
 }
 

@@ -48,16 +48,17 @@ TEST(KitSimulation, TheSimulationTableKeepsItsKeysAndDefaults) {
       "duration_s", "sample_rate_hz", "initial_displacement_m", "initial_velocity_m_per_s", "initial_waviness_m",
       "seed", "infeed_rate_m_per_s", "one_sided_contact", "wheel_contact_arc_deg", "work_contact_arc_deg",
       "snapshot_times_s", "fit_start_s", "fit_end_s", "min_frequency_hz", "relative_tolerance", "integrator",
-      "divergence_limit_m", "wheel_speed_modulation", "wheel_speed_amplitude_ratio", "wheel_speed_frequency_hz",
-      "wheel_speed_schedule", "work_speed_modulation", "work_speed_amplitude_ratio", "work_speed_frequency_hz",
-      "work_speed_schedule"};
+      "fixed_steps_per_wave", "divergence_limit_m", "wheel_speed_modulation", "wheel_speed_amplitude_ratio",
+      "wheel_speed_frequency_hz", "wheel_speed_schedule", "work_speed_modulation", "work_speed_amplitude_ratio",
+      "work_speed_frequency_hz", "work_speed_schedule"};
   EXPECT_EQ(keys, expected);
   const kit::SimulationTable t = validated({{"duration_s", 0.5}});
   EXPECT_EQ(t.sample_rate_hz, 20000.0);
   EXPECT_EQ(t.disturbance.initial_displacement_m, 1e-6);
   EXPECT_TRUE(t.contact.one_sided_contact);
   EXPECT_EQ(t.integration.relative_tolerance, 1e-6);
-  EXPECT_EQ(t.integration.integrator, TimeIntegrator::explicit_runge_kutta);
+  EXPECT_EQ(t.integration.integrator, TimeIntegrator::fixed_step);  // the default route
+  EXPECT_EQ(t.integration.fixed_steps_per_wave, 0.0);                // the engine's default steps
   EXPECT_EQ(t.integration.divergence_limit_m, 0.01);
   EXPECT_EQ(t.fit.min_frequency_hz, 10.0);
   EXPECT_EQ(t.wheel_speed.shape, kit::SpeedLawShape::constant);
@@ -76,6 +77,7 @@ TEST(KitSimulation, EngineSettingsCarryEveryPartAndTheSpeedLawsOfRotorsWithoutAn
                                       {"work_contact_arc_deg", 2.5},
                                       {"relative_tolerance", 1e-5},
                                       {"integrator", "adams"},
+                                      {"fixed_steps_per_wave", 25.0},
                                       {"work_speed_modulation", "sinusoidal"},
                                       {"work_speed_amplitude_ratio", 0.2},
                                       {"work_speed_frequency_hz", 0.5},
@@ -97,6 +99,7 @@ TEST(KitSimulation, EngineSettingsCarryEveryPartAndTheSpeedLawsOfRotorsWithoutAn
   EXPECT_EQ(s.contact_arc_deg[static_cast<std::size_t>(Rotor::work)], 2.5);
   EXPECT_EQ(s.relative_tolerance, 1e-5);
   EXPECT_EQ(s.integrator, TimeIntegrator::adams);
+  EXPECT_EQ(s.fixed_steps_per_wave, 25.0);
   EXPECT_EQ(s.snapshot_times_s, std::vector<double>{0.4});
   // The wheel's speed is the model's state: no law; the work's law is the sine around 60 rpm.
   EXPECT_EQ(s.speed[static_cast<std::size_t>(Rotor::wheel)], nullptr);

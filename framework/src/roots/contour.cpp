@@ -140,8 +140,7 @@ bool ContourTracker::segment(const Node& from, const Node& to, PathIntegral& sum
             newton_distances <= settings_.newton_distance_factor &&
             magnitude(log_change - fitted.log_change) <= settings_.consistency) {
           sum.phase += phase_change;
-          sum.moment += 0.5 * ((current.s - centre_) * current.log_derivative +
-                               (next->s - centre_) * next->log_derivative) * (next->s - current.s);
+          add_moments(current, *next, fitted, sum);
           current = *next;
           position = last ? length : position + step;
           previous_step = step;
@@ -158,6 +157,25 @@ bool ContourTracker::segment(const Node& from, const Node& to, PathIntegral& sum
     }
   }
   return true;
+}
+
+// The moments integral (s - c)^k E'/E ds, k = 1, 2, over an accepted step: exactly for the
+// step's local model E'/E = 1/(s - r) + lambda (a nearby zero r, background lambda), trapezoid
+// where no zero was fitted. The trapezoid alone, on steps that turn the phase by ~1 rad, left the
+// moments 10-20 % off; the repair starts Newton from them.
+void ContourTracker::add_moments(const Node& a, const Node& b, const LocalModel& model, PathIntegral& sum) const {
+  const Complex ua = a.s - centre_, ub = b.s - centre_, ds = b.s - a.s;
+  if (!model.has_zero) {
+    const Complex ga = ua * a.log_derivative, gb = ub * b.log_derivative;
+    sum.moment += 0.5 * (ga + gb) * ds;
+    sum.moment2 += 0.5 * (ua * ga + ub * gb) * ds;
+    return;
+  }
+  // log((s1 - r)/(s0 - r)) is the model's log change without its background part.
+  const Complex log_ratio = model.log_change - model.background * ds, d = model.zero - centre_;
+  const Complex ua2 = ua * ua, ub2 = ub * ub;
+  sum.moment += ds + d * log_ratio + model.background * 0.5 * (ub2 - ua2);
+  sum.moment2 += 0.5 * (ub2 - ua2) + d * ds + d * d * log_ratio + model.background * (ub2 * ub - ua2 * ua) / 3.0;
 }
 
 bool ContourTracker::path(const std::vector<Complex>& vertices, PathIntegral& sum,
@@ -197,6 +215,7 @@ BoxCount ContourTracker::count(const Box& box) {
     if (!path(vertices, sum, result.failure_point)) return result;
     winding = sum.phase / std::numbers::pi;
     result.root_sum = Complex(sum.moment.imag() / std::numbers::pi, 0.0);
+    result.root_square_sum = Complex(sum.moment2.imag() / std::numbers::pi, 0.0);
   } else {
     std::vector<Complex> vertices = {Complex(box.re_max, box.im_min), Complex(box.re_max, box.im_max),
                                      Complex(box.re_min, box.im_max), Complex(box.re_min, box.im_min),
@@ -204,6 +223,7 @@ BoxCount ContourTracker::count(const Box& box) {
     if (!path(vertices, sum, result.failure_point)) return result;
     winding = sum.phase / (2.0 * std::numbers::pi);
     result.root_sum = sum.moment / Complex(0.0, 2.0 * std::numbers::pi);
+    result.root_square_sum = sum.moment2 / Complex(0.0, 2.0 * std::numbers::pi);
   }
   double rounded = std::round(winding);
   // Every accepted step is resolved to well under pi, so a total far from an integer means the
@@ -214,7 +234,9 @@ BoxCount ContourTracker::count(const Box& box) {
   }
   result.ok = true;
   result.zeros = static_cast<int>(rounded);
-  result.root_sum += centre_ * rounded;  // moments were taken about the centre
+  // Moments were taken about the centre c: sum r = S1 + n c, sum r^2 = S2 + 2 c S1 + n c^2.
+  result.root_square_sum += 2.0 * centre_ * result.root_sum + centre_ * centre_ * rounded;
+  result.root_sum += centre_ * rounded;
   return result;
 }
 

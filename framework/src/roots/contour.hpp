@@ -42,7 +42,9 @@ struct Box {
 struct BoxCount {
   bool ok = false;
   int zeros = 0;            // zeros of E inside the (mirrored) box
-  Complex root_sum = 0.0;   // sum of those zeros (trapezoid rule; an estimate for Newton)
+  // Sum of those zeros and of their squares (trapezoid rule; estimates for Newton: with two
+  // unknown zeros inside, the two sums give both, e.g. a conjugate pair in a mirrored box).
+  Complex root_sum = 0.0, root_square_sum = 0.0;
   Complex failure_point;    // where the phase could not be resolved (when !ok)
 };
 
@@ -62,7 +64,7 @@ class ContourTracker {
   };
   struct PathIntegral {
     double phase = 0.0;
-    Complex moment = 0.0;  // integral of s E'/E ds
+    Complex moment = 0.0, moment2 = 0.0;  // integrals of (s - c) E'/E ds and (s - c)^2 E'/E ds
   };
 
   struct LocalModel {
@@ -74,6 +76,7 @@ class ContourTracker {
 
   std::optional<Node> node(Complex s);
   static LocalModel fit(const Node& a, const Node& b);
+  void add_moments(const Node& a, const Node& b, const LocalModel& model, PathIntegral& sum) const;
   double model_step(const LocalModel& model, Complex s, Complex direction) const;
   bool segment(const Node& from, const Node& to, PathIntegral& sum, Complex& failure_point);
   bool path(const std::vector<Complex>& vertices, PathIntegral& sum, Complex& failure_point);

@@ -7,9 +7,33 @@
 namespace chatterlab {
 
 void apply_growth_rate_settings(SimulationSettings& settings) {
+  settings.integrator = TimeIntegrator::explicit_runge_kutta;
   settings.relative_tolerance = 1e-2;
   settings.max_steps_per_wave = 3.0;
   settings.samples_per_wave = 8.0;
+}
+
+PlungeRegenerativeParameters reference_g1_case() {
+  PlungeRegenerativeParameters p;
+  p.wheel_speed_rpm = 1450.0;
+  p.work_speed_rpm = 55.0;
+  p.contact_stiffness_n_per_m = 1e8;
+  p.wheel_wear_stiffness_n_per_m = 1e9;
+  p.work_removal_stiffness_n_per_m = 2e8;
+  p.modes = {{250.0, 0.05, 5e7}};
+  return p;
+}
+
+PlungeRegenerativeParameters g8_grinder() {
+  PlungeRegenerativeParameters p;
+  p.wheel_speed_rpm = 1450.0;
+  p.work_speed_rpm = 55.0;
+  p.contact_stiffness_n_per_m = 2e8;
+  p.wheel_wear_stiffness_n_per_m = 6.3e10;
+  p.work_removal_stiffness_n_per_m = 2e7;
+  p.modes = {{67.56, 0.03, 5.53e7}, {102.44, 0.03, 1.27e8}, {184.08, 0.03, 4.11e8}, {221.11, 0.03, 5.93e8},
+             {255.01, 0.03, 7.88e8}, {275.05, 0.03, 9.17e8}, {305.60, 0.03, 1.132e9}};
+  return p;
 }
 
 PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p) {
@@ -25,6 +49,7 @@ PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p
 }
 
 SimulationSettings converged_reference_settings(SimulationSettings settings) {
+  settings.integrator = TimeIntegrator::explicit_runge_kutta;
   settings.relative_tolerance = 1e-8;
   settings.samples_per_wave *= 4.0;
   settings.max_steps_per_wave *= 4.0;
@@ -88,6 +113,36 @@ void PlungeTimeDomain::derivatives(const ContactInput& in, const ContactOutput& 
     dx[2 * i + 1] = m.omega * m.omega * (contact.normal_force_n * m.compliance_m_per_n - q) -
                     2.0 * m.zeta * m.omega * v;
   }
+}
+
+std::optional<LinearForm> PlungeTimeDomain::linear_form(double /*t_s*/) const {
+  // State (q_i, q_i'): q_i' = v_i, v_i' = w_i^2 (F / k_i - q_i) - 2 zeta_i w_i v_i, with
+  // F = k (f - sum_j q_j) in contact and 0 out of contact.
+  const std::size_t n = state_size();
+  LinearForm form;
+  form.free_matrix.assign(n * n, 0.0);
+  form.free_input.assign(n, 0.0);
+  for (std::size_t i = 0; i < modes_.size(); ++i) {
+    const Mode& m = modes_[i];
+    form.free_matrix[(2 * i) * n + 2 * i + 1] = 1.0;
+    form.free_matrix[(2 * i + 1) * n + 2 * i] = -m.omega * m.omega;
+    form.free_matrix[(2 * i + 1) * n + 2 * i + 1] = -2.0 * m.zeta * m.omega;
+  }
+  form.contact_matrix = form.free_matrix;
+  form.contact_input.assign(n, 0.0);
+  for (std::size_t i = 0; i < modes_.size(); ++i) {
+    const Mode& m = modes_[i];
+    const double gain = m.omega * m.omega * m.compliance_m_per_n * series_stiffness_;
+    for (std::size_t j = 0; j < modes_.size(); ++j) form.contact_matrix[(2 * i + 1) * n + 2 * j] -= gain;
+    form.contact_input[2 * i + 1] = gain;
+  }
+  return form;
+}
+
+double PlungeTimeDomain::linear_forcing(const ContactInput& in) const {
+  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
+  constexpr auto work = static_cast<std::size_t>(Rotor::work);
+  return in.infeed_m - in.previous_surface_m[wheel] - in.previous_surface_m[work];
 }
 
 double PlungeTimeDomain::displacement_m(std::span<const double> state) const {

@@ -15,8 +15,9 @@
 
 namespace chatterlab {
 
-// Integrator settings for the growth rate of a growing (chatter) response of this model, chosen
-// from measured accuracy (docs/dynamics.md): rtol 1e-2 with the largest step 1/(3 f_max), i.e.
+// The adaptive ARKODE route's settings for the growth rate of a growing (chatter) response of
+// this model (they select that route), chosen from measured accuracy (docs/dynamics.md): rtol
+// 1e-2 with the largest step 1/(3 f_max), i.e.
 // ~5.9 Dormand-Prince steps per chatter period (G1's f_max is ~1.8x the chatter frequency; the
 // step is cap-limited, the error test would allow more), and 8 surface samples per wave of
 // f_max (~14 per chatter wave). The growth rate then agrees with a converged run within 0.6 %
@@ -24,9 +25,18 @@ namespace chatterlab {
 // of the root agreement (the benchmark and PlungeTimeDomainAccuracy use them). Not for decaying
 // responses (the engine default is for those).
 void apply_growth_rate_settings(SimulationSettings& settings);
-// The same run converged (rtol 1e-8, 4x denser steps and surface samples): the reference against
-// which the benchmark and the tests measure the integration error of `settings`.
+// The same run converged on the ARKODE route (rtol 1e-8, 4x denser steps and surface samples):
+// the reference against which the benchmark and the tests measure the integration error of
+// `settings` (either route).
 SimulationSettings converged_reference_settings(SimulationSettings settings);
+
+// The known-answer cases of the tests and benchmarks (docs/dynamics.md):
+// one 250 Hz mode, zeta 0.05, km 5e7, kc 1e8, kg 1e9, kw 2e8 N/m, 1450/55 rpm (rightmost root
+// 4.790137 /s at 361.7148 Hz);
+PlungeRegenerativeParameters reference_g1_case();
+// the G8 grinder of studies/simulate_g8_chatter.toml: the seven measured modes (MODELS.md G8, 3 %
+// damping, stiffnesses of studies/default.toml), kc 2e8, kg 6.3e10, kw 2e7 N/m, 1450/55 rpm.
+PlungeRegenerativeParameters g8_grinder();
 
 class PlungeTimeDomain final : public TimeDomainModel {
  public:
@@ -42,6 +52,10 @@ class PlungeTimeDomain final : public TimeDomainModel {
   void derivatives(const ContactInput& in, const ContactOutput& contact,
                    std::span<double> state_derivative) const override;
   double displacement_m(std::span<const double> state) const override;
+  // Linear between contact events: the contact spring k = 1/(1/kc + 1/kg + 1/kw) folded into the
+  // modal matrix in contact, forcing f = U0 - Wg(t - Tg) - Ww(t - Tw).
+  std::optional<LinearForm> linear_form(double t_s) const override;
+  double linear_forcing(const ContactInput& in) const override;
 
  private:
   struct Mode {

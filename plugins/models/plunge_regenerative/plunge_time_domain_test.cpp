@@ -21,18 +21,8 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// The reference case: one 250 Hz mode, zeta 0.05, km 5e7, kc 1e8, kg 1e9, kw 2e8,
-// 1450/55 rpm.
-PlungeRegenerativeParameters reference_case() {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
-  p.work_removal_stiffness_n_per_m = 2e8;
-  p.modes = {{250.0, 0.05, 5e7}};
-  return p;
-}
+// The reference case (plunge_time_domain.hpp).
+PlungeRegenerativeParameters reference_case() { return reference_g1_case(); }
 
 RightmostRoot root_of(const PlungeRegenerativeParameters& p) {
   PlungeCharacteristic e(p);
@@ -68,14 +58,17 @@ TEST(PlungeTimeDomainAccuracy, SimulationAgreesWithTheRightmostRoot) {
   ASSERT_TRUE(root.certified);
   EXPECT_NEAR(root.root.real(), 4.790137, 1e-5);  // pinned reference
   EXPECT_NEAR(root.root.imag() / kTwoPi, 361.7148, 1e-3);
-  // The default tolerance, the growth-rate settings of the benchmark
-  // (tests/bench/dynamics_bench.cpp, apply_growth_rate_settings: rtol 1e-2 with the step and
-  // surface resolution chosen for this accuracy: 4.7743 /s), and CVODE Adams at 1e-4 (4.7756 /s).
+  // The fixed-step engine (the default), ARKODE at its default tolerance, at the growth-rate
+  // settings of the benchmark (tests/bench/dynamics_bench.cpp, apply_growth_rate_settings: rtol
+  // 1e-2 with the step and surface resolution chosen for this accuracy: 4.7743 /s), and CVODE
+  // Adams at 1e-4 (4.7756 /s).
   struct Case {
     const char* name;
     void (*configure)(SimulationSettings&);
   };
-  for (const Case c : {Case{"ARKODE ERK, default rtol", [](SimulationSettings&) {}},
+  for (const Case c : {Case{"fixed-step engine", [](SimulationSettings&) {}},
+                       Case{"ARKODE ERK, default rtol",
+                            [](SimulationSettings& s) { s.integrator = TimeIntegrator::explicit_runge_kutta; }},
                        Case{"ARKODE ERK, growth-rate settings", apply_growth_rate_settings},
                        Case{"CVODE Adams, rtol 1e-4", [](SimulationSettings& s) {
                               s.integrator = TimeIntegrator::adams;
@@ -349,8 +342,8 @@ TEST(PlungeTimeDomain, DivergenceIsReportedWithTimeAndState) {
 
 // A right-hand side that breaks down at t = 10 ms (not a number from there on, as a model whose
 // force law fails would give): the run must stop with a PointFailure naming the time, the cause
-// and the integrator's flag (with ARKODE it used to hang: its step adaptation never ends on a NaN
-// error estimate). Not covered: the CVODE Adams option still loops in CVODE's step reduction on
+// and, on the reference route, the integrator's flag (with ARKODE it used to hang: its step
+// adaptation never ends on a NaN error estimate). Not covered: the CVODE Adams option still loops in CVODE's step reduction on
 // such a model (docs/dynamics.md).
 class BreakingOscillator final : public TimeDomainModel {
  public:
@@ -378,14 +371,27 @@ class BreakingOscillator final : public TimeDomainModel {
 };
 
 TEST(PlungeTimeDomain, NonFiniteRightHandSideStopsTheRunWithTimeAndCause) {
-  try {
-    simulate(BreakingOscillator(), linear_settings(0.05));
-    FAIL() << "no exception";
-  } catch (const PointFailure& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("integrator failed at t = 0.01"), std::string::npos) << what;
-    EXPECT_NE(what.find("right-hand side not finite at t = 0.01"), std::string::npos) << what;
-    EXPECT_NE(what.find("ARKODE ARK_"), std::string::npos) << what;
+  // The reference route names ARKODE's flag; the fixed-step engine (Runge-Kutta: the model
+  // declares no linear form) the time of the evaluation.
+  struct Case {
+    TimeIntegrator integrator;
+    const char* failed_at;
+    const char* flag;
+  };
+  for (const Case c : {Case{TimeIntegrator::explicit_runge_kutta, "integrator failed at t = 0.01", "ARKODE ARK_"},
+                       Case{TimeIntegrator::fixed_step, "fixed-step integration failed at t = 0.01", ""}}) {
+    SCOPED_TRACE(to_string(c.integrator));
+    SimulationSettings s = linear_settings(0.05);
+    s.integrator = c.integrator;
+    try {
+      simulate(BreakingOscillator(), s);
+      FAIL() << "no exception";
+    } catch (const PointFailure& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(c.failed_at), std::string::npos) << what;
+      EXPECT_NE(what.find("right-hand side not finite at t = 0.01"), std::string::npos) << what;
+      EXPECT_NE(what.find(c.flag), std::string::npos) << what;
+    }
   }
 }
 

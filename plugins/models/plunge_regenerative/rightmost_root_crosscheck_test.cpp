@@ -16,6 +16,7 @@
 
 #include "chatterlab/roots.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "models/plunge_regenerative/plunge_time_domain.hpp"
 
 namespace chatterlab {
 namespace {
@@ -135,13 +136,7 @@ bool expect_rightmost_and_honest(const PlungeRegenerativeParameters& p, double b
 
 PlungeRegenerativeParameters reported_case() {
   // The dynamics helper's case: one 250 Hz mode, work-only regeneration, 1450/55 rpm.
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
-  p.work_removal_stiffness_n_per_m = 2e8;
-  p.modes = {{250.0, 0.05, 5e7}};
+  PlungeRegenerativeParameters p = reference_g1_case();
   p.wheel_regeneration = false;
   return p;
 }

@@ -47,11 +47,29 @@ void UnbalanceTwoDofTimeDomain::contact(const ContactInput& in, ContactOutput& o
   out.removed_m[work] = relative - in.previous_surface_m[work];
 }
 
-void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const ContactOutput&,
-                                            std::span<double> dx) const {
+double UnbalanceTwoDofTimeDomain::linear_forcing(const ContactInput& in) const {
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
   const double w = 2.0 * std::numbers::pi * in.speed_rpm[wheel] / 60.0;
-  const double force = p_.unbalance_kg_m * w * w * std::cos(in.angle_rad[wheel]);
+  return p_.unbalance_kg_m * w * w * std::cos(in.angle_rad[wheel]);
+}
+
+std::optional<LinearForm> UnbalanceTwoDofTimeDomain::linear_form(double /*t_s*/) const {
+  const double k = unbalance::coupling_stiffness_n_per_m(p_);
+  const double m1 = p_.wheel_mass_kg, m2 = p_.work_mass_kg;
+  LinearForm form;
+  form.contact_matrix = {0.0, 1.0, 0.0, 0.0,
+                         -(k + p_.wheel_support_stiffness_n_per_m) / m1, -p_.wheel_damping_n_s_per_m / m1, -k / m1, 0.0,
+                         0.0, 0.0, 0.0, 1.0,
+                         -k / m2, 0.0, -(k + p_.work_support_stiffness_n_per_m) / m2, -p_.work_damping_n_s_per_m / m2};
+  form.contact_input = {0.0, 1.0 / m1, 0.0, 0.0};
+  form.free_matrix = form.contact_matrix;  // contact is never lost (penetration 1)
+  form.free_input = form.contact_input;
+  return form;
+}
+
+void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const ContactOutput&,
+                                            std::span<double> dx) const {
+  const double force = linear_forcing(in);
   const double k = unbalance::coupling_stiffness_n_per_m(p_);
   const double x1 = in.state[0], v1 = in.state[1], x2 = in.state[2], v2 = in.state[3];
   dx[0] = v1;

@@ -32,6 +32,9 @@ class UnbalanceTwoDofTimeDomain final : public TimeDomainModel {
   void derivatives(const ContactInput& in, const ContactOutput& contact, std::span<double> dx) const override;
   // The relative wheel-work motion x1 + x2.
   double displacement_m(std::span<const double> s) const override { return s[0] + s[2]; }
+  // Linear with constant coefficients; forcing f = U w^2 cos th_g (the unbalance force).
+  std::optional<LinearForm> linear_form(double t_s) const override;
+  double linear_forcing(const ContactInput& in) const override;
 
  private:
   UnbalanceTwoDofParameters p_;

@@ -36,6 +36,14 @@ const ParamTable<SimulateSettings>& simulate_settings_table() {
   static const ParamTable<S> table = [] {
     ParamTable<S> t;
     t.add_fields(&S::simulation, kit::simulation_table());
+    t.add_choice(&S::timeseries_format, "timeseries_format",
+                 "time-series file: csv (timeseries.csv) or npy (timeseries.npy, a NumPy structured array with "
+                 "one float64 field per column: long runs)",
+                 {{"csv", TimeSeriesFormat::csv}, {"npy", TimeSeriesFormat::npy}});
+    t.add(&S::timeseries_decimation, "timeseries_decimation", "1",
+          "write every k-th output sample to the time-series file (exact samples, no filter; the fit and "
+          "spectrum use every sample)")
+        .at_least(1);
     t.add(&S::measurement_noise_m, "measurement_noise_m", "m",
           "rms of white Gaussian sensor noise added to x in timeseries.csv column measured_displacement_m "
           "(seeded by seed; 0: no column)")

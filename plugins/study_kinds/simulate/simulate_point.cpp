@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <span>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/time_series_file.hpp"
 
 namespace chatterlab::simulate_point {
 
@@ -72,26 +74,33 @@ SampledSeries work_profile(const SurfaceSnapshot& snap) {
 
 Json number_or_null(const std::optional<double>& v) { return v ? Json(*v) : Json(); }
 
-void write_timeseries(const SimulationResult& r, const SimulateSettings& settings, const PointContext& context) {
+// timeseries.csv or .npy (every k-th sample); its entry of the summary.
+Json write_timeseries(const SimulationResult& r, const SimulateSettings& settings, const PointContext& context) {
   std::vector<std::string> header{"t_s", "displacement_m", "force_n", "depth_of_cut_m", "infeed_m",
                                   "wheel_speed_rpm", "work_speed_rpm", "wheel_surface_at_contact_m",
                                   "work_surface_at_contact_m", "in_contact"};
-  std::vector<std::vector<double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
-                                           r.speed_rpm[wheel], r.speed_rpm[work],
-                                           r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
-                                           r.in_contact};
+  std::vector<std::span<const double>> columns{r.t_s, r.displacement_m, r.force_n, r.depth_of_cut_m, r.infeed_m,
+                                               r.speed_rpm[wheel], r.speed_rpm[work],
+                                               r.surface_at_contact_m[wheel], r.surface_at_contact_m[work],
+                                               r.in_contact};
+  std::vector<double> measured;
   if (const double noise = settings.measurement_noise_m; noise > 0) {
     // A displacement sensor's reading: x plus white Gaussian noise (never fed back to the
     // dynamics). Monitors built for measured signals (C1-C3) need it: a noise-free simulated
     // signal has no stable "texture", and amplitude-normalised criteria flag any pure sine.
     std::mt19937_64 random(settings.simulation.disturbance.seed + 0x5eed);
     std::normal_distribution<double> gauss(0.0, noise);
-    std::vector<double> measured = r.displacement_m;
+    measured = r.displacement_m;
     for (double& x : measured) x += gauss(random);
     header.emplace_back("measured_displacement_m");
-    columns.push_back(std::move(measured));
+    columns.push_back(measured);
   }
-  kit::write_table(context, "timeseries.csv", header, columns);
+  const std::string file = write_time_series(context.artifact_dir, "timeseries", header, columns,
+                                             settings.timeseries_format, settings.timeseries_decimation);
+  return {{"file", file},
+          {"columns", header},
+          {"sample_rate_hz",
+           settings.simulation.sample_rate_hz / static_cast<double>(settings.timeseries_decimation)}};
 }
 
 // surfaces_NN.csv per snapshot; their list for the summary.
@@ -116,11 +125,12 @@ Json fit_summary(const PointAnalysis& a) {
 }
 
 Json point_summary(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
-                   const Json& document, const SimulateSettings& settings, Json snapshots) {
+                   const Json& document, const SimulateSettings& settings, Json timeseries, Json snapshots) {
   Json summary;
   summary["model"] = document.at("model").at("type");
   summary["status"] = r.status;
   summary["end_time_s"] = r.end_time_s;
+  summary["timeseries"] = std::move(timeseries);
   summary["fitted_growth_rate_per_s"] = a.fit ? Json(a.fit->growth_rate_per_s) : Json();
   summary["fit"] = fit_summary(a);
   summary["dominant_frequency_hz"] = a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz);
@@ -142,6 +152,7 @@ Json point_summary(const SimulationResult& r, const PointAnalysis& a, const Work
                             {"contact_events", r.contact_events},
                             {"wheel_surface_samples_per_rev", r.surface_samples_per_rev[wheel]},
                             {"work_surface_samples_per_rev", r.surface_samples_per_rev[work]},
+                            {"method", r.method},
                             {"relative_tolerance", settings.simulation.integration.relative_tolerance}};
   return summary;
 }
@@ -290,12 +301,12 @@ WorkSurfaceQuality measure_work_surface(const SimulationResult& r, const Json& s
 
 void write_point_files(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
                        const Json& document, const SimulateSettings& settings, const PointContext& context) {
-  write_timeseries(r, settings, context);
+  Json timeseries = write_timeseries(r, settings, context);
   Json snapshots = write_snapshots(r, context);
   if (a.spectrum)
     kit::write_table(context, "spectrum.csv", {"frequency_hz", "amplitude_m"},
                      {a.spectrum->frequency_hz, a.spectrum->amplitude});
-  kit::write_summary(context, point_summary(r, a, quality, document, settings, std::move(snapshots)));
+  kit::write_summary(context, point_summary(r, a, quality, document, settings, std::move(timeseries), std::move(snapshots)));
   // Titled by [study] name, else "simulation".
   if (context.plots) plot_point(r, a, quality, kit::study_title(document, "simulation"), context.artifact_dir);
 }

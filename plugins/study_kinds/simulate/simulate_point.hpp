@@ -39,7 +39,7 @@ struct WorkSurfaceQuality {
 WorkSurfaceQuality measure_work_surface(const SimulationResult& r, const Json& surface_table,
                                         double infeed_rate_m_per_s);
 
-// timeseries.csv, surfaces_NN.csv, spectrum.csv, summary.json and (with context.plots) figures.
+// timeseries.csv (or .npy), surfaces_NN.csv, spectrum.csv, summary.json and (with context.plots) figures.
 void write_point_files(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
                        const Json& document, const SimulateSettings& settings, const PointContext& context);
 

@@ -35,7 +35,6 @@ duration_s = 1.2
 sample_rate_hz = 10000
 one_sided_contact = false
 initial_waviness_m = 1e-9
-relative_tolerance = 1e-4
 )";
 
 TEST(Simulate, TheSimulationTableKeepsTheUserVisibleKeys) {
@@ -44,13 +43,14 @@ TEST(Simulate, TheSimulationTableKeepsTheUserVisibleKeys) {
   for (const char* key : {"duration_s", "sample_rate_hz", "initial_displacement_m", "initial_velocity_m_per_s",
                           "initial_waviness_m", "seed", "infeed_rate_m_per_s", "one_sided_contact",
                           "wheel_contact_arc_deg", "work_contact_arc_deg", "snapshot_times_s", "fit_start_s",
-                          "fit_end_s", "relative_tolerance", "integrator", "min_frequency_hz", "divergence_limit_m",
+                          "fit_end_s", "relative_tolerance", "integrator", "fixed_steps_per_wave", "min_frequency_hz",
+                          "divergence_limit_m", "timeseries_format", "timeseries_decimation",
                           "measurement_noise_m", "write_point_files", "wheel_speed_modulation",
                           "wheel_speed_amplitude_ratio", "wheel_speed_frequency_hz", "wheel_speed_schedule",
                           "work_speed_modulation", "work_speed_amplitude_ratio", "work_speed_frequency_hz",
                           "work_speed_schedule"})
     EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
-  EXPECT_EQ(keys.size(), 27u);
+  EXPECT_EQ(keys.size(), 30u);
 }
 
 TEST(Simulate, ValidationWritesTheDefaultsAndIsIdempotent) {
@@ -58,9 +58,12 @@ TEST(Simulate, ValidationWritesTheDefaultsAndIsIdempotent) {
   const Study study = load_study(dir.write("g1.toml", g1_study));
   const Json& sim = study.document.at("simulation");
   EXPECT_EQ(sim.at("snapshot_times_s"), Json::array({1.2}));  // the end
-  EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-4));
+  EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-6));
   EXPECT_EQ(sim.at("divergence_limit_m"), Json(0.01));
-  EXPECT_EQ(sim.at("integrator"), Json("explicit_runge_kutta"));
+  EXPECT_EQ(sim.at("integrator"), Json("fixed_step"));
+  EXPECT_EQ(sim.at("fixed_steps_per_wave"), Json(0.0));
+  EXPECT_EQ(sim.at("timeseries_format"), Json("csv"));
+  EXPECT_EQ(sim.at("timeseries_decimation"), Json(1));
   Json again = study.document;
   auto kind = study_kind_registry().at("simulate").create(ParamValues{});
   struct Nowhere final : SourceMap {
@@ -79,8 +82,8 @@ TEST(Simulate, ThePartQualityComesFromTheAnalysisWithTheCapability) {
 
 TEST(Simulate, ALinearG1RunGrowsAtTheCertifiedRoot) {
   // docs/models/plunge_regenerative.md: the certified rightmost root of this machine is
-  // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear (rtol 1e-4 reproduces the
-  // growth to 0.03 %, docs/dynamics.md).
+  // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear (the default fixed-step
+  // engine propagates G1's linear form exactly, docs/dynamics.md).
   TempDir dir;
   const Study study = load_study(dir.write("g1.toml", g1_study));
   auto kind = study_kind_registry().at("simulate").create(ParamValues{});

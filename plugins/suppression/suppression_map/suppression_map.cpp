@@ -291,7 +291,10 @@ std::unique_ptr<TimeDomainModel> time_domain(const Json& document, SuppressionTa
   const Json& model = document.at("model");
   auto td = build_model(model)->time_domain();
   const double exponent = document.at("suppression_map").at("thickness_exponent").get<double>();
-  if (target != SuppressionTarget::feed || exponent == 0.0) return td;
+  // Without feed modulation the stiffness scale is 1: the plain model (the constant run's, so a
+  // zero amplitude reproduces it exactly with the same integration).
+  const bool modulated = document.at("suppression").value("amplitude_ratio", 0.0) != 0.0;
+  if (target != SuppressionTarget::feed || exponent == 0.0 || !modulated) return td;
   PlungeStiffnesses k{model.at("contact_stiffness_n_per_m").get<double>(),
                       model.at("wheel_wear_stiffness_n_per_m").get<double>(),
                       model.at("work_removal_stiffness_n_per_m").get<double>(),

@@ -53,11 +53,13 @@ struct ContactSettings {
 };
 const ParamTable<ContactSettings>& contact_table();
 
-// The integrator and the end of a run that runs away.
+// The integrator and the end of a run that runs away (docs/dynamics.md: the fixed-step engine is
+// the default route, the adaptive SUNDIALS integrators the reference).
 struct IntegratorSettings {
-  double relative_tolerance = 1e-6;
-  TimeIntegrator integrator = TimeIntegrator::explicit_runge_kutta;
+  double relative_tolerance = 1e-6;  // adaptive routes only
+  TimeIntegrator integrator = TimeIntegrator::fixed_step;
   double divergence_limit_m = 0.01;
+  double fixed_steps_per_wave = 0.0;  // fixed_step only; 0: the engine's documented default
 };
 const ParamTable<IntegratorSettings>& integrator_table();
 
