@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "chatterlab/kit/model.hpp"
 #include "chatterlab/kit/plots.hpp"
 #include "chatterlab/kit/settings.hpp"
 #include "chatterlab/param_table.hpp"
@@ -136,6 +137,15 @@ TEST(KitSettings, AbsentTableTakesEveryDefaultAndIsWrittenBack) {
   document["sampling"] = 4;
   const std::string message = input_error_of([&] { kit::validate_settings(document, "sampling", t, LineSeven()); });
   EXPECT_NE(message.find("expected a table [sampling]"), std::string::npos) << message;
+}
+
+TEST(KitModel, ExactSpeedRatiosOfSmallWholeNumbers) {
+  EXPECT_EQ(kit::exact_ratio(1450.0, 290.0), "5/1");
+  EXPECT_EQ(kit::exact_ratio(1000.0, 30.0), "100/3");
+  EXPECT_EQ(kit::exact_ratio(1450.0, 290.01), "");
+  EXPECT_EQ(kit::exact_ratio(1450.0, 55.0), "290/11");
+  EXPECT_EQ(kit::exact_ratio(1450.0, 55.0, 10), "");  // needs q = 11
+  EXPECT_EQ(kit::exact_ratio(0.0, 55.0), "");
 }
 
 TEST(KitPlots, AxisLabelsAreWordsWithTheUnitOfTheKeySuffix) {

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "chatterlab/errors.hpp"
@@ -94,7 +95,8 @@ const ParamTable<ContactSettings>& contact_table() {
     ParamTable<S> t;
     t.add(&S::infeed_rate_m_per_s, "infeed_rate_m_per_s", "m/s", "plunge infeed rate (G1 U0 = rate * t)").non_negative();
     t.add(&S::one_sided_contact, "one_sided_contact", "1",
-          "the force cannot pull: the wheel leaves the work and re-enters (false: bilateral, linear contact)");
+          "the force cannot pull: the wheel leaves the work and re-enters (false: bilateral, linear contact; "
+          "default: true with an infeed, false without one)");
     t.add(&S::wheel_contact_arc_deg, "wheel_contact_arc_deg", "deg",
           "geometric filtering (G4): wheel surface averaged over this arc (0: point contact)")
         .non_negative()
@@ -139,8 +141,11 @@ const ParamTable<FitWindowSettings>& fit_window_table() {
   using S = FitWindowSettings;
   static const ParamTable<S> table = [] {
     ParamTable<S> t;
-    t.add(&S::fit_start_s, "fit_start_s", "s", "start of the envelope-fit window (default: duration/2)").non_negative();
-    t.add(&S::fit_end_s, "fit_end_s", "s", "end of the envelope-fit window (default: the end)").non_negative();
+    t.add(&S::fit_start_s, "fit_start_s", "s", "start of the envelope-fit window (default: half-way to its end)")
+        .non_negative();
+    t.add(&S::fit_end_s, "fit_end_s", "s",
+          "end of the envelope-fit window (default: where the contact first opens, else the end of the run)")
+        .non_negative();
     t.add(&S::min_frequency_hz, "min_frequency_hz", "Hz",
           "spectral peaks below this are not the dominant (chatter) frequency: the infeed transient and "
           "work-revolution waviness live there")
@@ -150,8 +155,42 @@ const ParamTable<FitWindowSettings>& fit_window_table() {
   return table;
 }
 
+namespace {
+
+double default_fit_start(const FitWindowSettings& s, double end_s, double delay_s) {
+  if (s.fit_start_s) return *s.fit_start_s;
+  const double half = 0.5 * end_s;
+  return half < delay_s && delay_s < end_s ? delay_s : half;
+}
+
+}  // namespace
+
 FitWindow fit_window(const FitWindowSettings& s, double duration_s) {
-  return {s.fit_start_s ? *s.fit_start_s : 0.5 * duration_s, s.fit_end_s ? *s.fit_end_s : duration_s};
+  const double end = s.fit_end_s ? *s.fit_end_s : duration_s;
+  return {default_fit_start(s, end, 0.0), end};
+}
+
+FitWindow fit_window(const FitWindowSettings& s, const SimulationResult& run, double delay_s) {
+  double end = run.end_time_s;
+  if (s.fit_end_s) {
+    end = std::min(*s.fit_end_s, run.end_time_s);
+  } else {
+    for (const auto& [from, to] : run.contact_loss_intervals)
+      if (from >= delay_s) {
+        end = std::min(from, run.end_time_s);
+        break;
+      }
+  }
+  return {default_fit_start(s, end, delay_s), end};
+}
+
+double longest_delay_s(const TimeDomainModel& model) {
+  double delay = 0.0;
+  for (Rotor r : {Rotor::wheel, Rotor::work}) {
+    const double rpm = model.nominal_speed_rpm(r);
+    if (rpm > 0) delay = std::max(delay, 60.0 / rpm);
+  }
+  return delay;
 }
 
 // ------------------------------------------------------------------ the [simulation] table
@@ -240,9 +279,11 @@ void apply(const DisturbanceSettings& s, SimulationSettings& engine) {
   engine.seed = s.seed;
 }
 
+bool one_sided(const ContactSettings& s) { return s.one_sided_contact.value_or(s.infeed_rate_m_per_s > 0.0); }
+
 void apply(const ContactSettings& s, SimulationSettings& engine) {
   engine.infeed_rate_m_per_s = s.infeed_rate_m_per_s;
-  engine.one_sided_contact = s.one_sided_contact;
+  engine.one_sided_contact = one_sided(s);
   engine.contact_arc_deg[static_cast<std::size_t>(Rotor::wheel)] = s.wheel_contact_arc_deg;
   engine.contact_arc_deg[static_cast<std::size_t>(Rotor::work)] = s.work_contact_arc_deg;
 }

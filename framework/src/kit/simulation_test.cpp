@@ -55,7 +55,9 @@ TEST(KitSimulation, TheSimulationTableKeepsItsKeysAndDefaults) {
   const kit::SimulationTable t = validated({{"duration_s", 0.5}});
   EXPECT_EQ(t.sample_rate_hz, 20000.0);
   EXPECT_EQ(t.disturbance.initial_displacement_m, 1e-6);
-  EXPECT_TRUE(t.contact.one_sided_contact);
+  EXPECT_FALSE(t.contact.one_sided_contact.has_value());  // absent: one-sided exactly with an infeed
+  EXPECT_FALSE(kit::one_sided(t.contact));
+  EXPECT_TRUE(kit::one_sided(kit::ContactSettings{1e-6, std::nullopt, 0.0, 0.0}));
   EXPECT_EQ(t.integration.relative_tolerance, 1e-6);
   EXPECT_EQ(t.integration.integrator, TimeIntegrator::fixed_step);  // the default route
   EXPECT_EQ(t.integration.fixed_steps_per_wave, 0.0);                // the engine's default steps
@@ -152,7 +154,7 @@ TEST(KitSimulation, AnotherTableEmbedsThePartsWithItsOwnDefaults) {
   t.add_fields(&Mine::integration, kit::integrator_table());
   Json document = Json::object();
   const Mine m = kit::validate_settings(document, "mine", t, LineNine());
-  EXPECT_FALSE(m.contact.one_sided_contact);
+  EXPECT_EQ(m.contact.one_sided_contact, std::optional<bool>(false));
   EXPECT_EQ(document["mine"]["one_sided_contact"], Json(false));
   EXPECT_EQ(document["mine"]["relative_tolerance"], Json(1e-4));
   EXPECT_EQ(document["mine"]["divergence_limit_m"], Json(1.0));

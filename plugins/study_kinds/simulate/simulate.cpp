@@ -16,6 +16,9 @@ constexpr const char* col_frequency = "dominant_frequency_hz";
 constexpr const char* col_max_displacement = "max_displacement_m";
 constexpr const char* col_contact_loss = "contact_loss_fraction";
 constexpr const char* col_outcome = "simulation_outcome";
+constexpr const char* col_fit_valid = "fit_valid";
+constexpr const char* col_fit_regime = "fit_regime";
+constexpr const char* col_fit_reason = "fit_reason";
 constexpr const char* col_work_wt = "work_waviness_wt_um";
 constexpr const char* col_work_wz = "work_waviness_wz_um";
 constexpr const char* col_work_ront = "work_roundness_ront_um";
@@ -104,8 +107,8 @@ void Simulate::validate_surface(Json& document, const SourceMap& sources) {
 }
 
 std::vector<std::string> Simulate::output_columns(const Json&) const {
-  return {col_growth, col_frequency, col_max_displacement, col_contact_loss, col_outcome,
-          col_work_wt, col_work_wz, col_work_ront};
+  return {col_growth, col_fit_valid, col_fit_regime, col_fit_reason, col_frequency, col_max_displacement,
+          col_contact_loss, col_outcome, col_work_wt, col_work_wz, col_work_ront};
 }
 
 std::vector<Json> Simulate::run_point(const Json& document, const PointContext& context) const {
@@ -113,12 +116,14 @@ std::vector<Json> Simulate::run_point(const Json& document, const PointContext& 
   auto model = kit::build_model(document.at("model"))->time_domain();
   if (!model) throw PointFailure("the model has no time-domain form here");
   const SimulationResult result = run_engine(*model, settings.simulation);
-  const simulate_point::PointAnalysis a = simulate_point::analyse(result, settings.simulation);
+  const simulate_point::PointAnalysis a =
+      simulate_point::analyse(result, settings.simulation, kit::longest_delay_s(*model));
   const simulate_point::WorkSurfaceQuality quality = simulate_point::measure_work_surface(
       result, document.value("surface", Json::object()), settings.simulation.contact.infeed_rate_m_per_s);
   if (!context.artifact_dir.empty() && (context.single_point() || settings.write_point_files))
     simulate_point::write_point_files(result, a, quality, document, settings, context);
-  return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(),
+  return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(), a.validity ? Json(a.validity->valid) : Json(false),
+          a.validity ? to_string(a.validity->regime) : "no fit", a.validity ? a.validity->reason : a.fit_problem,
           a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz), a.max_displacement,
           result.end_time_s > 0 ? result.contact_loss_time_s / result.end_time_s : 0.0,
           result.diverged ? std::string("diverged") : std::string("completed"),

@@ -1,11 +1,12 @@
 #pragma once
 // Study kind `simulate` ([study] kind = "simulate"): integrates the [model]'s time-domain form
 // with the dynamics engine (chatterlab/dynamics.hpp) under the [simulation] settings (the study
-// kit's simulation table, chatterlab/kit/simulation.hpp) and reports the fitted growth rate, the
-// dominant frequency, the largest displacement and the fraction of time out of contact. A single
-// point also writes timeseries.csv (or .npy), surface snapshots, spectrum.csv, summary.json and
-// plots into its artefact directory (grid points only with write_point_files). The final work surface is
-// measured for waviness and roundness by the analysis that has the profile-quality capability
+// kit's simulation table, chatterlab/kit/simulation.hpp) and reports the fitted growth rate with
+// its validity (fit_valid, fit_regime, fit_reason: chatterlab/fit_validity.hpp), the dominant
+// frequency, the largest displacement and the fraction of time out of contact. A single point
+// also writes timeseries.csv (or .npy), surface snapshots, spectrum.csv, summary.json and plots
+// into its artefact directory (grid points only with write_point_files). The final work surface
+// is measured for waviness and roundness by the analysis that has the profile-quality capability
 // (Analysis::profile_quality(); the surface metrology's `surface_profile`), with its settings in
 // the optional [surface] table: summary.json "work_surface_quality", results.csv
 // work_waviness_wt_um, work_waviness_wz_um, work_roundness_ront_um.

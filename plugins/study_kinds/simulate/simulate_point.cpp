@@ -116,12 +116,78 @@ Json write_snapshots(const SimulationResult& r, const PointContext& context) {
   return snapshots;
 }
 
+// Why there is no fit, and what ended the default window when that explains it.
+std::string no_fit_problem(const kit::SimulationTable& sim, const SimulationResult& r, const kit::FitWindow& window,
+                           const std::string& what) {
+  std::string problem = fmt::format("no fit in the window {:.4g}..{:.4g} s: {}", window.start_s, window.end_s, what);
+  if (!sim.fit.fit_end_s && window.end_s < r.end_time_s)
+    problem += fmt::format(" (the contact first opened at t = {:.4g} s, ending the linear regime{})", window.end_s,
+                           sim.contact.infeed_rate_m_per_s > 0.0
+                               ? ""
+                               : "; with no infeed the depth of cut is zero and any vibration lifts the wheel: set "
+                                 "infeed_rate_m_per_s, or one_sided_contact = false for the linear growth");
+  return problem;
+}
+
+// Half peak-to-peak of x over the last tenth of the run about its least-squares line (the
+// infeed's drift); null when that tenth has fewer than 8 samples.
+struct FinalAmplitude {
+  double amplitude_m = 0.0;
+  Json window_s;
+};
+FinalAmplitude final_amplitude(const SimulationResult& r) {
+  const std::size_t n = r.displacement_m.size(), from = n - n / 10;
+  if (n / 10 < 8) return {};
+  double st = 0, sx = 0, stt = 0, stx = 0;
+  const double m = static_cast<double>(n - from);
+  for (std::size_t i = from; i < n; ++i) {
+    st += r.t_s[i]; sx += r.displacement_m[i]; stt += r.t_s[i] * r.t_s[i]; stx += r.t_s[i] * r.displacement_m[i];
+  }
+  const double slope = (m * stx - st * sx) / (m * stt - st * st), offset = (sx - slope * st) / m;
+  double lo = INFINITY, hi = -INFINITY;
+  for (std::size_t i = from; i < n; ++i) {
+    const double d = r.displacement_m[i] - offset - slope * r.t_s[i];
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  return {0.5 * (hi - lo), Json::array({r.t_s[from], r.t_s[n - 1]})};
+}
+
+// Lift-off statistics and the amplitude the response settles at once the contact has opened: the
+// nonlinear outcome that the (then invalid) linear growth rate does not describe.
+Json after_contact_loss(const SimulationResult& r) {
+  const double first = r.contact_loss_intervals.front().first;
+  double open = 0.0, longest = 0.0;
+  for (const auto& [from, to] : r.contact_loss_intervals) {
+    open += to - from;
+    longest = std::max(longest, to - from);
+  }
+  const double span = std::max(r.end_time_s - first, 1e-300);
+  const FinalAmplitude final = final_amplitude(r);
+  return {{"first_contact_loss_s", first},
+          {"open_fraction_after_first_loss", open / span},
+          {"lift_off_count", r.contact_loss_intervals.size()},
+          {"mean_lift_off_s", open / static_cast<double>(r.contact_loss_intervals.size())},
+          {"longest_lift_off_s", longest},
+          {"final_amplitude_m", final.amplitude_m},
+          {"final_amplitude_window_s", final.window_s}};
+}
+
 Json fit_summary(const PointAnalysis& a) {
   if (!a.fit) return {{"problem", a.fit_problem}};
+  const FitValidity& v = *a.validity;
   return {{"window_s", {a.fit->start_s, a.fit->end_s}},
           {"method", "ln of the per-period envelope (half peak-to-peak per period of the dominant "
                      "frequency), least squares"},
-          {"residual_rms", a.fit->residual_rms}};
+          {"residual_rms", a.fit->residual_rms},
+          {"valid", v.valid},
+          {"regime", to_string(v.regime)},
+          {"reason", v.reason},
+          {"contact_loss_fraction_in_window", v.contact_loss_fraction},
+          {"longest_delays_in_window", v.delays_in_window},
+          {"growth_rate_first_half_per_s", v.first_half_growth_per_s},
+          {"growth_rate_second_half_per_s", v.second_half_growth_per_s},
+          {"final_envelope_m", v.final_amplitude_m}};
 }
 
 Json point_summary(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
@@ -129,6 +195,7 @@ Json point_summary(const SimulationResult& r, const PointAnalysis& a, const Work
   Json summary;
   summary["model"] = document.at("model").at("type");
   summary["status"] = r.status;
+  summary["one_sided_contact"] = kit::one_sided(settings.simulation.contact);
   summary["end_time_s"] = r.end_time_s;
   summary["timeseries"] = std::move(timeseries);
   summary["fitted_growth_rate_per_s"] = a.fit ? Json(a.fit->growth_rate_per_s) : Json();
@@ -143,6 +210,7 @@ Json point_summary(const SimulationResult& r, const PointAnalysis& a, const Work
   for (std::size_t i = 0; i < r.contact_loss_intervals.size() && i < 200; ++i)
     intervals.push_back({r.contact_loss_intervals[i].first, r.contact_loss_intervals[i].second});
   summary["contact_loss_intervals_s"] = intervals;
+  if (!r.contact_loss_intervals.empty()) summary["after_contact_loss"] = after_contact_loss(r);
   summary["contact_loss_interval_count"] = r.contact_loss_intervals.size();
   summary["surface_snapshots"] = std::move(snapshots);
   summary["work_surface_quality"] = quality.summary;
@@ -166,8 +234,12 @@ plot::Curves time_figure(const std::string& title, const std::string& y_label, p
   return c;
 }
 
-plot::Curves envelope_figure(const std::string& title, const EnvelopeFit& fit) {
-  plot::Curves env = time_figure(fmt::format("{}: envelope and fit (growth {:.4g} /s)", title, fit.growth_rate_per_s),
+plot::Curves envelope_figure(const std::string& title, const EnvelopeFit& fit, const FitValidity& validity) {
+  const std::string verdict = validity.valid ? fmt::format("growth {:.4g} /s, {}", fit.growth_rate_per_s,
+                                                           to_string(validity.regime))
+                                             : fmt::format("growth {:.4g} /s NOT VALID: {}", fit.growth_rate_per_s,
+                                                           to_string(validity.regime));
+  plot::Curves env = time_figure(fmt::format("{}: envelope and fit ({})", title, verdict),
                                  "envelope of x [m]",
                                  kit::decimated("envelope (half peak-to-peak per period)", fit.t_s, fit.envelope));
   env.log_y = true;
@@ -224,7 +296,7 @@ void plot_point(const SimulationResult& r, const PointAnalysis& a, const WorkSur
   figures.render(time_figure(fmt::format("{}: normal grinding force", title), "normal force Fn [N]",
                              kit::decimated("force Fn", r.t_s, r.force_n)),
                  dir, "force");
-  if (a.fit) figures.render(envelope_figure(title, *a.fit), dir, "envelope_fit");
+  if (a.fit) figures.render(envelope_figure(title, *a.fit, *a.validity), dir, "envelope_fit");
   if (a.spectrum) figures.render(spectrum_figure(title, *a.spectrum, a.peaks), dir, "spectrum");
   plot_surfaces(r, title, dir, figures);
   if (quality.analysis && quality.profile_m) {
@@ -239,15 +311,16 @@ void plot_point(const SimulationResult& r, const PointAnalysis& a, const WorkSur
 
 }  // namespace
 
-PointAnalysis analyse(const SimulationResult& r, const kit::SimulationTable& sim) {
+PointAnalysis analyse(const SimulationResult& r, const kit::SimulationTable& sim, double longest_delay_s) {
   PointAnalysis a;
   for (double x : r.displacement_m) a.max_displacement = std::max(a.max_displacement, std::abs(x));
-  const kit::FitWindow window = kit::fit_window(sim.fit, sim.duration_s);
-  const double start = window.start_s, end = std::min(window.end_s, r.end_time_s);
+  const kit::FitWindow window = kit::fit_window(sim.fit, r, longest_delay_s);
+  const double start = window.start_s, end = window.end_s;
   try {
     a.fit = fit_envelope(r.t_s, r.displacement_m, start, end, sim.fit.min_frequency_hz);
+    a.validity = assess_fit(*a.fit, r.t_s, r.in_contact, longest_delay_s);
   } catch (const std::invalid_argument& e) {
-    a.fit_problem = e.what();
+    a.fit_problem = no_fit_problem(sim, r, window, e.what());
   }
   // Spectrum of the fit window (where chatter has developed), Hann-windowed.
   const std::vector<double> samples = detrended_window(r, start, end);

@@ -8,21 +8,24 @@
 
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/dynamics.hpp"
+#include "chatterlab/fit_validity.hpp"
 #include "chatterlab/spectrum.hpp"
 #include "chatterlab/study_kind.hpp"
 #include "study_kinds/simulate/simulate.hpp"
 
 namespace chatterlab::simulate_point {
 
-// The envelope fit over the fit window and the spectrum of that window.
+// The envelope fit over the fit window, its validity, and the spectrum of that window.
 struct PointAnalysis {
   std::optional<EnvelopeFit> fit;
+  std::optional<FitValidity> validity;  // with fit: can the fitted growth be trusted (issue 19)
   std::string fit_problem;
   std::optional<Spectrum> spectrum;
   std::vector<SpectralPeak> peaks;
   double max_displacement = 0.0;
 };
-PointAnalysis analyse(const SimulationResult& r, const kit::SimulationTable& sim);
+// `longest_delay_s`: kit::longest_delay_s of the model (the default window and the validity need it).
+PointAnalysis analyse(const SimulationResult& r, const kit::SimulationTable& sim, double longest_delay_s);
 
 // The analysis that measures profile quality (Analysis::profile_quality()), the first by name of
 // those registered; null when the build has none.

@@ -31,7 +31,7 @@ wheel_wear_stiffness_n_per_m = 1.0e9
 work_removal_stiffness_n_per_m = 2.0e8
 modes = [ { frequency_hz = 250.0, damping_ratio = 0.05, stiffness_n_per_m = 5.0e7 } ]
 [simulation]
-duration_s = 1.2
+duration_s = 2.5
 sample_rate_hz = 10000
 one_sided_contact = false
 initial_waviness_m = 1e-9
@@ -57,7 +57,7 @@ TEST(Simulate, ValidationWritesTheDefaultsAndIsIdempotent) {
   TempDir dir;
   const Study study = load_study(dir.write("g1.toml", g1_study));
   const Json& sim = study.document.at("simulation");
-  EXPECT_EQ(sim.at("snapshot_times_s"), Json::array({1.2}));  // the end
+  EXPECT_EQ(sim.at("snapshot_times_s"), Json::array({2.5}));  // the end
   EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-6));
   EXPECT_EQ(sim.at("divergence_limit_m"), Json(0.01));
   EXPECT_EQ(sim.at("integrator"), Json("fixed_step"));
@@ -83,17 +83,19 @@ TEST(Simulate, ThePartQualityComesFromTheAnalysisWithTheCapability) {
 TEST(Simulate, ALinearG1RunGrowsAtTheCertifiedRoot) {
   // docs/models/plunge_regenerative.md: the certified rightmost root of this machine is
   // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear (the default fixed-step
-  // engine propagates G1's linear form exactly, docs/dynamics.md).
+  // engine propagates G1's linear form exactly, docs/dynamics.md). 2.5 s: the default fit window
+  // [1.25, 2.5] s spans more than one work revolution (1.09 s), as a valid fit needs.
   TempDir dir;
   const Study study = load_study(dir.write("g1.toml", g1_study));
   auto kind = study_kind_registry().at("simulate").create(ParamValues{});
   const std::vector<Json> row = kind->run_point(study.point_document(0), PointContext{});
-  ASSERT_EQ(row.size(), 8u);
+  ASSERT_EQ(row.size(), 11u);
   EXPECT_NEAR(row[0].get<double>(), 4.790137, 0.01 * 4.790137);  // fitted growth rate
-  EXPECT_NEAR(row[1].get<double>(), 361.7148, 2.0);               // dominant frequency (spectral resolution)
-  EXPECT_EQ(row[3].get<double>(), 0.0);                           // never out of contact
-  EXPECT_EQ(row[4], Json("completed"));
-  EXPECT_TRUE(row[5].is_number());  // the work surface's Wt was measured
+  EXPECT_EQ(row[1], Json(true)) << row[3];                        // ... and the fit is valid
+  EXPECT_NEAR(row[4].get<double>(), 361.7148, 2.0);               // dominant frequency (spectral resolution)
+  EXPECT_EQ(row[6].get<double>(), 0.0);                           // never out of contact
+  EXPECT_EQ(row[7], Json("completed"));
+  EXPECT_TRUE(row[8].is_number());  // the work surface's Wt was measured  // the work surface's Wt was measured
 }
 
 }  // namespace

@@ -21,6 +21,13 @@ constexpr const char* col_stable = "stable";
 constexpr const char* col_certified = "certified";
 constexpr const char* col_certified_real_part = "certified_real_part_per_s";
 constexpr const char* col_certificate = "certificate";
+// Over the speed-tolerance band (models with process conditions).
+constexpr const char* col_band_growth = "band_worst_growth_rate_per_s";
+constexpr const char* col_band_frequency = "band_worst_chatter_frequency_hz";
+constexpr const char* col_band_stable = "stable_over_speed_band";
+constexpr const char* col_exact_ratio = "exact_speed_ratio";
+
+bool has_speed_band(const Model& model) { return model.process_conditions() != nullptr; }
 
 std::vector<ClosedFormIndicatorSpec> indicator_specs(const Json& document) {
   auto model = kit::build_model(document.at("model"));
@@ -81,6 +88,19 @@ void plot_roots(const std::vector<kit::PlotAxis>& axes, const Study& study, cons
   frequency.flag_label = "no certificate";
   kit::plot_column(axes, results, frequency, out_dir, map ? "chatter_frequency_map" : "chatter_frequency",
                    figures);
+  if (std::find(results.output_columns.begin(), results.output_columns.end(), col_band_growth) ==
+      results.output_columns.end())
+    return;
+  const double tol = study.document.at("stability").at("speed_tolerance").get<double>();
+  kit::ColumnFigure band{col_band_growth,
+                         fmt::format("{}: worst over ±{:g} % speed", title, 100.0 * tol),
+                         "worst growth rate in the speed band [1/s]"};
+  band.reference = 0.0;
+  band.reference_label = map ? "robust stability boundary" : "stability limit (Re s = 0)";
+  band.diverging = true;
+  band.low_label = "stable";
+  band.high_label = "chatter";
+  kit::plot_column(axes, results, band, out_dir, map ? "band_growth_rate_map" : "band_growth_rate", figures);
 }
 
 // Closed-form chatter margins (ClosedFormIndicatorSpec::chatter_margin): drawn like the growth
@@ -138,6 +158,9 @@ std::vector<std::string> StabilityMap::output_columns(const Json& document) cons
     columns.push_back(col_growth_per_wheel_rev);
   for (const char* c : {col_stable, col_certified, col_certified_real_part, col_certificate})
     columns.push_back(c);
+  if (has_speed_band(*kit::build_model(document.at("model"))))
+    for (const char* c : {col_band_growth, col_band_frequency, col_band_stable, col_exact_ratio})
+      columns.push_back(c);
   // Closed-form indicators last: a property of the model type, like the wheel column.
   for (const ClosedFormIndicatorSpec& spec : indicator_specs(document)) columns.push_back(spec.name);
   return columns;
@@ -146,8 +169,9 @@ std::vector<std::string> StabilityMap::output_columns(const Json& document) cons
 std::vector<Json> StabilityMap::run_point(const Json& point_document,
                                           const PointContext& /*context*/) const {
   auto model = kit::build_model(point_document.at("model"));
-  const RightmostRoot found = kit::rightmost_root(
-      *model, kit::read_settings(point_document, "stability", kit::stability_settings_table()));
+  const kit::StabilitySettings settings =
+      kit::read_settings(point_document, "stability", kit::stability_settings_table());
+  const RightmostRoot found = kit::rightmost_root(*model, settings);
   const kit::StabilityVerdict v = kit::verdict(found, *model);
   std::vector<Json> out{v.growth_rate_per_s, v.chatter_frequency_hz};
   // Same rule as output_columns(): having a wheel is a property of the model type.
@@ -156,6 +180,13 @@ std::vector<Json> StabilityMap::run_point(const Json& point_document,
   out.emplace_back(found.certified);
   out.push_back(found.certified ? Json(found.certified_real_part) : Json());
   out.emplace_back(found.certificate);
+  if (has_speed_band(*model)) {
+    const kit::SpeedBandVerdict band = kit::speed_band_verdict(point_document.at("model"), *model, settings, found);
+    out.emplace_back(band.worst_growth_rate_per_s);
+    out.emplace_back(band.worst_chatter_frequency_hz);
+    out.emplace_back(band.stable_over_band);
+    out.emplace_back(band.exact_speed_ratio);
+  }
   for (Json& value : indicator_values(*model)) out.push_back(std::move(value));
   return out;
 }

@@ -99,7 +99,53 @@ TEST(StabilityMap, WheelColumnOnlyForModelsWithAWheel) {
   EXPECT_EQ(kind.output_columns(load(dir, dde_model).document), common);
   std::vector<std::string> with_wheel = common;
   with_wheel.insert(with_wheel.begin() + 2, "growth_rate_per_wheel_rev");
+  // A model with process conditions also reports the verdict over the speed-tolerance band.
+  for (const char* c : {"band_worst_growth_rate_per_s", "band_worst_chatter_frequency_hz",
+                        "stable_over_speed_band", "exact_speed_ratio"})
+    with_wheel.push_back(c);
   EXPECT_EQ(kind.output_columns(plunge_study().document), with_wheel);
+}
+
+// G1 with the G8 machine's first two modes and soft process stiffnesses at wheel 1450 rpm: at
+// work 290 rpm the speed ratio is exactly 5, the wheel's delay lattice coincides with every fifth
+// line of the work's, and the rightmost root jumps to about -2.9 /s, while at 289.9 and 290.01 rpm
+// it is within 1e-7 /s of the axis. The verdict over the +-0.5 % band does not rest on the
+// coincidence: it is as marginal as the neighbours' and says which ratio was exact.
+TEST(StabilityMap, ExactSpeedRatioIsFlaggedAndTheBandVerdictIgnoresIt) {
+  TempDir dir;
+  const std::string model = R"(
+[model]
+type = "plunge_regenerative"
+wheel_speed_rpm = 1450
+work_speed_rpm = 290
+contact_stiffness_n_per_m = 1.0e7
+wheel_wear_stiffness_n_per_m = 6.3e10
+work_removal_stiffness_n_per_m = 2.0e6
+modes = [
+  { frequency_hz = 67.56, damping_ratio = 0.03, stiffness_n_per_m = 5.53e7 },
+  { frequency_hz = 102.44, damping_ratio = 0.03, stiffness_n_per_m = 1.27e8 },
+]
+[stability]
+max_frequency_hz = 1250
+[grid]
+work_speed_rpm = [289.9, 290.0, 290.01]
+)";
+  Study study = load(dir, model);
+  const std::vector<std::string> columns = kind.output_columns(study.document);
+  auto value = [&](std::size_t point, const char* name) {
+    return kind.run_point(study.point_document(point), {})[column(columns, name)];
+  };
+  const double exact = value(1, "growth_rate_per_s").get<double>();
+  const double near = value(2, "growth_rate_per_s").get<double>();
+  EXPECT_LT(exact, -1.0);             // the coincidence
+  EXPECT_GT(near, -1e-7);             // its neighbours: marginal
+  EXPECT_EQ(value(1, "exact_speed_ratio"), "5/1");
+  EXPECT_EQ(value(2, "exact_speed_ratio"), "");
+  const double band = value(1, "band_worst_growth_rate_per_s").get<double>();
+  EXPECT_GT(band, -1e-5);             // the band sees the marginal neighbours
+  EXPECT_GE(band, near - 1e-6);
+  EXPECT_GE(value(0, "band_worst_growth_rate_per_s").get<double>(),
+            value(0, "growth_rate_per_s").get<double>());  // the band includes the nominal point
 }
 
 TEST(StabilityMap, DdeBiftoolPointMatchesTheReferenceRoot) {

@@ -42,6 +42,11 @@ struct StabilitySettings {
   int max_newton_iterations = RootSearchOptions{}.max_newton_iterations;
   double newton_relative_tolerance = RootSearchOptions{}.newton_relative_tolerance;
   long max_function_evaluations = RootSearchOptions{}.max_function_evaluations;
+  // A spindle holds its speed only within a tolerance: every verdict is also evaluated with each
+  // rotor's speed anywhere in [1 - tol, 1 + tol] x nominal (models with process conditions). A
+  // verdict that holds at the nominal speeds alone may rest on an exact speed ratio, where the
+  // wheel's and the work's delay lattices coincide and the rightmost root jumps.
+  double speed_tolerance = 0.005;
 };
 
 // Regenerative chatter locks onto a structural mode; at 4 x its frequency the structure's
@@ -61,6 +66,30 @@ RootSearchOptions root_search_options(const StabilitySettings& settings,
 // The certified rightmost root of `model`. Throws PointFailure when the model has no
 // characteristic function or no root was found.
 RightmostRoot rightmost_root(const Model& model, const StabilitySettings& settings);
+
+// The rightmost root over the speed-tolerance band: the worst (largest) growth rate among the
+// nominal root and roots at speeds sampled across the band: each rotor's speed swept with the
+// other at nominal (odd sample counts, four per regenerative lobe the nominal chatter frequency
+// passes through in the band, at least 3, at most 33) and the four corners where both deviate.
+// A sampled worst case: a lobe narrower than the sampling can still be missed.
+struct SpeedBandVerdict {
+  bool applies = false;  // the model declares process conditions and the tolerance is > 0
+  double worst_growth_rate_per_s = 0.0;
+  double worst_chatter_frequency_hz = 0.0;
+  double worst_wheel_speed_rpm = 0.0, worst_work_speed_rpm = 0.0;
+  bool stable_over_band = false;
+  bool certified = false;     // every sampled root certified
+  std::size_t samples = 0;    // roots evaluated (the nominal one included)
+  // The nominal wheel/work speed ratio as p/q when it is one of small whole numbers (q <= 12):
+  // the delay lattices then share roots, and the nominal verdict is not robust by itself.
+  std::string exact_speed_ratio;
+};
+// `model` is built from `model_table` (the band's models differ from it by their speeds only).
+SpeedBandVerdict speed_band_verdict(const Json& model_table, const Model& model,
+                                    const StabilitySettings& settings, const RightmostRoot& nominal);
+
+// "p/q" when a/b equals p/q (q <= max_denominator) to 1e-9 relative; empty otherwise.
+std::string exact_ratio(double a, double b, int max_denominator = 12);
 
 // The quantities derived from a rightmost root that every kind reports the same way.
 struct StabilityVerdict {

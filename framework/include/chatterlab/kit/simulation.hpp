@@ -48,10 +48,14 @@ const ParamTable<DisturbanceSettings>& disturbance_table();
 // The wheel-work contact: infeed, one-sided or bilateral force, geometric filtering arcs (G4).
 struct ContactSettings {
   double infeed_rate_m_per_s = 0.0;
-  bool one_sided_contact = true;
+  std::optional<bool> one_sided_contact;  // absent: one-sided exactly when there is an infeed
   double wheel_contact_arc_deg = 0.0, work_contact_arc_deg = 0.0;
 };
 const ParamTable<ContactSettings>& contact_table();
+// Whether the contact is one-sided. Without an infeed the mean depth of cut is zero, so a
+// one-sided contact opens at the first vibration and never carries the linear growth (issue 19);
+// the bilateral contact is then the linearisation the roots describe.
+bool one_sided(const ContactSettings& settings);
 
 // The integrator and the end of a run that runs away (docs/dynamics.md: the fixed-step engine is
 // the default route, the adaptive SUNDIALS integrators the reference).
@@ -73,7 +77,17 @@ const ParamTable<FitWindowSettings>& fit_window_table();
 struct FitWindow {
   double start_s = 0.0, end_s = 0.0;
 };
+// The window as given, for checks before a run (a default end is the end of the run).
 FitWindow fit_window(const FitWindowSettings& settings, double duration_s);
+// The window of a finished run. The default is the later half of the linear regime: it ends where
+// the contact first opens after the longest regenerative delay (after that the amplitude is
+// limited by lift-off, not by the roots; lift-offs while the infeed builds the first cut do not
+// count) or at the end of the run, and starts half-way there but not before that delay (only then
+// are the regenerated surfaces under the contact). Explicit fit_start_s / fit_end_s are taken as
+// given (the end clipped to the run); assess_fit (chatterlab/fit_validity.hpp) judges either.
+FitWindow fit_window(const FitWindowSettings& settings, const SimulationResult& run, double longest_delay_s);
+// The longest regenerative delay of a model: one revolution of its slowest rotor at nominal speed.
+double longest_delay_s(const TimeDomainModel& model);
 
 // ------------------------------------------------------------------ the [simulation] table
 

@@ -1,5 +1,5 @@
 // Known answers for the S1-S3 quantifications (MODELS.md S1-S3, book 5-23..5-45).
-#include "suppression/suppression_map/suppression_measures.hpp"
+#include "study_kinds/suppression_map/suppression_measures.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,19 +8,24 @@
 #include <limits>
 #include <numbers>
 
-#include "suppression/variable_speed/variable_speed.hpp"
+#include "chatterlab/suppression.hpp"
 
 namespace chatterlab::suppression_measures {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+// The sinusoidal law of the registered variable_speed plugin (reached by name through the
+// registry, as a study names it).
 std::shared_ptr<const ModulationLaw> sine_law(double amplitude, double frequency) {
-  VariableSpeedParameters p;
-  p.shape = ModulationShape::sinusoidal;
-  p.amplitude_ratio = amplitude;
-  p.frequency_hz = frequency;
-  return make_modulation_law(p, 10.0);
+  const Json params = {{"target", "wheel_speed"}, {"shape", "sinusoidal"}, {"amplitude_ratio", amplitude},
+                       {"frequency_hz", frequency}};
+  struct Nowhere final : SourceMap {
+    SourceLocation locate(std::string_view) const override { return {}; }
+  };
+  const auto& entry = suppression_registry().at("variable_speed");
+  const Json validated = validate_params(params, entry.info.params, "suppression", Nowhere());
+  return entry.create(ParamValues(validated))->law(10.0);
 }
 
 // ------------------------------------------------------------------ S2

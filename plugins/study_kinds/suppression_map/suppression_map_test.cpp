@@ -2,7 +2,7 @@
 // exactly, slow modulation follows growth-rate averaging (5-37) where its condition holds and
 // departs from it outside, chattering roots sit in the exciting zone of 5-45 (sign of 5-40), and
 // bad input names file, line, key, value and limit.
-#include "suppression/suppression_map/suppression_map.hpp"
+#include "study_kinds/suppression_map/suppression_map.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,10 @@
 #include <fmt/format.h>
 
 #include "chatterlab/model.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "chatterlab/kit/model.hpp"
 #include "chatterlab/roots.hpp"
 #include "chatterlab/study.hpp"
-#include "suppression/suppression_map/suppression_measures.hpp"
+#include "study_kinds/suppression_map/suppression_measures.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -125,15 +125,15 @@ TEST(SuppressionMap, ChatteringRootsLieInTheExcitingZoneOf545) {
   // work-regenerative G1 at several work speeds has 0 < phi < pi, near pi/2 (largest energy
   // input, as the book states for the developed chatter).
   for (double rpm : {40.0, 55.0, 70.0}) {
-    PlungeRegenerativeParameters p;
-    p.wheel_speed_rpm = 1500;
-    p.work_speed_rpm = rpm;
-    p.contact_stiffness_n_per_m = 1e8;
-    p.wheel_wear_stiffness_n_per_m = 1e9;
-    p.work_removal_stiffness_n_per_m = 5e7;
-    p.wheel_regeneration = false;
-    p.modes = {{180.0, 0.03, 5e7}};
-    auto fn = PlungeRegenerative(p).characteristic();
+    const Json model = {{"type", "plunge_regenerative"},
+                        {"wheel_speed_rpm", 1500.0},
+                        {"work_speed_rpm", rpm},
+                        {"contact_stiffness_n_per_m", 1e8},
+                        {"wheel_wear_stiffness_n_per_m", 1e9},
+                        {"work_removal_stiffness_n_per_m", 5e7},
+                        {"wheel_regeneration", false},
+                        {"modes", {{{"frequency_hz", 180.0}, {"damping_ratio", 0.03}, {"stiffness_n_per_m", 5e7}}}}};
+    auto fn = kit::build_model(model)->characteristic();
     RootSearchOptions options;
     options.max_frequency_hz = 720.0;
     const RightmostRoot root = find_rightmost_root(*fn, options);
@@ -172,7 +172,10 @@ TEST(SuppressionMap, BadInputNamesFileLineKeyValueAndLimit) {
                                      "[suppression]\ntype = \"variable_speed\"\n"));
   });
   EXPECT_NE(e.find("dde.toml:"), std::string::npos) << e;
-  EXPECT_NE(e.find("model.type = \"linear_dde\": the suppression_map study needs a model with a time-domain form"), std::string::npos) << e;
+  EXPECT_NE(e.find("model.type = \"linear_dde\": this model has no time-domain form (simulation), which the "
+                   "suppression_map study needs"),
+            std::string::npos)
+      << e;
   // A grid value is checked like a written one.
   e = testing::input_error_of([&] {
     load_study(dir.write("grid.toml", study_text(wheel_model, "", "revolutions = 5") +

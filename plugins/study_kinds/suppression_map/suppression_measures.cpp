@@ -1,4 +1,4 @@
-#include "suppression/suppression_map/suppression_measures.hpp"
+#include "study_kinds/suppression_map/suppression_measures.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -18,13 +18,15 @@
 //                               the modulation changes the relative thickness da/a
 //   simulation_outcome          "completed" or "diverged"
 // Heatmaps (per value of a string grid axis such as suppression.shape) use a diverging palette
-// centred on "no effect". docs/suppression.md is the user documentation.
+// centred on "no effect". Any model works that has a characteristic function, a time-domain form
+// and the process-conditions capability (chatterlab/process_conditions.hpp: the frozen modulated
+// conditions); feed modulation with a thickness exponent also needs its G1 stiffness chain.
+// docs/suppression.md is the user documentation.
 #include <filesystem>
 #include <string>
 #include <vector>
 
-#include "chatterlab/registry.hpp"
-#include "chatterlab/study_kind.hpp"
+#include "chatterlab/kit.hpp"
 
 namespace chatterlab {
 
