@@ -12,6 +12,7 @@
 //   LinearisedModel (linearised_model.hpp)    the linearisation derived from the physics written
 //                                             once (derived_model.hpp): roots, Floquet
 //   MeasuredMachine (modal_fit.hpp)           the measured FRF (and modal fit) the model is built on
+//   StructuralCompliance (below)              the machine's compliance H(s) between wheel and work
 #include <limits>
 #include <memory>
 #include <optional>
@@ -44,6 +45,20 @@ struct StiffnessChain {
   double wheel_wear_stiffness_n_per_m = std::numeric_limits<double>::infinity();    // kg
   double work_removal_stiffness_n_per_m = std::numeric_limits<double>::infinity();  // kw
   std::vector<ModeView> modes;
+  // G4's penetration-rate coefficient kd [N s/m] acting beside kw in the work chain (0: none).
+  // With kd > 0 the work term of eq 2-16 is 1/(kw (1 - e^{-Tw s}) + kd s), whose real part on
+  // s = jw is no longer 1/(2 kw): a closed form built on eq 2-21 (the compliance chart's process
+  // line) does not hold and must refuse such a chain.
+  double penetration_damping_n_s_per_m = 0.0;
+};
+
+// Capability of a model: the machine's structural compliance H(s) [m/N] between wheel and work
+// in the direction of the normal force (G1: the summed modal compliances), at any complex s [1/s];
+// the compliance chart draws H(jw) against the process line.
+class StructuralCompliance {
+ public:
+  virtual ~StructuralCompliance() = default;
+  virtual Complex compliance_m_per_n(Complex s) const = 0;
 };
 
 class Model {
@@ -76,6 +91,7 @@ class Model {
   virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
   // The linearisation of a model written once (DerivedModel provides it).
   virtual const LinearisedModel* linearised() const { return nullptr; }
+  virtual const StructuralCompliance* structural_compliance() const { return nullptr; }
 };
 
 }  // namespace chatterlab

@@ -26,7 +26,8 @@
 // std::string, std::vector<double> (real_list), std::vector<std::vector<double>> (real_matrix),
 // an enum through add_choice (string with choices), a struct with its own ParamTable (table,
 // add_table), std::vector of such structs (table_list, add_tables); std::optional<T> of any of
-// the scalar ones is an optional parameter (null when absent).
+// the scalar ones is an optional parameter (null when absent). add_fields embeds a sub-struct's
+// table flat (its keys at this table's level).
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -182,6 +183,20 @@ class ParamTable {
     return Field(&e.spec, &e.required);
   }
 
+  // The members of a sub-struct declared by its own table, flat in this one: a plugin whose
+  // parameters extend another parameter set (G1's plus one coefficient) declares the common part
+  // once and keeps it as one member.
+  template <class Sub>
+  void add_fields(Sub S::*member, const ParamTable<Sub>& fields) {
+    for (const auto& sub : fields.entries_) {
+      Entry& e = push(sub.spec);
+      e.required = sub.required;
+      e.optional = sub.optional;
+      e.read = [member, read = sub.read](S& s, const Json& table) { read(s.*member, table); };
+      e.write = [member, write = sub.write](const S& s, Json& table) { write(s.*member, table); };
+    }
+  }
+
   // The declared parameters, in declaration order, defaults from a default-constructed S.
   std::vector<ParamSpec> specs() const {
     const Json defaults = write(S{});
@@ -212,6 +227,7 @@ class ParamTable {
   }
 
  private:
+  template <class> friend class ParamTable;  // add_fields reads another table's entries
   template <class T> struct unwrap { using type = T; };
   template <class T> struct unwrap<std::optional<T>> { using type = T; };
 

@@ -1,6 +1,6 @@
 // G4 known answers: the energy balance 2-72..2-75 the stiffnesses come from, the plane-grinding
 // limit of the equivalent diameter, the book's 2-78 form, and the filtering condition behind v_c.
-#include "models/grinding_process/grinding_process.hpp"
+#include "shared/plunge_dynamics/grinding_process.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,13 +19,17 @@ TEST(GrindingProcess, StiffnessesReproduceTheEnergyBalance) {
   const double psi = 2e10, width = 0.035, vw = 0.29, vg = 35.0, rg = 0.2, u0 = 5e-6;
   const double du = 1e-7, dt = 1e-4;
   const double de = 2.0 * rg;  // plane grinding
-  const double ks = static_grinding_stiffness_n_per_m(psi, width, vw, vg);
+  const double ks = psi * width * removal_speed_factor(speed_ratio(vw, vg));
   const double kd = dynamic_grinding_coefficient_n_s_per_m(ks, de, u0, vw);
   const double energy = psi * width * ((u0 + 0.5 * du) * vw * dt + std::sqrt(2.0 * rg * u0) * du);
   const double force = ks * (u0 + 0.5 * du) + kd * du / dt;
   EXPECT_NEAR(force * (vg + vw) * dt, energy, 1e-12 * energy);
   EXPECT_NEAR(kd, psi * width * std::sqrt(2.0 * rg * u0) / (vg * (1.0 + vw / vg)), 1e-9 * kd);
   EXPECT_NEAR(ks, psi * width * 0.29 / 35.29, 1e-6 * ks);
+  // The wear stiffness of the same force over a wheel surface passing vg/vw times faster is
+  // kg = G ks vg/vw = G psi Bw/(1 + Kv): the two speed factors differ by exactly Kv.
+  EXPECT_NEAR(removal_speed_factor(0.29 / 35.0) / wear_speed_factor(0.29 / 35.0), 0.29 / 35.0, 1e-15);
+  EXPECT_NEAR(surface_speed_m_per_s(100.0, 55.0), std::numbers::pi * 0.1 * 55.0 / 60.0, 1e-15);
 }
 
 TEST(GrindingProcess, EquivalentDiameterAndBookForm2_78) {

@@ -1,4 +1,4 @@
-#include "models/plunge_regenerative/wheel_growth_rate.hpp"
+#include "shared/plunge_dynamics/wheel_growth_rate.hpp"
 
 #include <cmath>
 #include <numbers>

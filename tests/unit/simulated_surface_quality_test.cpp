@@ -1,5 +1,6 @@
-// Part quality of simulated work surfaces (issue 7 part 6): the `simulate` kind evaluates the
-// final work surface with the surface metrology (surface_profile plugin). Known answer: MODELS.md
+// Part quality of simulated work surfaces (issue 7 part 6): the `simulate` kind measures the
+// final work surface through the profile-quality capability of the surface metrology
+// (surface_profile plugin). Cross-cutting: a study kind, a model's closed form, an analysis. Known answer: MODELS.md
 // G6 wheel unbalance at n_g / n_w = 1500 / 50 imprints exactly Z = 30 lobes of the steady relative
 // amplitude |X1 + X2| (the closed form, a 2 x 2 complex solve independent of the simulation);
 // the 50 UPR Gaussian passes them with ISO 16610-21 transmission exp(-pi (alpha Z / 50)^2), so
@@ -128,7 +129,8 @@ TEST(SimulatedSurfaceQuality, BadSurfaceKeysNameTheKeyAndLimit) {
     });
   };
   const std::string mm = message("[surface]\ncutoff_mm = 0.8\n");
-  EXPECT_NE(mm.find("surface.cutoff_mm = 0.8: a simulated work surface is a closed profile"),
+  EXPECT_NE(mm.find("surface.cutoff_mm = 0.8: a simulated work surface is a closed profile (one revolution); "
+                    "a closed profile takes its cut-off in undulations per revolution: give cutoff_upr"),
             std::string::npos) << mm;
   const std::string one_speed = message("[surface]\nwork_speed_rpm = 50\n");
   EXPECT_NE(one_speed.find("Wz|f needs both wheel_speed_rpm and work_speed_rpm"), std::string::npos)

@@ -3,17 +3,17 @@
 // fig 2-4 (MODELS.md G1 eq 2-21). On s = j w the characteristic equation 2-16 splits into
 // Re H(jw) = -(1/2)(2/kc + 1/kg + 1/kw) (the process line eta) and an imaginary part fixed by the
 // speeds; if the machine compliance curve H(jw) never reaches the line, no root can cross the
-// imaginary axis: stable at every wheel and work speed (kc counts double). For
-// `plunge_regenerative` and `thompson` models (the latter through its equivalent G1 parameters).
-// Per point: the leftmost point of the compliance curve, the line, and whether they meet; a
-// single-point study also writes chart.csv and the chart plot. docs/models/closed_forms.md.
+// imaginary axis: stable at every wheel and work speed (kc counts double). For every model with a
+// G1 stiffness chain and a structural compliance (Model::stiffness_chain(),
+// Model::structural_compliance(): plunge_regenerative, thompson). Per point: the leftmost point
+// of the compliance curve, the line, and whether they meet; a single-point study also writes
+// chart.csv and the chart plot. docs/models/closed_forms.md.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "chatterlab/registry.hpp"
-#include "chatterlab/study_kind.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "chatterlab/kit.hpp"
 
 namespace chatterlab {
 
@@ -25,10 +25,18 @@ struct ComplianceChart {
   std::vector<double> frequency_hz, real_m_per_n, imag_m_per_n;  // the curve
 };
 
-// The chart of a G1 model over 0..max_frequency_hz, `points` samples (the minimum refined by
-// golden section between the samples next to the smallest).
-ComplianceChart compliance_chart(const PlungeRegenerativeParameters& parameters,
+// The chart of a model's stiffness chain and structural compliance over 0..max_frequency_hz,
+// `points` samples (the minimum refined by golden section between the samples next to the
+// smallest).
+ComplianceChart compliance_chart(const StiffnessChain& chain, const StructuralCompliance& compliance,
                                  double max_frequency_hz, int points);
+
+// The [chart] table.
+struct ComplianceChartSettings {
+  std::optional<double> max_frequency_hz;  // default: 4 x the highest structural mode
+  int points = 20000;
+};
+const ParamTable<ComplianceChartSettings>& compliance_chart_settings_table();
 
 class ComplianceChartKind final : public StudyKind {
  public:
@@ -39,6 +47,7 @@ class ComplianceChartKind final : public StudyKind {
   std::vector<Json> run_point(const Json& point_document, const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
+  bool requires_serial(const Json& document) const override;
 };
 
 }  // namespace chatterlab

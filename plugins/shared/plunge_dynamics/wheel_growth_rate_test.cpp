@@ -2,7 +2,7 @@
 // characteristic (plunge_regenerative, work_regeneration = false), and the per-revolution
 // amplification of eqs 5-37..5-39. The table printed by ErrorAgainstExactRootsAcrossDampingAndFrequency is the
 // one in docs/models/closed_forms.md.
-#include "models/plunge_regenerative/wheel_growth_rate.hpp"
+#include "shared/plunge_dynamics/wheel_growth_rate.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "chatterlab/roots.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
 
 namespace chatterlab {
 namespace {

@@ -1,10 +1,14 @@
-#include "models/grinding_process/grinding_process.hpp"
+#include "shared/plunge_dynamics/grinding_process.hpp"
 
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
 namespace chatterlab::grinding_process {
+
+double surface_speed_m_per_s(double diameter_mm, double speed_rpm) {
+  return std::numbers::pi * diameter_mm * 1e-3 * speed_rpm / 60.0;
+}
 
 double equivalent_diameter_m(double dw, double dg, Contact contact) {
   if (!(dw > 0.0 && dg > 0.0)) throw std::invalid_argument("equivalent_diameter_m: diameters must be > 0");
@@ -16,10 +20,9 @@ double equivalent_diameter_m(double dw, double dg, Contact contact) {
 
 double speed_ratio(double vw, double vg) { return vw / vg; }
 
-double static_grinding_stiffness_n_per_m(double psi, double width, double vw, double vg) {
-  const double kv = speed_ratio(vw, vg);
-  return psi * width * kv / (1.0 + kv);
-}
+double removal_speed_factor(double kv) { return kv / (1.0 + kv); }
+
+double wear_speed_factor(double kv) { return 1.0 / (1.0 + kv); }
 
 double contact_length_m(double de, double u0) { return std::sqrt(de * u0); }
 
