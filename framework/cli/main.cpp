@@ -1,11 +1,13 @@
 // The `chatterlab` command: list, describe, validate, run; the SDK commands (new-plugin,
 // check-plugin, init, completion) are in sdk_commands.cpp.
 //
-// Exit codes (docs/studies.md): 0 every grid point ok, 1 some points failed (each recorded in
-// results.csv and meta.json), 2 the study could not be run at all: bad input, a usage error, an
-// unusable output directory. Errors go to stderr as "chatterlab: error: <message>", never as a
-// stack trace. Under mpirun every rank loads the same study and the runner makes its errors
-// collective, so only rank 0 prints.
+// Exit codes (docs/studies.md, "Exit codes"), one meaning each: 0 every grid point ok, 1 some
+// points failed or timed out (each recorded in results.csv and meta.json), 2 rejected: bad input,
+// a usage error, an unusable or busy output directory, a refused --resume (nothing run, nothing
+// written), or an input file that changed during the run (stopped, results.csv not written),
+// 3 an output could not be written (disk full, I/O error; meta.json says which). Errors go to
+// stderr as "chatterlab: error: <message>", never as a stack trace. Under mpirun every rank
+// loads the same study and the runner makes its errors collective, so only rank 0 prints.
 #include <algorithm>
 #include <exception>
 #include <filesystem>
@@ -13,6 +15,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -23,6 +26,7 @@
 #include "chatterlab/plugin_api.hpp"
 #include "chatterlab/detail/mpi_env.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
 #include "sdk_commands.hpp"
@@ -32,6 +36,7 @@ namespace {
 using chatterlab::Json;
 
 constexpr int exit_bad_input = 2;
+constexpr int exit_output_failed = 3;
 
 // MPI_Init only under a launcher; MPI_Finalize on every way out of main.
 struct MpiSession {
@@ -51,6 +56,15 @@ int report_error(const std::string& message) {
 // Numbers in shortest form (1450, not 1450.0), anything else as JSON.
 std::string show(const Json& value) {
   return value.is_number_float() ? fmt::format("{}", value.get<double>()) : value.dump();
+}
+
+// 1.2 GiB, 340 MiB, 12 KiB, 800 bytes.
+std::string bytes_text(std::uint64_t bytes) {
+  const double b = static_cast<double>(bytes);
+  if (b >= 1 << 30) return fmt::format("{:.1f} GiB", b / (1 << 30));
+  if (b >= 1 << 20) return fmt::format("{:.0f} MiB", b / (1 << 20));
+  if (b >= 1 << 10) return fmt::format("{:.0f} KiB", b / (1 << 10));
+  return fmt::format("{} bytes", bytes);
 }
 
 // One line per axis for `validate`: "wheel_speed_rpm  21 values from 1000 to 2000".
@@ -88,6 +102,20 @@ void print_summary(const chatterlab::Study& study) {
   if (study.grid.empty()) out << "  grid        (none: a single point)\n";
   out << fmt::format("  points      {}{}\n", study.point_count(),
                      study.grid.size() > 1 ? " (" + shape + ", last key varies fastest)" : "");
+  const chatterlab::GridCost cost =
+      chatterlab::grid_cost(study.point_count(), study.grid.size(), study.output_columns.size());
+  out << fmt::format(
+      "  estimate    memory {} at rank 0, disk {} for the journal, results.csv and grid plots\n"
+      "              ({} points x {} and {} bytes; a kind's own per-point files come on top)\n"
+      "              limit on this machine: {} points (half of {} of memory){}\n",
+      bytes_text(cost.memory_bytes()), bytes_text(cost.disk_bytes()), cost.points,
+      cost.memory_bytes_per_point, cost.disk_bytes_per_point, cost.default_max_points,
+      bytes_text(2 * cost.memory_budget_bytes),
+      cost.points > cost.default_max_points ? "; this grid needs --allow-large" : "");
+  if (study.inputs)
+    for (const auto& file : study.inputs->files())
+      out << fmt::format("  input       {} ({}, {} bytes, sha256 {})\n", file.path.string(),
+                         chatterlab::input_role_name(file.role), file.bytes, file.sha256);
   std::cout << out.str();
 }
 
@@ -97,6 +125,9 @@ struct Arguments {
   std::filesystem::path out_dir;
   int threads = 0;
   bool resume = false;
+  bool retry_failed = false;
+  bool isolate = false;
+  std::optional<double> point_timeout_s;
   bool allow_large = false;
   bool progress = false;
   bool no_progress = false;
@@ -128,15 +159,34 @@ int run(CLI::App& app, const Arguments& args) {
                         : args.out_dir;
   options.threads = args.threads;
   options.resume = args.resume;
+  options.retry_failed = args.retry_failed;
+  options.isolate = args.isolate;
+  options.point_timeout_s = args.point_timeout_s;
   if (args.progress || args.no_progress) options.progress = args.progress;
   chatterlab::RunSummary summary = chatterlab::run_study(study, options);
   if (is_root()) {
     std::cout << fmt::format("{} points: {} ok, {} failed", summary.points,
                              summary.points - summary.failed, summary.failed);
+    if (summary.timed_out > 0) std::cout << fmt::format(" ({} of them timed out)", summary.timed_out);
     if (summary.resumed > 0) std::cout << fmt::format(" ({} taken over from the earlier run)", summary.resumed);
-    std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
+    if (summary.output_error.empty())
+      std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
+    else
+      std::cout << '\n';
     if (summary.failed > 0)
       std::cout << "failed points: status column of results.csv, reasons in meta.json\n";
+    if (!summary.output_error.empty())
+      std::cerr << fmt::format(
+          "chatterlab: error: output could not be written: {} (meta.json: state output_failed); "
+          "make room and run again with --resume\n",
+          summary.output_error);
+    constexpr std::size_t shown = 5;
+    for (std::size_t i = 0; i < summary.notices.size() && i < shown; ++i)
+      std::cout << fmt::format("notice{}: {}\n",
+                               summary.points > 1 ? fmt::format(" (point {})", summary.notices[i].point) : "",
+                               summary.notices[i].text);
+    if (summary.notices.size() > shown)
+      std::cout << fmt::format("... {} more notices in meta.json\n", summary.notices.size() - shown);
   }
   return summary.exit_code();
 }
@@ -144,6 +194,8 @@ int run(CLI::App& app, const Arguments& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A worker process of the runner (--isolate, time limits): before MPI, which it never joins.
+  if (argc > 1 && std::string_view(argv[1]) == "__worker") return chatterlab::run_point_worker(argc, argv);
   MpiSession mpi(argc, argv);
 
   CLI::App app{"chatterlab: chatter and stability analysis for grinding"};
@@ -164,7 +216,8 @@ int main(int argc, char** argv) {
     command->add_option("STUDY", args.study_file, "Study file (TOML), see docs/studies.md")
         ->required();
     command->add_flag("--allow-large", args.allow_large,
-                      fmt::format("Accept grids of more than {} points", chatterlab::max_grid_points));
+                      "Accept grids larger than this machine's default limit (`chatterlab "
+                      "validate` prints it: half the memory over the results' bytes per point)");
   };
   auto* validate = app.add_subcommand("validate", "Check a study file without running it");
   add_study_arguments(validate);
@@ -179,8 +232,18 @@ int main(int argc, char** argv) {
                        : "must be 0 (all cores) or a positive whole number, not " + text;
           },
           "N >= 0"));
-  run_command->add_flag("--resume", args.resume,
-                        "Complete an interrupted run, keeping the points it finished");
+  auto* resume = run_command->add_flag(
+      "--resume", args.resume, "Complete an interrupted run, keeping the points it finished");
+  run_command->add_flag("--retry-failed", args.retry_failed,
+                        "With --resume: compute the failed and timed-out points again")
+      ->needs(resume);
+  run_command->add_flag("--isolate", args.isolate,
+                        "Run every point in a worker process: a crashing plugin fails only its point");
+  run_command->add_option("--point-timeout", args.point_timeout_s,
+                          "Time limit of one grid point in seconds (overrides [run] "
+                          "point_timeout_s); a point still running then is killed and recorded "
+                          "as timeout")
+      ->check(CLI::PositiveNumber);
   auto* progress = run_command->add_flag("--progress", args.progress,
                                          "Show a progress bar (default: only on a terminal)");
   run_command->add_flag("--no-progress", args.no_progress, "Never show a progress bar")
@@ -223,6 +286,12 @@ int main(int argc, char** argv) {
     std::cerr << "chatterlab: error: "
               << (is_root() ? "" : fmt::format("(rank {}) ", chatterlab::mpi_rank())) << e.what()
               << '\n';
+    const int code =
+        dynamic_cast<const chatterlab::OutputError*>(&e) != nullptr ? exit_output_failed : exit_bad_input;
+    if (chatterlab::mpi_size() > 1) chatterlab::mpi_abort(code);
+    return code;
+  } catch (...) {
+    std::cerr << "chatterlab: error: " << chatterlab::describe_current_exception() << '\n';
     if (chatterlab::mpi_size() > 1) chatterlab::mpi_abort(exit_bad_input);
     return exit_bad_input;
   }

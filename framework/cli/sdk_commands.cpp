@@ -18,6 +18,7 @@
 
 #include "chatterlab/conformance.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plugin_api.hpp"
 #include "chatterlab/study_template.hpp"
@@ -246,6 +247,9 @@ void record_command_line_plugins(Study& study, const std::vector<std::string>& l
       continue;
     study.plugin_libraries.push_back(path);
     study.document["plugins"].push_back(path);
+    // Hashed like a library the study lists: meta.json, the resume fingerprint and the workers'
+    // check of the library before they load it all see it.
+    if (study.inputs) study.inputs->read(path, InputRole::plugin, /*keep_bytes=*/false);
   }
 }
 

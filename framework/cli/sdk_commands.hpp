@@ -37,7 +37,8 @@ void add_sdk_commands(CLI::App& app, SdkArguments& args);
 std::optional<int> run_sdk_command(const CLI::App& app, const SdkArguments& args);
 
 // `--plugin LIB` on validate and run: the libraries are recorded in the study as if it named them
-// under `plugins` (absolute paths), so meta.json's resolved study loads them again.
+// under `plugins` (absolute paths, hashed into the input snapshot), so meta.json's resolved
+// study loads them again and a resume or a worker process notices a rebuilt library.
 void record_command_line_plugins(Study& study, const std::vector<std::string>& libraries);
 
 }  // namespace chatterlab::cli

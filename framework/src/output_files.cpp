@@ -10,35 +10,44 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "chatterlab/errors.hpp"
 #include "runner/results_io.hpp"
 
 namespace chatterlab {
 
 namespace {
-// Unique per process and call: two threads writing files in one directory never share a
-// temporary name.
-std::string temporary_suffix() {
-  static std::atomic<unsigned long> counter{0};
-  return fmt::format(".tmp{}.{}", static_cast<long>(::getpid()), counter.fetch_add(1));
-}
+thread_local std::size_t failed_writes = 0;
 }  // namespace
 
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+std::size_t failed_output_writes_on_this_thread() { return failed_writes; }
+void note_failed_output_write() { ++failed_writes; }
+
+// Unique per process and call: two threads writing files in one directory never share a
+// temporary name.
+std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
+  static std::atomic<unsigned long> counter{0};
   std::filesystem::path tmp = path;
-  tmp += temporary_suffix();
+  tmp += fmt::format(".tmp{}.{}", static_cast<long>(::getpid()), counter.fetch_add(1));
+  return tmp;
+}
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+  const std::filesystem::path tmp = temporary_path_for(path);
   if (path.has_parent_path()) {
     std::error_code ec;
     std::filesystem::create_directories(path.parent_path(), ec);
-    if (ec)
-      throw std::runtime_error(fmt::format("cannot create directory {}: {}",
-                                           path.parent_path().string(), ec.message()));
+    if (ec) {
+      note_failed_output_write();
+      throw OutputError(fmt::format("cannot create directory {}: {}",
+                                    path.parent_path().string(), ec.message()));
+    }
   }
   auto fail = [&](const char* what) {
     int err = errno;
     std::error_code ignored;
     std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error(
-        fmt::format("cannot {} {}: {}", what, path.string(), std::strerror(err)));
+    note_failed_output_write();
+    throw OutputError(fmt::format("cannot {} {}: {}", what, path.string(), std::strerror(err)));
   };
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) fail("create");

@@ -1,6 +1,7 @@
 #include "chatterlab/params.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <stdexcept>
 
@@ -136,6 +137,7 @@ struct Checker {
                                  messages::sorted_list(spec.choices),
                                  messages::did_you_mean(v.get<std::string>(), spec.choices)));
         }
+        if (spec.data_file) return data_file(v, path);
         return v;
       }
       case ValueKind::real_list: {
@@ -179,6 +181,21 @@ struct Checker {
         return validate_params(v, spec.fields, path, sources);
     }
     fail(path, "unsupported parameter kind");
+  }
+
+  // A data file name resolved against the directory of the study file that names it.
+  Json data_file(const Json& v, const std::string& path) const {
+    std::filesystem::path file = v.get<std::string>();
+    if (file.empty()) fail(path, fmt::format("{} = \"\": expected a file name", path));
+    const SourceLocation where = sources.locate(path);
+    if (file.is_relative() && where.line > 0)
+      file = std::filesystem::absolute(std::filesystem::path(where.file)).parent_path() / file;
+    file = file.lexically_normal();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+      fail(path, fmt::format("{} = {}: no such file{}", path, show(v),
+                             file.string() == v.get<std::string>() ? "" : fmt::format(" ({})", file.string())));
+    return file.string();
   }
 
   void count(const Json& v, const ParamSpec& spec, const std::string& path) const {

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -23,6 +24,9 @@
 #include <utility>
 
 #include <fmt/format.h>
+
+#include "chatterlab/errors.hpp"
+#include "chatterlab/output_files.hpp"
 
 extern char** environ;
 
@@ -64,13 +68,6 @@ std::string gp_string(std::string_view text) {
 // broken there (a failed point is not bridged) and a heatmap cell is not drawn.
 std::string number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "NaN"; }
 
-void write_text_file(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) throw PlotError(fmt::format("cannot write {}", file.string()));
-}
-
 void check_stem(const std::string& stem) {
   if (stem.empty() || stem.find('/') != std::string::npos || stem == "." || stem == "..")
     throw PlotError(fmt::format("plot file stem '{}' must be a plain file name", stem));
@@ -83,6 +80,9 @@ std::string script_preamble(const std::string& stem, std::string_view what,
   return fmt::format(
       "# {} written by chatterlab from {}.dat.\n"
       "# Re-render after editing: cd into this directory and run `gnuplot {}.gp`.\n"
+      "# (chatterlab renders into temporary names, output_suffix, and renames the finished\n"
+      "# images, so no reader ever sees half a PNG.)\n"
+      "if (!exists(\"output_suffix\")) output_suffix = \"\"\n"
       "set encoding utf8\n"
       "set title {} font '{}'\n"
       "set xlabel {}\nset ylabel {}\n"
@@ -126,19 +126,21 @@ std::string log_axis(char axis, double low, double high) {
 // for the SVG. The SVG gets a white background so it reads the same as the PNG on dark pages.
 std::string script_png_terminal(const std::string& stem) {
   return fmt::format(
-      "set terminal pngcairo size {},{} noenhanced font '{}' linewidth 1.5\nset output {}\n",
+      "set terminal pngcairo size {},{} noenhanced font '{}' linewidth 1.5\n"
+      "set output {}.output_suffix\n",
       kWidthPx, kHeightPx, kFont, gp_string(stem + ".png"));
 }
 std::string script_svg_replot(const std::string& stem) {
   return fmt::format(
       "set terminal svg size {},{} noenhanced font '{}' linewidth 1.5 background rgb 'white'\n"
-      "set output {}\nreplot\nunset output\n",
+      "set output {}.output_suffix\nreplot\nunset output\n",
       kWidthPx, kHeightPx, kFont, gp_string(stem + ".svg"));
 }
 
-// Runs `gnuplot <script>` inside `dir` without a shell (file names never meet a command line
-// parser), capturing its diagnostics. gnuplot exits non-zero on any script error.
-void run_gnuplot(const fs::path& dir, const std::string& script) {
+// Runs `gnuplot -e "output_suffix='<suffix>'" <script>` inside `dir` without a shell (file names
+// never meet a command line parser), capturing its diagnostics. gnuplot exits non-zero on any
+// script error.
+void run_gnuplot(const fs::path& dir, const std::string& script, const std::string& suffix) {
   std::array<int, 2> pipe_fds{};
   if (pipe(pipe_fds.data()) != 0)
     throw PlotError(fmt::format("cannot run gnuplot: pipe: {}", std::strerror(errno)));
@@ -153,9 +155,11 @@ void run_gnuplot(const fs::path& dir, const std::string& script) {
   posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
   posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
 
-  std::string program = "gnuplot";
+  std::string program = "gnuplot", option = "-e";
+  std::string define = fmt::format("output_suffix='{}'", suffix);  // digits and dots only
   std::string script_arg = script;
-  std::array<char*, 3> argv{program.data(), script_arg.data(), nullptr};
+  std::array<char*, 5> argv{program.data(), option.data(), define.data(), script_arg.data(),
+                            nullptr};
   pid_t pid = 0;
   int spawn_error = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
@@ -192,20 +196,78 @@ void run_gnuplot(const fs::path& dir, const std::string& script) {
   }
 }
 
-// Writes data and script, runs gnuplot, and checks that both images exist.
+// True when `file` is a whole image: a PNG ends with its IEND chunk, an SVG with </svg>. A
+// gnuplot that ran out of disk space may still exit 0 after writing part of one.
+bool complete_image(const fs::path& file, bool png) {
+  std::error_code ec;
+  const auto size = fs::file_size(file, ec);
+  if (ec || size < 12) return false;
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(size) - 12);
+  std::string tail(12, '\0');
+  if (!in.read(tail.data(), 12)) return false;
+  if (png) return tail == std::string("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+  return tail.find("</svg>") != std::string::npos;
+}
+
+// Why no image came out: a disk that takes no more data (full, read-only, I/O errors) is an
+// output failure (OutputError, exit 3); anything else (gnuplot missing, a script error) a plot
+// failure that meta.json records. Judged by writing a probe of a typical image's size.
+[[noreturn]] void image_failure(const fs::path& out_dir, const std::string& what) {
+  try {
+    const fs::path probe = out_dir / ".chatterlab-write-probe";
+    write_file_atomically(probe, std::string(256 * 1024, '\0'));
+    std::error_code ignored;
+    fs::remove(probe, ignored);
+  } catch (const OutputError& e) {
+    throw OutputError(fmt::format("{} ({})", what, e.what()));
+  }
+  throw PlotError(what);
+}
+
+// Writes data and script (atomically), runs gnuplot into temporary image names, checks that both
+// images are complete and renames them into place: readers never see a partial image, and a
+// failure leaves no temporary file behind.
 void produce(const fs::path& out_dir, const std::string& stem, const std::string& data,
              const std::string& script) {
   check_stem(stem);
   std::error_code ec;
   fs::create_directories(out_dir, ec);
-  if (ec) throw PlotError(fmt::format("cannot create {}: {}", out_dir.string(), ec.message()));
-  write_text_file(out_dir / (stem + ".dat"), data);
-  write_text_file(out_dir / (stem + ".gp"), script);
-  run_gnuplot(out_dir, stem + ".gp");
-  for (const char* ext : {".png", ".svg"}) {
-    fs::path image = out_dir / (stem + ext);
-    if (!fs::exists(image) || fs::file_size(image) == 0)
-      throw PlotError(fmt::format("gnuplot reported success but wrote no {}", image.string()));
+  if (ec) {
+    note_failed_output_write();
+    throw OutputError(fmt::format("cannot create {}: {}", out_dir.string(), ec.message()));
+  }
+  write_file_atomically(out_dir / (stem + ".dat"), data);
+  write_file_atomically(out_dir / (stem + ".gp"), script);
+  const fs::path png = out_dir / (stem + ".png"), svg = out_dir / (stem + ".svg");
+  const fs::path png_tmp = temporary_path_for(png);
+  const std::string suffix = png_tmp.string().substr(png.string().size());
+  const fs::path svg_tmp = svg.string() + suffix;
+  auto remove_temporaries = [&] {
+    std::error_code ignored;
+    fs::remove(png_tmp, ignored);
+    fs::remove(svg_tmp, ignored);
+  };
+  try {
+    run_gnuplot(out_dir, stem + ".gp", suffix);
+  } catch (const PlotError& e) {
+    remove_temporaries();
+    image_failure(out_dir, e.what());
+  }
+  for (const auto& [image, is_png] : {std::pair{&png_tmp, true}, std::pair{&svg_tmp, false}}) {
+    if (!complete_image(*image, is_png)) {
+      remove_temporaries();
+      image_failure(out_dir, fmt::format("gnuplot reported success but wrote no complete {}",
+                                         (is_png ? png : svg).string()));
+    }
+  }
+  for (const auto& [from, to] : {std::pair{&png_tmp, &png}, std::pair{&svg_tmp, &svg}}) {
+    fs::rename(*from, *to, ec);
+    if (ec) {
+      remove_temporaries();
+      note_failed_output_write();
+      throw OutputError(fmt::format("cannot replace {}: {}", to->string(), ec.message()));
+    }
   }
 }
 
@@ -323,9 +385,48 @@ std::string palette_commands(const Heatmap& f, double z_min, double z_max) {
 
 }  // namespace
 
+// Line styles 1-8: the Okabe-Ito colours, distinguishable with the common colour-vision
+// deficiencies.
+std::string line_styles() {
+  constexpr std::array<std::string_view, 8> kColours{"#0072b2", "#d55e00", "#009e73", "#cc79a7",
+                                                     "#e69f00", "#56b4e9", "#000000", "#f0e442"};
+  std::string gp;
+  for (std::size_t i = 0; i < kColours.size(); ++i)
+    gp += fmt::format("set style line {} lc rgb '{}' lw 2 pt 7 ps 0.9\n", i + 1, kColours[i]);
+  return gp;
+}
+
+// The plot command's style of a series: the style word, its line style (palette place, or its own
+// colour and width) and, for an area, a translucent fill down to the bottom of the plot.
+std::string series_style(const Series& s, const SeriesLook& look, std::size_t index) {
+  const bool dashes = s.style == "dashes", area = s.style == "area" || s.style == "area_above";
+  const std::string word = dashes ? "lines" : s.style == "area" ? "filledcurves x1" : s.style == "area_above" ? "filledcurves x2" : s.style;
+  std::string style = fmt::format("with {} ls {}", word, index % 8 + 1);
+  if (!look.colour.empty()) style += fmt::format(" lc rgb '{}'", look.colour);
+  if (look.line_width > 0.0) style += fmt::format(" lw {}", number(look.line_width));
+  // "dashes": a dash pattern (after the line style, which would reset it), for a curve drawn over
+  // another that may hide it.
+  if (dashes) style += " dt 2";
+  if (area) style += " fs transparent solid 0.25 noborder";
+  return style;
+}
+
+// The look of series i (defaults when the list is shorter), checked.
+SeriesLook look_of(const std::vector<SeriesLook>& looks, std::size_t i, const Series& s) {
+  const SeriesLook look = i < looks.size() ? looks[i] : SeriesLook{};
+  const bool hex = look.colour.size() == 7 && look.colour[0] == '#' &&
+                   std::all_of(look.colour.begin() + 1, look.colour.end(),
+                               [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+  if (!look.colour.empty() && !hex)
+    throw PlotError(fmt::format("series '{}': colour '{}' is not #rrggbb", s.label, look.colour));
+  if (!(look.line_width >= 0.0 && look.line_width <= 20.0))
+    throw PlotError(fmt::format("series '{}': line width {} is not in [0, 20]", s.label, look.line_width));
+  return look;
+}
+
 void render(const Curves& figure, const fs::path& out_dir, const std::string& stem) {
-  static constexpr std::array<std::string_view, 6> kStyles{"lines", "points", "linespoints",
-                                                           "impulses", "steps", "dashes"};
+  static constexpr std::array<std::string_view, 8> kStyles{"lines", "points", "linespoints", "impulses",
+                                                           "steps", "dashes", "area", "area_above"};
   if (figure.series.empty()) throw PlotError(fmt::format("plot '{}' has no series", stem));
   if (figure.equal_aspect && (figure.log_x || figure.log_y))
     throw PlotError(fmt::format("plot '{}': equal aspect needs linear axes", stem));
@@ -344,15 +445,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
     if (std::find(kStyles.begin(), kStyles.end(), s.style) == kStyles.end())
       throw PlotError(fmt::format("series '{}': unknown style '{}' (valid: {})", s.label, s.style,
                                   fmt::join(kStyles, ", ")));
+    const SeriesLook look = look_of(figure.looks, i, s);
     data += fmt::format("{}# series {}: {}\n", i == 0 ? "" : "\n\n", i, s.label);
     for (std::size_t k = 0; k < s.x.size(); ++k)
       data += fmt::format("{} {}\n", number(s.x[k]), number(s.y[k]));
-    // "dashes": lines with a dash pattern (after the line style, which would reset it), for a
-    // curve drawn over another that may hide it.
-    const bool dashes = s.style == "dashes";
-    plots.push_back(fmt::format("'{}.dat' index {} using 1:2 with {} ls {}{} title {}", stem, i,
-                                dashes ? "lines" : s.style, i % 8 + 1, dashes ? " dt 2" : "",
-                                gp_string(s.label)));
+    plots.push_back(fmt::format("'{}.dat' index {} using 1:2{} {} title {}", stem, i, s.right_axis ? " axes x1y2" : "",
+                                series_style(s, look, i), s.label.empty() ? "\"\"" : gp_string(s.label)));
   }
   // A reference at y <= 0 does not exist on a log y axis (gnuplot would fail on it).
   const bool reference = figure.reference_y && !(figure.log_y && *figure.reference_y <= 0);
@@ -370,6 +468,21 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   }
 
   std::string gp = script_preamble(stem, "Curves", figure.title, figure.x_label, figure.y_label);
+  const bool right_axis = std::any_of(figure.series.begin(), figure.series.end(),
+                                      [](const Series& s) { return s.right_axis; });
+  if (right_axis) {
+    if (figure.equal_aspect || figure.log_y)
+      throw PlotError(fmt::format("plot '{}': a right-hand axis needs a linear, free y axis", stem));
+    // The right axis spans its own data with the same 5 % headroom as the left one.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Series& s : figure.series)
+      if (s.right_axis)
+        for (double v : s.y)
+          if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    const double pad = hi > lo ? 0.05 * (hi - lo) : (std::isfinite(lo) ? std::max(1.0, std::abs(lo)) * 0.05 : 1.0);
+    gp += fmt::format("set y2label {}\nset y2tics out nomirror\nset ytics nomirror\n", gp_string(figure.y2_label));
+    if (std::isfinite(lo)) gp += fmt::format("set y2range [{}:{}]\n", number(lo - pad), number(hi + pad));
+  }
   if (figure.log_x || figure.log_y) {
     // Ticks are chosen over the positive data (gnuplot drops the rest on a log axis).
     auto positive_range = [&](auto member) {
@@ -388,11 +501,7 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
       gp += log_axis('y', lo, hi);
     }
   }
-  // Okabe-Ito colours: distinguishable with the common colour-vision deficiencies.
-  constexpr std::array<std::string_view, 8> kColours{"#0072b2", "#d55e00", "#009e73", "#cc79a7",
-                                                     "#e69f00", "#56b4e9", "#000000", "#f0e442"};
-  for (std::size_t i = 0; i < kColours.size(); ++i)
-    gp += fmt::format("set style line {} lc rgb '{}' lw 2 pt 7 ps 0.9\n", i + 1, kColours[i]);
+  gp += line_styles();
   // The key sits below the x label, two entries per row, with the bottom margin reserved for its
   // rows: beside the plot a long label ("stability limit (Re s = 0)") would squeeze the curves.
   const std::size_t key_rows = (plots.size() + 1) / 2;
@@ -412,6 +521,12 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
                             : figure.integer_x
                                   ? "set offsets 0.5, 0.5, graph 0.05, graph 0.05\n"
                                   : "set offsets graph 0, graph 0, graph 0.05, graph 0.05\n";
+  if (figure.y_range) {
+    if (!(figure.y_range->first < figure.y_range->second) || (figure.log_y && !(figure.y_range->first > 0.0)))
+      throw PlotError(fmt::format("plot '{}': y range [{}, {}] is empty or not positive on a log axis", stem,
+                                  figure.y_range->first, figure.y_range->second));
+    gp += fmt::format("set yrange [{}:{}]\n", number(figure.y_range->first), number(figure.y_range->second));
+  }
   // Whole-number ticks: gnuplot would label an index axis 1, 1.2, 1.4, ... over a short range.
   if (figure.integer_x) gp += "set xtics 1\nset mxtics 1\n";
   // The integer axis' reference line; the y range still reaches it ("*<y": the autoscaled
@@ -524,8 +639,20 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
   if (any_failed)
     plots.push_back(fmt::format(
         "'{}.dat' using (strcol(3) eq 'NaN' ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
-        "fillstyle solid 1.0 border title 'failed point'",
-        stem, kFailedGrey));
+        "fillstyle solid 1.0 border title {}",
+        stem, kFailedGrey, gp_string(figure.missing_label)));
+  // Curves over the map, as inline data blocks (the map's data file is read whole).
+  if (!figure.overlays.empty()) gp += line_styles();
+  for (std::size_t i = 0; i < figure.overlays.size(); ++i) {
+    const Series& o = figure.overlays[i];
+    const SeriesLook look = look_of(figure.overlay_looks, i, o);
+    if (o.x.size() != o.y.size() || (o.style != "lines" && o.style != "points" && o.style != "dashes"))
+      throw PlotError(fmt::format("overlay '{}': needs as many x as y values and style lines, points or dashes", o.label));
+    gp += fmt::format("$overlay{} << EOD\n", i);
+    for (std::size_t k = 0; k < o.x.size(); ++k) gp += fmt::format("{} {}\n", number(o.x[k]), number(o.y[k]));
+    gp += "EOD\n";
+    plots.push_back(fmt::format("$overlay{} using 1:2 {} title {}", i, series_style(o, look, i + 6), gp_string(o.label)));
+  }
   if (!any_finite) gp += "set label 'no point succeeded' at graph 0.5, graph 0.5 center front\n";
   // A map with a level to compare against but no point on one side of it has no boundary to
   // draw: say so in the picture, or a reader looks for a boundary that is not there.

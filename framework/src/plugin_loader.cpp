@@ -6,6 +6,7 @@
 // leaves the registries exactly as they were.
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <mutex>
 #include <set>
@@ -14,6 +15,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plugin_api.hpp"
@@ -59,9 +61,30 @@ std::string first_clash(const Registry<Product>& staged, const Registry<Product>
   return {};
 }
 
+// Moves a library's entries into the global registry with their factories wrapped: whatever a
+// plugin's constructor throws (its own class, an int) leaves as an exception that names the
+// plugin and its library. InputError and PointFailure keep their type (bad parameters at load
+// time, a failed point at run time); anything else becomes PluginError.
 template <class Product>
 void move_entries(const Registry<Product>& staged, Registry<Product>& target) {
-  for (const auto* entry : staged.sorted()) target.add(entry->info, entry->create, entry->origin);
+  for (const auto* entry : staged.sorted()) {
+    auto factory = [create = entry->create, name = entry->info.name, library = entry->origin,
+                    kind = target.kind()](const ParamValues& params) -> std::unique_ptr<Product> {
+      const std::string who = fmt::format("{} plugin '{}' (library {})", kind, name, library);
+      try {
+        return create(params);
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}: {}", who, e.what()));
+      } catch (const PointFailure& e) {
+        throw PointFailure(fmt::format("{}: {}", who, e.what()));
+      } catch (...) {
+        throw PluginError(
+            fmt::format("{}: its constructor threw {}", who, describe_current_exception()), name,
+            library);
+      }
+    };
+    target.add(entry->info, std::move(factory), entry->origin);
+  }
 }
 
 // Same kind names as the global registries, so messages read the same.
@@ -176,9 +199,11 @@ void load_plugin_library(const std::string& path) {
   int library_version = 0;
   try {
     library_version = entry(CHATTERLAB_PLUGIN_API_VERSION, &registries);
-  } catch (const std::exception& e) {
-    // Registry::add throws std::logic_error for a name registered twice inside the library.
-    throw InputError(fmt::format("plugin library '{}' failed to register: {}", library, e.what()));
+  } catch (...) {
+    // Registry::add throws std::logic_error for a name registered twice inside the library; the
+    // library's own code may throw anything, which must not end the process ("terminate called").
+    throw InputError(fmt::format("plugin library '{}' failed to register: {}", library,
+                                 describe_current_exception()));
   }
   // The record said the API agrees, so the entry must have registered; if it reports another
   // version after all, nothing it did can be trusted.
@@ -203,6 +228,49 @@ void load_plugin_library(const std::string& path) {
   move_entries(staging.study_kinds, study_kind_registry());
   handle.keep_loaded();
   loaded.insert(library);
+}
+
+namespace {
+
+template <class Product>
+void note_plugin(const Registry<Product>& registry, const std::string& name,
+                 std::vector<std::string>& found) {
+  const auto* entry = registry.find(name);
+  if (entry == nullptr || entry->origin == "built-in") return;
+  std::string text =
+      fmt::format("{} plugin '{}' (library {})", registry.kind(), name, entry->origin);
+  if (std::find(found.begin(), found.end(), text) == found.end()) found.push_back(std::move(text));
+}
+
+void collect_plugins(const Json& value, std::vector<std::string>& found) {
+  if (value.is_array()) {
+    for (const Json& item : value) collect_plugins(item, found);
+    return;
+  }
+  if (!value.is_object()) return;
+  for (const auto& [key, item] : value.items()) {
+    if (key == "type" && item.is_string()) {
+      const std::string& name = item.get_ref<const std::string&>();
+      note_plugin(model_registry(), name, found);
+      note_plugin(kinematics_registry(), name, found);
+      note_plugin(suppression_registry(), name, found);
+      note_plugin(analysis_registry(), name, found);
+    } else {
+      collect_plugins(item, found);
+    }
+  }
+}
+
+}  // namespace
+
+std::string out_of_tree_plugins_in(const Json& document) {
+  std::vector<std::string> found;
+  // A study kind may come from a library too (plugin API 2); it is chosen by [study] kind.
+  if (const auto study = document.find("study"); study != document.end() && study->is_object())
+    if (const auto kind = study->find("kind"); kind != study->end() && kind->is_string())
+      note_plugin(study_kind_registry(), kind->get<std::string>(), found);
+  collect_plugins(document, found);
+  return fmt::format("{}", fmt::join(found, ", "));
 }
 
 PluginLibraryBuild plugin_library_build(const std::string& path) {

@@ -342,6 +342,8 @@ RightmostRoot RootSearch::finish(Complex rightmost, bool certified, double sigma
   result.zeros_right_of_contour = unknown;
   result.function_evaluations = static_cast<int>(std::min<long>(evaluate_.count(), 2147483647L));
   result.certificate = std::move(certificate);
+  if (std::string note = function_.certificate_note(sigma_c, band_); !note.empty())
+    result.certificate += "; " + note;
   result.repaired_roots = repaired_;
   result.neutral_roots_excluded = neutral_hits_;
   return result;
@@ -464,7 +466,7 @@ RightmostRoot find_rightmost_root(const CharacteristicFunction& characteristic,
   } catch (const std::exception& e) {
     throw PointFailure(std::string("root search failed: ") + e.what());
   } catch (...) {
-    throw PointFailure("root search failed: unknown error");
+    throw PointFailure("root search failed: " + describe_current_exception());
   }
 }
 

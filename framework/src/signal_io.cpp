@@ -14,25 +14,13 @@
 #include <string_view>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 
 namespace chatterlab {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string read_bytes(const fs::path& file) {
-  std::error_code ec;
-  if (!fs::exists(file, ec))
-    throw InputError(fmt::format("{}: no such file", file.string()));
-  if (fs::is_directory(file, ec))
-    throw InputError(fmt::format("{}: is a directory, not a data file", file.string()));
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot be opened for reading", file.string()));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  return std::move(buffer).str();
-}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
@@ -250,11 +238,14 @@ const std::vector<double>& DataTable::column(const std::string& name) const {
   return columns[column_index(name)];
 }
 
+// Through the run's input snapshot (chatterlab/input_files.hpp): read and parsed once per run,
+// the same table for every grid point, whatever happens to the file meanwhile.
 DataTable read_data_table(const fs::path& file) {
-  const std::string bytes = read_bytes(file);
-  if (is_wav_name(file) || (bytes.size() >= 12 && bytes.compare(0, 4, "RIFF") == 0))
-    return read_wav(file, bytes);
-  return read_text_table(file, bytes);
+  return *read_input_parsed<DataTable>(file, "data_table", [&](const std::string& bytes) {
+    if (is_wav_name(file) || (bytes.size() >= 12 && bytes.compare(0, 4, "RIFF") == 0))
+      return read_wav(file, bytes);
+    return read_text_table(file, bytes);
+  });
 }
 
 std::vector<double> read_signal_column(const fs::path& file, const std::string& column) {

@@ -17,6 +17,9 @@ three_probe.csv: one revolution, no noise (the separated profile equals r exactl
 three_probe_noisy.csv: the same part and spindle seen by probes at 0, 97, 194 degrees (equally
 spaced, as the time recursion needs), 8 revolutions with Gaussian probe noise sigma = 0.2 um
 (seed 7), for ensemble averaging and FIR smoothing.
+three_probe_opposite.csv: the part and spindle of three_probe.csv seen by probes at 0, 90 and
+    180 degrees, one revolution, no noise: c1 = -sin(180)/sin(90) = 0, G(l) = 1 + e^{j l pi} and
+    every odd harmonic is lost (the degraded-layout example).
 cylinder_probes.csv: sections z_mm = 0, 20, 40, 60, 80 (one revolution each) of a part with
     F_j(theta) = dr(z) + r_j(theta) + cx(z) cos(theta) + cy(z) sin(theta),
     dr = 3 + 0.01 z, cx = 2 + 0.05 z, cy = -1 + 0.0005 z^2,
@@ -30,6 +33,7 @@ import random
 N = 360
 ANGLES_DEG = (0.0, 99.0, 202.0)
 EQUAL_DEG = (0.0, 97.0, 194.0)  # time recursion: 0, p, 2p with gcd(97, 360) = 1
+OPPOSITE_DEG = (0.0, 90.0, 180.0)  # loses every odd harmonic
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -68,6 +72,12 @@ def main():
         th = 2 * math.pi * i / N
         rows.append(readings(part, th, *spindle(th)))
     write("three_probe.csv", ["A", "B", "C"], rows)
+
+    rows = []
+    for i in range(N):
+        th = 2 * math.pi * i / N
+        rows.append(readings(part, th, *spindle(th), OPPOSITE_DEG))
+    write("three_probe_opposite.csv", ["A", "B", "C"], rows)
 
     rng = random.Random(7)
     rows = []

@@ -149,7 +149,7 @@ BENCHMARK(G1OneChain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // G5 at its example parameters (speeds as states, one-sided contact, infeed 15 um/s, 1 um random
 // initial waviness); arg = -log10(rtol) of the ARKODE route: 6 (its default) and 4 (the force
-// rms and the end state agree with 1e-6 to 1e-4 relative: docs/performance.md); 0 = the
+// rms and the end state agree with 1e-6 to 1e-4 relative: docs/models/torsional_coupling.md); 0 = the
 // fixed-step engine (Runge-Kutta).
 void G5Torsional(benchmark::State& state) {
   Json params = TorsionalCoupling::info().example_params;

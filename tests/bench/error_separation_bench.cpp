@@ -1,6 +1,8 @@
 // Error separation (MODELS.md E1-E4) on one revolution of N samples: the frequency-domain method
 // (FFT of S, R = S/G, one inverse FFT per probe for the spindle motion) and the time recursion,
-// O(N log N) and O(N). Items per second = samples per second. Numbers: docs/performance.md.
+// O(N log N) and O(N); the band optimiser of the probe angles (every three-probe layout on a
+// one-degree grid, N = 360) and the lost-spectrum report of a degraded layout. Items per second
+// = samples per second. Numbers: docs/performance.md.
 //
 //   build/ci/tests/bench/error_separation_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -54,8 +56,31 @@ void BM_TimeRecursion(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 
+// Probe angles for the band 2..50 (N = 360, phi2 <= 180 deg): what every error_separation run
+// reports (and proposes for a degraded layout).
+void BM_OptimiseAnglesForBand(benchmark::State& state) {
+  for (auto _ : state) {
+    const AngleOptimum best = optimise_three_point_angles(360, 50, std::numbers::pi, 1e-6, 2);
+    benchmark::DoNotOptimize(best.worst.q);
+    state.counters["layouts"] = static_cast<double>(best.layouts_checked);
+  }
+}
+
+// What a [0, 90, 180] layout loses at N samples: the probes' spectra and the lost share.
+void BM_LostSpectrum(benchmark::State& state) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  Setup s = make_setup(n);
+  s.layout.angles_rad = {0.0, std::numbers::pi / 2, std::numbers::pi};
+  s.layout.weights = three_point_weights(s.layout.angles_rad);
+  const auto lost = suppressed_harmonics(s.layout, static_cast<int>(n / 2), 1e-6);
+  for (auto _ : state) benchmark::DoNotOptimize(lost_spectrum(s.probes, lost, 2, static_cast<int>(n / 2)).lost_share);
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+
 }  // namespace
 
+BENCHMARK(BM_OptimiseAnglesForBand)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LostSpectrum)->Arg(4096)->Arg(65536)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Frequency)->Arg(4096)->Arg(65536)->Arg(1 << 20)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TimeRecursion)->Arg(4096)->Arg(65536)->Arg(1 << 20)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -9,9 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "chatterlab/derived_model.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/roots.hpp"
+#include "derived/g1_written_once.hpp"
 #include "models/linear_dde/linear_dde.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 
@@ -120,7 +122,33 @@ std::vector<Json> g8_grid() {
 void BM_PlungeRegenerativeG8(benchmark::State& state) {
   run_points<PlungeRegenerative>(state, g8_grid(), static_cast<double>(state.range(0)));
 }
-BENCHMARK(BM_PlungeRegenerativeG8)->Arg(0)->Arg(3000)->ArgName("band_hz")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PlungeRegenerativeG8)->Arg(0)->Arg(1222)->Arg(3000)->ArgName("band_hz")->Unit(benchmark::kMillisecond);
+
+// The same G1 physics written once (docs/derived_stability.md): the derived route (Jacobian by
+// AD, characteristic matrix of the delay-differential-algebraic system) on the same grid, against
+// the hand-written fast path above at equal bands (issue 17: within 3x).
+class DerivedPlunge final : public DerivedModel<test_support::G1Equations> {
+ public:
+  explicit DerivedPlunge(const ParamValues& values) : DerivedModel(equations_of(values.json())) {}
+  static test_support::G1Equations equations_of(const Json& t) {
+    test_support::G1Equations eqs;
+    eqs.kc = t.at("contact_stiffness_n_per_m").get<double>();
+    eqs.kg = t.at("wheel_wear_stiffness_n_per_m").get<double>();
+    eqs.kw = t.at("work_removal_stiffness_n_per_m").get<double>();
+    eqs.wheel_rpm = t.at("wheel_speed_rpm").get<double>();
+    eqs.work_rpm = t.at("work_speed_rpm").get<double>();
+    eqs.modes.clear();
+    for (const Json& m : t.at("modes"))
+      eqs.modes.push_back({m.at("frequency_hz").get<double>(), m.at("damping_ratio").get<double>(),
+                           m.at("stiffness_n_per_m").get<double>()});
+    return eqs;
+  }
+};
+
+void BM_DerivedG8(benchmark::State& state) {
+  run_points<DerivedPlunge>(state, g8_grid(), static_cast<double>(state.range(0)));
+}
+BENCHMARK(BM_DerivedG8)->Arg(1222)->Arg(3000)->ArgName("band_hz")->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

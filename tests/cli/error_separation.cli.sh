@@ -54,6 +54,19 @@ expect_exit 2 "$work/supp/error" "$bin" run "$work/supp/error.toml" --out "$work
 grep -q 'error.toml:7: .*harmonics 35, 37, 71, 73' "$work/supp/error.err" || fail "suppression error message"
 [ ! -e "$work/supp/error_out" ] || fail "output written despite exit 2"
 
+# ---- a layout that loses harmonics: degraded, said in summary, results, stderr and plots
+out=$work/degraded
+expect_exit 0 "$work/degraded" "$bin" run "$src/studies/error_separation_degraded.toml" --out "$out"
+[ "$(csv_column "$out/results.csv" separation_status)" = "degraded" ] || fail "degraded: separation_status"
+[ "$(csv_column "$out/results.csv" worst_error_transfer_q)" = "inf" ] || fail "degraded: worst Q not inf"
+[ "$(csv_column "$out/results.csv" suppressed_harmonic_count)" = "89" ] || fail "degraded: not 89 lost harmonics"
+grep -q '"status": "degraded"' "$out/summary.json" || fail "degraded: summary status"
+grep -q "warning: .*degraded: harmonics 3, 5, 7, .* hold 69.4 % of the probe signals' power" "$work/degraded.err" ||
+  fail "degraded: warning: $(cat "$work/degraded.err")"
+grep -q '^3,.*,inf,inf,1$' "$out/transfer.csv" || fail "degraded: transfer.csv row of harmonic 3"
+grep -q 'DEGRADED' "$out/profile_polar.gp" || fail "degraded: polar plot does not say so"
+expect_plots "$out" profile_polar transfer_q transfer_g probe_spectrum
+
 # ---- cylindricity
 out=$work/cyl
 expect_exit 0 "$work/cyl" "$bin" run "$src/studies/error_separation_cylinder.toml" --out "$out"

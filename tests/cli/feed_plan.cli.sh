@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # feed_plan end to end (docs/planner.md): problem 1 of MODELS.md P3 gives the contract files
 # (pulses.csv columns, summary.json keys), the seed-000 first-segment rates -54, 12, 14, 3000 s,
-# a certified plan with replayed error <= 0.005 mm, the plots; bad input exits 2 writing nothing.
+# a certified plan with replayed error <= 0.005 mm, the controller output (program.ngc,
+# steps.csv) read back exactly, the plots; the fillet plans to the 5 um tolerance; the measured
+# table plans from its smoothed curve; kinks and near-steps and other bad input exit 2 writing
+# nothing.
 source "$(dirname "$0")/lib.sh"
 bin=$1 work=$2 src=$3
 rm -rf "$work" && mkdir -p "$work"
@@ -32,7 +35,15 @@ awk -v n="$states" 'BEGIN { exit !(n > 100000) }' || fail "interference checked 
 sum=$(csv_column "$out/pulses.csv" upper_pulses | awk '{ s += $1 } END { print s }')
 # z_g(600) - z_g(0) = -R (f'(600) - f'(0)) = 300 * (0.45 + 1/60) mm = 140 mm = 42000 pulses.
 [ "$sum" = "42000" ] || fail "upper pulses sum $sum (expected 42000)"
-expect_plots "$out" profile error_along_x pulse_rates
+expect_plots "$out" profile error_along_x pulse_rates segment_lengths
+grep -q '"certified": true' "$out/summary.json" || fail "problem 1 not certified"
+# Controller output: G93 inverse time, one G1 per segment; both files read back exactly.
+[ "$(grep -c '^G1 ' "$out/program.ngc")" = "3000" ] || fail "program.ngc: not 3000 moves"
+grep -q '^G93$' "$out/program.ngc" || fail "program.ngc: no G93"
+[ "$(csv_header "$out/steps.csv")" = "tick,motor,direction" ] || fail "steps.csv header"
+pulses=$(awk -F, 'NR > 1 { s += ($4 < 0 ? -$4 : $4) + ($5 < 0 ? -$5 : $5) + ($6 < 0 ? -$6 : $6) } END { print s }' "$out/pulses.csv")
+[ "$(($(wc -l < "$out/steps.csv") - 1))" = "$pulses" ] || fail "steps.csv rows differ from the pulse count $pulses"
+grep -A3 '"round_trip"' "$out/summary.json" | grep -q '"exact": true' || fail "controller round trip not exact"
 
 # Problem 2: seed 000's first rates -27, 40, 55; the edge-radius limit of the concave part.
 out2="$work/p2"
@@ -56,6 +67,32 @@ tri_u=$(json_number "$out3/points/000000/summary.json" uniformity)
 sine_u=$(json_number "$out3/points/000001/summary.json" uniformity)
 awk -v a="$tri_u" -v b="$sine_u" 'BEGIN { exit !(a > 0.9 && b < 0.5) }' || fail "uniformity $tri_u $sine_u"
 expect_plots "$out3/points/000000" wear_histogram
+
+# The fillet (38.6 um at uniform 0.2 mm segments) plans within the 5 um tolerance.
+out4="$work/fillet"
+expect_exit 0 "$work/fillet" "$bin" run "$src/studies/feed_plan_fillet.toml" --out "$out4"
+error=$(json_number "$out4/summary.json" max_profile_error_mm)
+awk -v e="$error" 'BEGIN { exit !(e > 0 && e <= 0.005) }' || fail "fillet max profile error $error"
+shortest=$(json_number "$out4/summary.json" shortest_segment_mm)
+awk -v l="$shortest" 'BEGIN { exit !(l < 0.06) }' || fail "fillet shortest segment $shortest"
+grep -q '"certified": true' "$out4/summary.json" || fail "fillet not certified"
+
+# The measured table plans from its smoothed curve; the raw spline's plan is reported beside it.
+out5="$work/measured"
+expect_exit 0 "$work/measured" "$bin" run "$src/studies/feed_plan_measured.toml" --out "$out5"
+close_to "$(json_number "$out5/summary.json" total_time_s)" 3000 1 || fail "measured part time"
+raw_time=$(grep -A3 '"interpolating_spline"' "$out5/summary.json" | json_number /dev/stdin total_time_s)
+awk -v t="$raw_time" 'BEGIN { exit !(t > 3300) }' || fail "raw spline time $raw_time"
+expect_plots "$out5" table_residual table_curvature
+
+# Kinks and near-steps are refused with their place (exit 2, nothing written).
+sed 's|^generatrix = .*|generatrix = "100 + abs(x-300)*1.0"|' "$src/studies/feed_plan_problem1.toml" > "$work/kink.toml"
+expect_exit 2 "$work/kink" "$bin" run "$work/kink.toml" --out "$work/kink_out"
+grep -q "the slope f' jumps by 2 at x = 300 (a kink" "$work/kink.err" || fail "kink message: $(cat "$work/kink.err")"
+[ ! -e "$work/kink_out" ] || fail "kink wrote $work/kink_out"
+sed 's|^generatrix = .*|generatrix = "100 + 5*tanh((x-300)/0.001)"|' "$src/studies/feed_plan_problem1.toml" > "$work/step.toml"
+expect_exit 2 "$work/step" "$bin" run "$work/step.toml" --out "$work/step_out"
+grep -q "narrower than the resolution 0.01 mm at x = 299.99" "$work/step.err" || fail "near-step message: $(cat "$work/step.err")"
 
 # Bad input: exit 2, message with key and reason, nothing written.
 sed 's/^max_pulse_rate_hz = 100.0/max_pulse_rate_hz = 0.0/' "$src/studies/feed_plan_problem1.toml" > "$work/bad.toml"

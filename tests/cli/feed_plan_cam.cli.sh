@@ -26,12 +26,18 @@ lift=$(json_number "$out/summary.json" max_lift_error_mm)
 per=$(json_number "$out/summary.json" max_per_degree_lift_error_mm)
 awk -v e="$lift" -v p="$per" 'BEGIN { exit !(e > 0 && e <= 0.015 && p > 0 && p <= 0.004) }' ||
   fail "lift error $lift, per degree $per"
-# A 200 mm wheel gouges the concave flanks: beyond the limit.
+# Controller output read back exactly (program.ngc with C and X, steps.csv).
+grep -q '^G1 C' "$out/program.ngc" || fail "program.ngc has no C moves"
+grep -A3 '"round_trip"' "$out/summary.json" | grep -q '"exact": true' || fail "cam controller round trip"
+# A 200 mm wheel gouges the concave flanks: beyond the limit, so the plan is not certified and
+# the point fails (exit 1); its files still say how deep.
 sed "s/^wheel_radius_mm = 40.0/wheel_radius_mm = 200.0/; s|\.\./tests/data|$src/tests/data|" \
   "$src/studies/cam_seed002.toml" > "$work/large.toml"
-expect_exit 0 "$work/large" "$bin" run "$work/large.toml" --out "$work/large_out"
+expect_exit 1 "$work/large" "$bin" run "$work/large.toml" --out "$work/large_out"
 lift=$(json_number "$work/large_out/summary.json" max_lift_error_mm)
 awk -v e="$lift" 'BEGIN { exit !(e > 0.05) }' || fail "200 mm wheel lift error $lift"
+grep -q '"certified": false' "$work/large_out/summary.json" || fail "200 mm wheel plan certified"
+grep -q 'failed: plan not certified: lift error' "$work/large_out/results.csv" || fail "200 mm wheel status"
 sed 's/^chosen_angles_deg = \[360, 10, 21,/chosen_angles_deg = [360, 10, 22,/' "$src/studies/cam_seed002.toml" > "$work/bad.toml"
 sed -i "s|\.\./tests/data|$src/tests/data|" "$work/bad.toml"
 expect_exit 2 "$work/bad" "$bin" run "$work/bad.toml" --out "$work/bad_out"

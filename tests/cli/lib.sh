@@ -70,3 +70,48 @@ expect_plots() {
 
 # mpirun as root inside containers needs these; harmless otherwise.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+
+# misbehaving_study FILE PLUGIN BEHAVIOURS [RUN_TABLE]: a stability_map study of the test plugin
+# misbehaving_model (tests/external_plugin/misbehaving_model.cpp) with a grid over its decay rate
+# ($DECAYS, default [1, 2, 3] per s: ok points have their root at -decay) and over BEHAVIOURS (a
+# TOML list of strings, e.g. '["ok", "segfault"]'; the faster axis), and RUN_TABLE written as
+# [run] when given.
+misbehaving_study() {
+  {
+    echo "plugins = [\"$2\"]"
+    printf '[study]\nkind = "stability_map"\n[model]\ntype = "misbehaving_model"\nsleep_s = 1\n'
+    printf '[stability]\nmax_frequency_hz = 1\n'
+    [ -n "${4:-}" ] && printf '[run]\n%s\n' "$4"
+    printf '[grid]\n"model.decay_rate_per_s" = %s\n"model.behaviour" = %s\n' "${DECAYS:-[1, 2, 3]}" "$3"
+  } >"$1"
+}
+
+# journal_records DIR: complete records in DIR/journal (newline-terminated lines after each
+# file's header line).
+journal_records() {
+  local total=0 lines f
+  for f in "$1"/journal/points-*.jsonl; do
+    [ -e "$f" ] || continue
+    lines=$(wc -l <"$f")
+    [ "$lines" -gt 1 ] && total=$((total + lines - 1))
+  done
+  echo "$total"
+}
+
+# wait_for SECONDS COMMAND...: polls COMMAND every 0.05 s until it succeeds; false on time-out.
+wait_for() {
+  local deadline=$(($(date +%s) + $1))
+  shift
+  until "$@"; do
+    [ "$(date +%s)" -ge "$deadline" ] && return 1
+    sleep 0.05
+  done
+}
+
+# no_partial_files DIR: no temporary (*.tmp<pid>.<n>) or empty files are left anywhere in DIR.
+no_partial_files() {
+  local found
+  found=$(find "$1" -type f \( -name '*.tmp[0-9]*' -o -empty \) ! -name '.chatterlab-output' \
+          ! -name '.chatterlab-lock' | head -n 5)
+  [ -z "$found" ] || { fail "partial files left in $1: $found"; return 1; }
+}

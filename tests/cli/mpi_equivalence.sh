@@ -21,6 +21,11 @@ for study in plunge_2d dde_2d budget_failure; do
   points=$(json_number "$work/$study.mpi/meta.json" points)
   [ "$(json_number "$work/$study.mpi/meta.json" points_computed)" = "$points" ] ||
     fail "$study: not every point computed exactly once"
+  # Worker processes under every rank (--isolate): still the same bytes.
+  expect_exit "$want" "$work/$study.mpi_isolated" "$mpiexec" --oversubscribe -np 2 "$bin" run "$file" \
+    --out "$work/$study.mpi_isolated" --threads 1 --isolate
+  cmp "$work/$study.single/results.csv" "$work/$study.mpi_isolated/results.csv" ||
+    fail "$study: results.csv differs between 1 process and 2 MPI ranks with --isolate"
   # Only rank 0 prints the summary.
   [ "$(grep -c "^[0-9]* points: " "$work/$study.mpi.out")" = 1 ] || fail "$study: summary printed $(grep -c "^[0-9]* points: " "$work/$study.mpi.out") times"
 done

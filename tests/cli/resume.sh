@@ -10,17 +10,6 @@ points=300
 
 expect_exit 0 "$work/full" "$bin" run "$study" --out "$work/full" --threads 2
 
-# Complete journal records (newline-terminated lines after each file's header line).
-journal_records() {
-  local total=0 lines
-  for f in "$1"/journal/points-*.jsonl; do
-    [ -e "$f" ] || continue
-    lines=$(wc -l <"$f")
-    [ "$lines" -gt 1 ] && total=$((total + lines - 1))
-  done
-  echo "$total"
-}
-
 cut=$work/cut
 "$bin" run "$study" --out "$cut" --threads 1 >"$work/cut.out" 2>"$work/cut.err" &
 pid=$!

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Study kind signal_analysis through the command: the shipped Lorenz and Henon studies (exit 0,
-# headline numbers near the known answers for 10,000 / 5,000 samples, summary.json and every
-# plot), and bad input
-# (missing column, missing sample rate, constant signal, too short for the requested dimension):
-# exit 2, the reason in the message, nothing written.
+# intervals covering the known answers for 10,000 / 5,000 samples, the verdict, summary.json and
+# every plot), a study without a sample rate (rates per sample), and bad input (missing column,
+# constant signal, 150 samples, too short for the requested dimension, a Theiler window leaving
+# too few neighbours): exit 2, the reason in the message, nothing written.
 # Usage: signal_analysis.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR
 source "$(dirname "$0")/lib.sh"
 bin=$1 work=$2 src=$3
@@ -14,10 +14,15 @@ out=$work/lorenz
 expect_exit 0 "$work/lorenz" "$bin" run "$src/studies/signal_analysis_lorenz.toml" --out "$out"
 csv=$out/results.csv
 [ "$(csv_column "$csv" status)" = ok ] || fail "lorenz: point not ok"
-lambda=$(csv_column "$csv" lyapunov_max_per_s)
-close_to "$lambda" 0.906 0.12 || fail "lorenz: lyapunov_max_per_s = $lambda (known 0.906)"
-d2=$(csv_column "$csv" correlation_dimension)
-close_to "$d2" 2.05 0.15 || fail "lorenz: correlation_dimension = $d2 (known 2.05)"
+# covers VALUE LOW HIGH: LOW <= VALUE <= HIGH (all numbers).
+covers() {
+  awk -v v="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(lo != "" && hi != "" && lo <= v && v <= hi) }'
+}
+lo=$(csv_column "$csv" lyapunov_max_per_s_ci_low) hi=$(csv_column "$csv" lyapunov_max_per_s_ci_high)
+covers 0.906 "$lo" "$hi" || fail "lorenz: lyapunov_max_per_s interval [$lo, $hi] misses 0.906"
+lo=$(csv_column "$csv" correlation_dimension_ci_low) hi=$(csv_column "$csv" correlation_dimension_ci_high)
+covers 2.05 "$lo" "$hi" || fail "lorenz: correlation_dimension interval [$lo, $hi] misses 2.05"
+[ "$(csv_column "$csv" verdict)" = "deterministic chaos" ] || fail "lorenz: verdict $(csv_column "$csv" verdict)"
 [ "$(csv_column "$csv" embedding_dimension)" = 3 ] || fail "lorenz: embedding dimension not 3"
 grep -q '"lyapunov_max_per_s"' "$out/summary.json" || fail "summary.json lacks lyapunov_max_per_s"
 grep -q '"ci_low"' "$out/summary.json" || fail "summary.json lacks confidence intervals"
@@ -31,10 +36,23 @@ expect_exit 0 "$work/henon" "$bin" run "$src/studies/signal_analysis_henon.toml"
 csv=$out/results.csv
 lambda=$(csv_column "$csv" lyapunov_max_per_s)
 close_to "$lambda" 0.419 0.015 || fail "henon: lyapunov_max_per_s = $lambda (known 0.419)"
+[ "$(csv_column "$csv" lyapunov_max_per_s_quality)" = good ] || fail "henon: exponent not good"
+lo=$(csv_column "$csv" lyapunov_max_per_s_ci_low) hi=$(csv_column "$csv" lyapunov_max_per_s_ci_high)
+covers 0.419 "$lo" "$hi" || fail "henon: lyapunov_max_per_s interval [$lo, $hi] misses 0.419"
 d2=$(csv_column "$csv" correlation_dimension)
 close_to "$d2" 1.21 0.05 || fail "henon: correlation_dimension = $d2 (known 1.21-1.22)"
 [ "$(csv_column "$csv" delay_samples),$(csv_column "$csv" embedding_dimension)" = 1,2 ] ||
   fail "henon: delay/dimension not 1/2"
+
+# ---- no sample rate: time in samples, the exponent per sample (Henon: per iteration)
+head -n 3001 "$src/studies/data/henon_x.csv" >"$work/henon3000.csv"
+printf '[study]\nkind = "signal_analysis"\n\n[input]\nfile = "henon3000.csv"\ncolumn = "x"\n[analysis]\nmethods = ["embedding", "lyapunov"]\n' >"$work/per_sample.toml"
+expect_exit 0 "$work/per_sample" "$bin" run "$work/per_sample.toml" --out "$work/per_sample_out"
+header=$(csv_header "$work/per_sample_out/results.csv")
+case "$header" in *lyapunov_max_per_sample,*) ;; *) fail "no lyapunov_max_per_sample column: $header" ;; esac
+case "$header" in *per_s,* | *per_s_*) fail "a per-second column without a sample rate: $header" ;; esac
+lambda=$(csv_column "$work/per_sample_out/results.csv" lyapunov_max_per_sample)
+close_to "$lambda" 0.419 0.03 || fail "per sample: lyapunov_max_per_sample = $lambda (known 0.419)"
 
 # ---- bad input
 printf 't_s,x\n' >"$work/short.csv"
@@ -54,11 +72,15 @@ bad_study() {  # NAME BODY EXPECTED_TEXT...
 }
 bad_study missing_column '[input]\nfile = "short.csv"\ncolumn = "y"\nsample_rate_hz = 100' \
   'input.column = "y"' "no column 'y'" "t_s, x"
-bad_study missing_rate '[input]\nfile = "short.csv"\ncolumn = "x"' \
-  "missing key 'input.sample_rate_hz'"
+printf 't_s,x\n' >"$work/tiny.csv"
+for i in $(seq 1 150); do printf '%s,%s\n' "$i" "$(( (i * 37) % 101 ))"; done >>"$work/tiny.csv"
+bad_study tiny '[input]\nfile = "tiny.csv"\ncolumn = "x"\nsample_rate_hz = 100' \
+  "150 samples are too short" "at least 300 samples"
 bad_study constant '[input]\nfile = "constant.csv"\ncolumn = "x"\nsample_rate_hz = 100' \
   "the signal is constant"
 bad_study too_short '[input]\nfile = "short.csv"\ncolumn = "x"\nsample_rate_hz = 100\n[analysis]\nmethods = ["correlation_dimension"]\n[analysis.correlation_dimension]\nembedding_dimension = 5\ndelay_samples = 60' \
   "300 samples are too short for embedding dimension 5 with delay 60" "at least 340 samples"
+bad_study theiler '[input]\nfile = "short.csv"\ncolumn = "x"\nsample_rate_hz = 100\n[analysis]\nmethods = ["embedding", "lyapunov"]\n[analysis.lyapunov]\ntheiler_window_samples = 100' \
+  "analysis.lyapunov.theiler_window_samples = 100: too few neighbours" "at most 99 samples"
 
 finish

@@ -52,7 +52,7 @@ TEST_F(BadInput, UnknownKeysListTheValidOnes) {
                    "valid keys: damping_ratio, frequency_hz"});
   expect_mentions(error(fake_study("[stability]\nmax_frequency_hz = 100.0\n")),
                   {"study.toml:10:", "unknown top-level key 'stability'",
-                   "valid: fake_settings, grid, model, plugins, study"});
+                   "valid: fake_settings, grid, model, plugins, run, study"});
   expect_mentions(error("title = \"x\"\n" + fake_study()), {"study.toml:1:", "unknown top-level key 'title'"});
   expect_mentions(error(with_line(2, "kind = \"test_fake_kind\"\nkinds = 1")),
                   {"study.toml:3:", "unknown key 'study.kinds'", "valid keys: description, kind, name"});
@@ -176,8 +176,9 @@ TEST_F(BadInput, OversizeGridNamesTheSizeAndTheFlag) {
   expect_mentions(error(fake_study("[grid]\n"
                                    "speed_rpm = { from = 1, to = 2, steps = 100000 }\n"
                                    "mass_kg = { from = 1, to = 2, steps = 1000 }\n")),
-                  {"study.toml:10: [grid] has 100000000 points (100000 x 1000), more than the limit of 10000000",
-                   "--allow-large"});
+                  {"study.toml:10: [grid] has 100000000 points (100000 x 1000), more than the limit of",
+                   "on this machine: its results would take about", "bytes per point), more than "
+                   "half of the machine's memory", "--allow-large"});
   expect_mentions(error(fake_study("[grid]\n"
                                    "speed_rpm = { from = 1, to = 2, steps = 4294967296 }\n"
                                    "mass_kg = { from = 1, to = 2, steps = 4294967296 }\n"),

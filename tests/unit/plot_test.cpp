@@ -279,6 +279,33 @@ TEST(Plot, CurvesWithReferenceLine) {
   EXPECT_NE(gp.find("index 1 using 1:2 with lines ls 2"), std::string::npos) << gp;
 }
 
+// A second quantity on its own right-hand axis (a deviation in um beside a radius in mm): its
+// series are drawn against y2, the axis is labelled and spans its own data with 5 % headroom.
+TEST(Plot, RightAxisCarriesItsOwnQuantity) {
+  fs::path dir = output_dir("right_axis");
+  Curves curves;
+  curves.title = "part and deviation";
+  curves.x_label = "x [mm]";
+  curves.y_label = "radius [mm]";
+  curves.y2_label = "deviation [um]";
+  Series radius = series("radius (left)", {0, 1, 2, 3}, {130, 129, 128, 130});
+  Series deviation = series("deviation (right)", {0, 1, 2, 3}, {-2, 18, 1, 0});
+  deviation.right_axis = true;
+  curves.series = {radius, deviation};
+  render(curves, dir, "right_axis");
+  expect_png(dir / "right_axis.png", 10000);
+  const std::string gp = read_all(dir / "right_axis.gp");
+  EXPECT_NE(gp.find("set y2label \"deviation [um]\""), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set y2tics"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("set y2range [-3:19]"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("index 1 using 1:2 axes x1y2 with lines"), std::string::npos) << gp;
+  EXPECT_EQ(gp.find("index 0 using 1:2 axes"), std::string::npos) << gp;
+  EXPECT_NE(read_all(dir / "right_axis.svg").find("deviation [um]"), std::string::npos);
+  // A right axis and an equal aspect (or log y) do not go together.
+  curves.equal_aspect = true;
+  EXPECT_THROW(render(curves, dir, "right_axis_aspect"), PlotError);
+}
+
 TEST(Plot, IntegerXAxisTicksWholeNumbersWithMargins) {
   // Two Lyapunov exponents: gnuplot alone would tick 1, 1.2, ..., 2 and draw both end points on
   // the frame.

@@ -140,6 +140,39 @@ TEST(PluginLoader, LibraryForAnotherApiVersionMustBeRebuilt) {
   EXPECT_NE(input_error_of([] { load_plugin_library(CHATTERLAB_WRONG_API_PLUGIN); }), "");
 }
 
+TEST(PluginLoader, AnEntryPointThrowingAnythingIsBadInputNotTerminate) {
+  const std::string path = fs::canonical(CHATTERLAB_THROWING_ENTRY_PLUGIN).string();
+  EXPECT_EQ(input_error_of([] { load_plugin_library(CHATTERLAB_THROWING_ENTRY_PLUGIN); }),
+            "plugin library '" + path +
+                "' failed to register: an exception of type 'int' (not derived from "
+                "std::exception)");
+}
+
+TEST(PluginLoader, ALibraryConstructorThrowingAnythingNamesThePluginAndLibrary) {
+  load_plugin_library(CHATTERLAB_MISBEHAVING_PLUGIN);
+  const std::string path = fs::canonical(CHATTERLAB_MISBEHAVING_PLUGIN).string();
+  const auto& entry = model_registry().at("misbehaving_model");
+  try {
+    entry.create(ParamValues(Json{{"decay_rate_per_s", 1.0},
+                                  {"behaviour", "throw_in_constructor"},
+                                  {"sleep_s", 0.0}}));
+    ADD_FAILURE() << "nothing thrown";
+  } catch (const PluginError& e) {
+    EXPECT_EQ(e.plugin(), "misbehaving_model");
+    EXPECT_EQ(e.library(), path);
+    EXPECT_EQ(std::string(e.what()),
+              "model plugin 'misbehaving_model' (library " + path +
+                  "): its constructor threw an exception of type 'int' (not derived from "
+                  "std::exception)");
+  }
+  // What the plugin's code throws later (at a grid point) is named by the runner, from the
+  // plugins a point's document chooses.
+  EXPECT_EQ(out_of_tree_plugins_in(Json{{"model", {{"type", "misbehaving_model"}}},
+                                        {"analysis", {{"methods", {{{"type", "nothing"}}}}}}}),
+            "model plugin 'misbehaving_model' (library " + path + ")");
+  EXPECT_EQ(out_of_tree_plugins_in(Json{{"model", {{"type", "plunge_regenerative"}}}}), "");
+}
+
 TEST(PluginLoader, LibraryForAnotherChatterlabVersionMustBeRebuilt) {
   // Same plugin API, another minor version: refused from the build record, before its entry
   // (which would throw) is called.

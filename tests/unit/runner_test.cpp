@@ -5,20 +5,29 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <thread>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/version.hpp"
 #include "runner/build_info.hpp"
+#include "runner/journal_writer.hpp"
 #include "runner/output_dir.hpp"
 #include "runner/progress.hpp"
 #include "runner/results_io.hpp"
+#include "runner/resume.hpp"
+#include "runner/worker_protocol.hpp"
 
 namespace chatterlab {
 namespace {
@@ -232,7 +241,7 @@ TEST(RunnerGridOrder, RowsFollowGridOrderWithLastAxisFastest) {
 TEST(RunnerJournal, FingerprintChangesWithTheComputation) {
   Study study = two_axis_study();
   const std::string base = runner::study_fingerprint(study, {"out"});
-  EXPECT_EQ(base.size(), 16u);
+  EXPECT_EQ(base.size(), 64u);
   EXPECT_EQ(runner::study_fingerprint(two_axis_study(), {"out"}), base);
   EXPECT_NE(runner::study_fingerprint(study, {"out", "more"}), base);
   Study other_value = study;
@@ -241,6 +250,89 @@ TEST(RunnerJournal, FingerprintChangesWithTheComputation) {
   Study other_grid = study;
   other_grid.grid[1].values.back() = 4.0;
   EXPECT_NE(runner::study_fingerprint(other_grid, {"out"}), base);
+  Study swapped_axes = study;
+  std::swap(swapped_axes.grid[0], swapped_axes.grid[1]);  // numbers the points differently
+  EXPECT_NE(runner::study_fingerprint(swapped_axes, {"out"}), base);
+}
+
+TEST(RunnerJournal, FingerprintIgnoresWhatChangesNoNumber) {
+  Study study = two_axis_study();
+  const std::string base = runner::study_fingerprint(study, {"out"});
+  Study renamed = study;
+  renamed.document["study"]["name"] = "another name";
+  renamed.document["study"]["description"] = "and a description";
+  renamed.document["run"] = {{"point_timeout_s", 5.0}, {"isolate", true}};
+  EXPECT_EQ(runner::study_fingerprint(renamed, {"out"}), base);
+  Study reordered = study;  // tables and keys written in another order
+  reordered.document = {{"model", {{"b", 2.0}, {"a", 1.0}}}, {"study", {{"kind", "stability_map"}}}};
+  EXPECT_EQ(runner::study_fingerprint(reordered, {"out"}), base);
+  // The content of an input file is part of it.
+  const fs::path data = fresh_dir("fingerprint") / "data.csv";
+  write(data, "1\n");
+  Study with_data = study;
+  with_data.inputs = std::make_shared<InputSnapshot>();
+  with_data.inputs->read(data, InputRole::data);
+  const std::string with_v1 = runner::study_fingerprint(with_data, {"out"});
+  EXPECT_NE(with_v1, base);
+  write(data, "2\n");
+  with_data.inputs = std::make_shared<InputSnapshot>();
+  with_data.inputs->read(data, InputRole::data);
+  EXPECT_NE(runner::study_fingerprint(with_data, {"out"}), with_v1);
+}
+
+TEST(RunnerJournal, TimeoutsRoundTripWithTheirTime) {
+  runner::JournalHeader header{"f", 3, {"a"}};
+  PointResult timeout{true, {Json()}, runner::timeout_status("still running after 2 s"), 2.25};
+  runner::JournalContents read = runner::parse_journal(runner::journal_header_line(header) +
+                                                       runner::journal_line(1, timeout));
+  ASSERT_EQ(read.records.size(), 1u);
+  EXPECT_EQ(read.records[0].second.status, "timeout: still running after 2 s");
+  EXPECT_EQ(read.records[0].second.elapsed_s, 2.25);
+  EXPECT_EQ(runner::outcome_of(read.records[0].second.status), runner::PointOutcome::timeout);
+  EXPECT_EQ(runner::reason_of(read.records[0].second.status), "still running after 2 s");
+  EXPECT_EQ(runner::outcome_of("failed: x"), runner::PointOutcome::failed);
+  EXPECT_EQ(runner::outcome_of("ok"), runner::PointOutcome::ok);
+}
+
+TEST(RunnerResume, OkRecordsWinAndRetryFailedLeavesFailuresToCompute) {
+  Study study = two_axis_study();
+  const std::vector<std::string> columns{"out"};
+  const runner::JournalHeader header{runner::study_fingerprint(study, columns), 6, columns,
+                                     runner::result_inputs(study)};
+  fs::path out = fresh_dir("journals");
+  PointResult failed{true, {Json()}, "failed: disk full", 0.0};
+  // Session 1: point 0 ok, 1 failed, 2 timed out. Session 10 (sorted after 2 as text, before it
+  // by number): point 1 ok. Session 2: point 0 failed (must not replace the ok record).
+  write(runner::journal_file(out, 1, 0),
+        runner::journal_header_line(header) + runner::journal_line(0, ok({1.0})) +
+            runner::journal_line(1, failed) +
+            runner::journal_line(2, {true, {Json()}, runner::timeout_status("slow"), 9.0}));
+  write(runner::journal_file(out, 2, 0),
+        runner::journal_header_line(header) + runner::journal_line(0, failed));
+  write(runner::journal_file(out, 10, 0),
+        runner::journal_header_line(header) + runner::journal_line(1, ok({2.0})));
+  runner::ResumedPoints all = runner::read_journals(out, header, study, false);
+  ASSERT_EQ(all.records.size(), 3u);
+  EXPECT_EQ(all.records[0].second.status, "ok");
+  EXPECT_EQ(all.records[1].second.status, "ok");
+  EXPECT_EQ(all.records[1].second.outputs[0], 2.0);
+  EXPECT_EQ(runner::outcome_of(all.records[2].second.status), runner::PointOutcome::timeout);
+  runner::ResumedPoints retry = runner::read_journals(out, header, study, true);
+  ASSERT_EQ(retry.records.size(), 2u);  // the timed-out point 2 is computed again
+  EXPECT_EQ(retry.records[1].first, 1u);
+}
+
+TEST(RunnerResume, FirstDifferenceNamesThePathAndBothValues) {
+  Json then = {{"model", {{"a", 1.0}, {"modes", {{{"f", 10.0}}, {{"f", 20.0}}}}}}};
+  Json now = then;
+  EXPECT_EQ(runner::first_difference(then, now), "");
+  now["model"]["modes"][1]["f"] = 25.5;
+  EXPECT_EQ(runner::first_difference(then, now), "model.modes.1.f: 20 then, 25.5 now");
+  now = then;
+  now["model"]["b"] = true;
+  EXPECT_EQ(runner::first_difference(then, now), "model.b: absent then, true now");
+  EXPECT_EQ(runner::result_relevant({{"study", {{"kind", "k"}, {"name", "n"}}}, {"run", {}}}),
+            Json({{"study", {{"kind", "k"}}}}));
 }
 
 // ------------------------------------------------------------------ files and directories
@@ -260,15 +352,15 @@ TEST(RunnerFiles, AtomicWriteReplacesAndLeavesNoTemporaries) {
 
 TEST(RunnerOutputDir, CreatesMarksAndReplacesOnlyItsOwnRuns) {
   fs::path dir = fresh_dir("owned") / "nested" / "out";
-  runner::prepare_output_dir(dir, false);
+  runner::prepare_output_dir(dir, false, "s.toml");
   EXPECT_TRUE(fs::exists(dir / runner::output_marker_name));
 
   write(dir / "results.csv", "previous run\n");
   write(dir / "journal" / "points-1-0.jsonl", "{}\n");
-  runner::prepare_output_dir(dir, true);  // --resume keeps the previous run
+  runner::prepare_output_dir(dir, true, "s.toml");  // --resume keeps the previous run
   EXPECT_TRUE(fs::exists(dir / "results.csv"));
   EXPECT_TRUE(fs::exists(dir / "journal" / "points-1-0.jsonl"));
-  runner::prepare_output_dir(dir, false);  // a new run replaces it cleanly
+  runner::prepare_output_dir(dir, false, "s.toml");  // a new run replaces it cleanly
   EXPECT_FALSE(fs::exists(dir / "results.csv"));
   EXPECT_FALSE(fs::exists(dir / "journal"));
   EXPECT_TRUE(fs::exists(dir / runner::output_marker_name));
@@ -279,7 +371,7 @@ TEST(RunnerOutputDir, RefusesForeignAndUnusableDirectories) {
   write(foreign / "thesis.tex", "precious");
   for (bool resume : {false, true}) {
     try {
-      runner::prepare_output_dir(foreign, resume);
+      runner::prepare_output_dir(foreign, resume, "s.toml");
       ADD_FAILURE() << "a non-empty directory without the chatterlab mark was accepted";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("not written by chatterlab"), std::string::npos)
@@ -291,9 +383,87 @@ TEST(RunnerOutputDir, RefusesForeignAndUnusableDirectories) {
   EXPECT_FALSE(fs::exists(foreign / runner::output_marker_name));
 
   fs::path file = foreign / "thesis.tex";
-  EXPECT_THROW(runner::prepare_output_dir(file, false), InputError);          // a file
-  EXPECT_THROW(runner::prepare_output_dir(file / "out", false), InputError);  // under a file
-  EXPECT_THROW(runner::prepare_output_dir("/proc/chatterlab_runner_test", false), InputError);
+  EXPECT_THROW(runner::prepare_output_dir(file, false, "s.toml"), InputError);  // a file
+  EXPECT_THROW(runner::prepare_output_dir(file / "out", false, "s.toml"), InputError);  // under a file
+  EXPECT_THROW(runner::prepare_output_dir("/proc/chatterlab_runner_test", false, "s.toml"),
+               InputError);
+}
+
+TEST(RunnerOutputDir, ALockedDirectoryIsRefusedNamingTheHolderAndLeftAlone) {
+  fs::path dir = fresh_dir("locked");
+  auto lock = runner::prepare_output_dir(dir, false, "first.toml");
+  write(dir / "results.csv", "the first run's\n");
+  for (bool resume : {false, true}) {
+    try {
+      runner::prepare_output_dir(dir, resume, "second.toml");
+      ADD_FAILURE() << "a second run took a locked directory";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("is in use by another chatterlab run (PID " + std::to_string(::getpid()) +
+                       " on host "),
+                std::string::npos)
+          << m;
+      EXPECT_NE(m.find("first.toml since "), std::string::npos) << m;
+      EXPECT_NE(m.find("nothing was changed"), std::string::npos) << m;
+    }
+  }
+  EXPECT_EQ(runner::read_file(dir / "results.csv"), "the first run's\n");
+  lock.reset();  // released: the next run may take it
+  EXPECT_NO_THROW(runner::prepare_output_dir(dir, true, "second.toml"));
+}
+
+TEST(RunnerJournalWriter, LinesReachTheFileWithinTheFlushIntervalWithoutAnotherPoint) {
+  fs::path dir = fresh_dir("writer");
+  fs::create_directories(dir);
+  const fs::path file = dir / "points-1-0.jsonl";
+  runner::JournalWriter writer(file, "header\n");
+  EXPECT_EQ(runner::read_file(file), "header\n");
+  writer.append("one\n");
+  // No further append, no flush(): the writer thread must put it on disk by itself (documented
+  // within 0.1 s; 5 s is the allowance for a loaded machine, not the guarantee).
+  const auto start = std::chrono::steady_clock::now();
+  while (runner::read_file(file) != "header\none\n" &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(5))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_EQ(runner::read_file(file), "header\none\n");
+  writer.append("two\n");
+  writer.flush();
+  EXPECT_EQ(runner::read_file(file), "header\none\ntwo\n");
+  EXPECT_EQ(writer.error(), "");
+  EXPECT_THROW(runner::JournalWriter(file, "again\n"), std::runtime_error);  // never reused
+}
+
+TEST(RunnerWorkerProtocol, FramesAndTheStudyCrossTheSocketUnchanged) {
+  int sockets[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM, 0, sockets), 0);
+  const std::string big(200000, 'x');  // larger than a socket buffer: sent in pieces
+  std::thread sender([&] {
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], "first"));
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], ""));
+    EXPECT_TRUE(runner::worker::write_frame(sockets[0], big));
+    ::close(sockets[0]);
+  });
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), "first");
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), "");
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), big);
+  EXPECT_EQ(runner::worker::read_frame(sockets[1]), std::nullopt);  // the peer is gone
+  sender.join();
+  ::close(sockets[1]);
+  EXPECT_FALSE(runner::worker::write_frame(sockets[1], "x"));  // never a SIGPIPE
+
+  Study study = two_axis_study();
+  study.document["model"]["a"] = 0.1 + 0.2;  // a double that must survive exactly
+  study.plugin_libraries = {"/p/libx.so"};
+  const Study back = runner::worker::study_from_json(
+      Json::parse(runner::json_text(runner::worker::study_to_json(study))));
+  EXPECT_EQ(back.kind, study.kind);
+  EXPECT_EQ(back.file, study.file);
+  EXPECT_EQ(back.plugin_libraries, study.plugin_libraries);
+  EXPECT_EQ(back.point_count(), study.point_count());
+  for (std::size_t p = 0; p < study.point_count(); ++p)
+    EXPECT_EQ(back.point_document(p), study.point_document(p)) << p;
+  const double a = back.document["model"]["a"].get<double>(), want = 0.1 + 0.2;
+  EXPECT_EQ(std::memcmp(&a, &want, sizeof a), 0);
 }
 
 TEST(RunnerOutputDir, JournalSessionsCount) {
@@ -498,10 +668,61 @@ TEST(RunStudy, ResumeRefusesTheJournalOfAnotherStudy) {
     run_study(square_study({1.0, 2.5}), options);
     ADD_FAILURE() << "resumed from another study's journal";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("different study"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot resume from"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("run without --resume"), std::string::npos) << e.what();
   }
   EXPECT_EQ(runner::read_file(out / "meta.json"), meta);  // the earlier run is left as it was
   EXPECT_EQ(runner::read_file(out / "results.csv"), results);
+}
+
+TEST(RunStudy, RetryFailedComputesOnlyTheFailedPointsAgain) {
+  Study study = square_study({-1.0, 2.0, 98.0, 3.0});
+  fs::path out = fresh_dir("retry");
+  run_study(study, quiet(out));
+  RunOptions options = quiet(out);
+  options.resume = true;
+  const int before = square_calls;
+  EXPECT_EQ(run_study(study, options).resumed, 4u);
+  EXPECT_EQ(square_calls, before);  // failed points are results too
+  options.retry_failed = true;
+  RunSummary retried = run_study(study, options);
+  EXPECT_EQ(square_calls - before, 2);  // -1 and 98 again
+  EXPECT_EQ(retried.resumed, 2u);
+  EXPECT_EQ(retried.failed, 2u);
+}
+
+TEST(RunStudy, AnOutputThatCannotBeWrittenIsExitCode3WithMetaJsonSayingSo) {
+  Study study = square_study({1.0, 2.0});
+  fs::path out = fresh_dir("output_failure");
+  run_study(study, quiet(out));
+  fs::remove(out / "results.csv");
+  fs::create_directories(out / "results.csv" / "in_the_way");
+  RunOptions options = quiet(out);
+  options.resume = true;
+  RunSummary summary = run_study(study, options);
+  EXPECT_EQ(summary.exit_code(), 3);
+  EXPECT_NE(summary.output_error.find("results.csv"), std::string::npos) << summary.output_error;
+  Json meta = Json::parse(runner::read_file(out / "meta.json"));
+  EXPECT_EQ(meta["state"], "output_failed");
+  EXPECT_EQ(meta["output_error"], summary.output_error);
+  for (const auto& entry : fs::recursive_directory_iterator(out))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+  EXPECT_FALSE(fs::exists(out / runner::output_reserve_name));
+}
+
+TEST(RunStudy, ALockedOutputDirectoryIsRefusedBeforeAnyPoint) {
+  fs::path out = fresh_dir("run_locked");
+  run_study(square_study({1.0}), quiet(out));
+  runner::OutputLock holder(out, "holder.toml");
+  const int calls_before = square_calls;
+  try {
+    run_study(square_study({5.0, 6.0}), quiet(out));
+    ADD_FAILURE() << "ran into a locked directory";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("in use by another chatterlab run"), std::string::npos);
+  }
+  EXPECT_EQ(square_calls, calls_before);
+  EXPECT_EQ(runner::read_file(out / "results.csv"), "x,square,big,note,status\n1,1,false,\"x, squared\",ok\n");
 }
 
 TEST(RunStudy, UnusableOutputDirectoryFailsBeforeAnyPoint) {

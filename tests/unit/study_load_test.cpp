@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
@@ -269,6 +272,90 @@ TEST(StudyLoad, LoadingWritesNothing) {
   Study study = load_study(dir.path() / "study.toml");
   EXPECT_EQ(study.point_count(), 2u);
   EXPECT_EQ(dir.listing(), before);
+}
+
+TEST(StudyLoad, RecordsEveryInputFileWithItsHash) {
+  TempDir dir;
+  const std::string text = "plugins = [\"" CHATTERLAB_EXAMPLE_PLUGIN "\"]\n" + fake_study();
+  Study study = load_text(dir, text);
+  ASSERT_TRUE(study.inputs);
+  const auto files = study.inputs->files();
+  ASSERT_EQ(files.size(), 2u);
+  const auto& library = files[0].role == InputRole::plugin ? files[0] : files[1];
+  const auto& study_file = files[0].role == InputRole::plugin ? files[1] : files[0];
+  EXPECT_EQ(study_file.role, InputRole::study);
+  EXPECT_EQ(study_file.path, input_key(dir.path() / "study.toml"));
+  EXPECT_EQ(study_file.sha256, sha256_hex(text));
+  EXPECT_EQ(library.path, input_key(CHATTERLAB_EXAMPLE_PLUGIN));
+  EXPECT_EQ(library.sha256.size(), 64u);
+  EXPECT_EQ(study.output_columns, (std::vector<std::string>{"scaled_speed_rpm", "first_frequency_hz"}));
+}
+
+TEST(StudyLoad, RunTableIsCheckedAndNeverReachesTheKind) {
+  TempDir dir;
+  Study study = load_text(dir, fake_study("[run]\npoint_timeout_s = 2.5\n[grid]\nspeed_rpm = [1, 2]\n"));
+  EXPECT_EQ(study.document["run"]["point_timeout_s"], 2.5);
+  EXPECT_EQ(study.document["run"]["isolate"], false);
+  EXPECT_FALSE(study.point_document(1).contains("run"));
+  EXPECT_NE(load_error(dir, fake_study("[run]\npoint_timeout_s = 0\n"))
+                .find("study.toml:11: run.point_timeout_s = 0"),
+            std::string::npos);
+  EXPECT_NE(load_error(dir, fake_study("[run]\nthreads = 2\n")).find("unknown key"), std::string::npos);
+  // A study without [run] keeps its resolved document as before (meta.json shows no [run]).
+  EXPECT_FALSE(load_text(dir, fake_study()).document.contains("run"));
+}
+
+TEST(StudyLoad, WhateverAPluginConstructorThrowsIsBadInputAtItsTablesLine) {
+  TempDir dir;
+  const std::string plugin = "plugins = [\"" CHATTERLAB_MISBEHAVING_PLUGIN "\"]\n";
+  const std::string message = load_error(
+      dir, plugin + "[study]\nkind = \"stability_map\"\n[model]\ntype = \"misbehaving_model\"\n"
+                    "behaviour = \"throw_in_constructor\"\n");
+  for (const std::string& part : {std::string("study.toml:5: model plugin 'misbehaving_model' (library "),
+                                 std::string(CHATTERLAB_MISBEHAVING_PLUGIN),
+                                 std::string("its constructor threw an exception of type 'int' (not "
+                                             "derived from std::exception)")})
+    EXPECT_NE(message.find(part), std::string::npos) << message;
+}
+
+TEST(StudyLoad, AStudyKindConstructorThrowingAnythingIsBadInputAtTheKindsLine) {
+  TempDir dir;
+  const std::string plugin = "plugins = [\"" CHATTERLAB_MISBEHAVING_PLUGIN "\"]\n";
+  const std::string message = load_error(dir, plugin + "[study]\nkind = \"throwing_study_kind\"\n");
+  for (const std::string& part :
+       {std::string("study.toml:3: study kind plugin 'throwing_study_kind' (library "),
+        std::string(CHATTERLAB_MISBEHAVING_PLUGIN),
+        std::string("its constructor threw an exception of type 'int' (not derived from "
+                    "std::exception)")})
+    EXPECT_NE(message.find(part), std::string::npos) << message;
+}
+
+TEST(GridCost, GrowsWithTheRowAndKeepsTheDefaultGridWithinHalfTheMemory) {
+  const GridCost small = grid_cost(1000, 2, 3), wide = grid_cost(1000, 2, 13);
+  EXPECT_EQ(small.cells_per_point, 6u);
+  EXPECT_EQ(small.memory_bytes_per_point, 6 * GridCost::memory_bytes_per_cell);
+  EXPECT_EQ(wide.disk_bytes(), 1000 * 16 * GridCost::disk_bytes_per_cell);
+  EXPECT_GT(small.default_max_points, wide.default_max_points);
+  // What the limit accepts fits in the budget; one point more would not.
+  EXPECT_LE(static_cast<std::uint64_t>(small.default_max_points) * small.memory_bytes_per_point,
+            small.memory_budget_bytes);
+  EXPECT_GT((static_cast<std::uint64_t>(small.default_max_points) + 1) * small.memory_bytes_per_point,
+            small.memory_budget_bytes);
+}
+
+TEST(GridCost, AGridOverTheLimitNeedsAllowLarge) {
+  TempDir dir;
+  const GridCost cost = grid_cost(0, 2, 2);
+  // Two axes whose product passes this machine's limit (never expanded: refused from the sizes).
+  const std::size_t side = static_cast<std::size_t>(std::sqrt(double(cost.default_max_points))) + 2;
+  const std::string grid = fmt::format(
+      "[grid]\nspeed_rpm = {{ from = 1, to = 2, steps = {0} }}\n\"fake_settings.scale\" = "
+      "{{ from = 1, to = 2, steps = {0} }}\n",
+      side);
+  const std::string message = load_error(dir, fake_study(grid));
+  EXPECT_NE(message.find(fmt::format("more than the limit of {} on this machine", cost.default_max_points)),
+            std::string::npos)
+      << message;
 }
 
 TEST(SetAtPath, WritesNestedItemsAndNamesWhatExistsWhenThePathDoesNot) {

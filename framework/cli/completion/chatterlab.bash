@@ -29,14 +29,14 @@ _chatterlab() {
     --model) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names model)" -- "$cur"); return ;;
     --machine) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names kinematics)" -- "$cur"); return ;;
     --suppression) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names suppression)" -- "$cur"); return ;;
-    --threads | --name | --example) return ;;
+    --threads | --name | --example | --point-timeout) return ;;
   esac
   local options
   case "${COMP_WORDS[1]}" in
     list) options="--plugin --help" ;;
     describe) options="--plugin --help $(_chatterlab_names '')" ;;
     validate) options="--plugin --allow-large --help" ;;
-    run) options="--plugin --allow-large --out --threads --resume --progress --no-progress --help" ;;
+    run) options="--plugin --allow-large --out --threads --resume --retry-failed --isolate --point-timeout --progress --no-progress --help" ;;
     new-plugin) options="--kind --help" ;;
     check-plugin) options="--quick --threads --help" ;;
     init) options="--output --force --name --example --model --machine --suppression --plugin --help $(_chatterlab_names 'study kind')" ;;

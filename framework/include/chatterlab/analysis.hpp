@@ -9,7 +9,13 @@
 //     { "value": v, "ci_low": a, "ci_high": b, "quality": "good" | "uncertain" | "failed",
 //       "reason": "..." }
 // and curves (e.g. AMI over lag) as arrays under their own keys, which plot() draws.
+//
+// Capabilities beyond analyse() are typed interfaces an analysis class may also derive from; a
+// study kind finds the analyses that have one through the accessor (the analysis returns `this`),
+// never by a plugin's name or its result keys:
+//   ProfileQualityMeasurement (below)   part quality of a surface profile (waviness, roundness)
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +35,8 @@ struct SampledSeries {
   double sample_rate() const { return 1.0 / sample_interval; }  // samples per sample_unit
 };
 
+class ProfileQualityMeasurement;
+
 class Analysis {
  public:
   virtual ~Analysis() = default;
@@ -44,6 +52,54 @@ class Analysis {
   // with the plugin name. Default: none.
   virtual void plot(const Json& /*result*/, const SampledSeries& /*series*/,
                     const std::filesystem::path& /*out_dir*/) const {}
+
+  // ---- capabilities (null: the analysis does not have it)
+  virtual const ProfileQualityMeasurement* profile_quality() const { return nullptr; }
+};
+
+// ------------------------------------------------------------------ profile quality
+
+// The speeds that cut a profile (0: unknown): frequency-resolved waviness bands (W2) need both.
+struct ProfileSpeeds {
+  double wheel_speed_rpm = 0.0;
+  double work_speed_rpm = 0.0;
+};
+
+// Part quality of one surface profile: the figures a grinding engineer specifies a part by.
+struct ProfileQuality {
+  std::optional<double> waviness_wt_um;     // Wt: total height of the waviness profile (W1)
+  std::optional<double> waviness_wz_um;     // Wz: mean maximum height of the waviness profile (W1)
+  std::optional<double> roundness_ront_um;  // RONt about the least-squares circle (closed profiles)
+  // The speeds the frequency bands used: the measurement's own settings, else the caller's.
+  std::optional<ProfileSpeeds> speeds;
+  bool speeds_from_caller = false;
+  Json report;  // the whole evaluation (filter, every parameter, bands), for summary files
+};
+
+// Capability of an analysis: measures the quality of a surface profile given in metres.
+class ProfileQualityMeasurement {
+ public:
+  virtual ~ProfileQualityMeasurement() = default;
+  // The settings a caller offers its users for the measurement (e.g. the simulate kind's
+  // [surface] table): the analysis's parameters without those the call itself fixes (the unit).
+  virtual std::vector<ParamSpec> measurement_params() const = 0;
+  // A setting of this instance that cannot apply to a profile of the given kind (e.g. a cut-off
+  // in mm for a closed profile, which takes it in undulations per revolution): its key and why,
+  // so that the caller refuses the study with the setting's file and line. Nothing: all apply.
+  struct SettingProblem {
+    std::string key;
+    Json value;
+    std::string reason;  // what is wrong, and what to give instead
+  };
+  virtual std::optional<SettingProblem> setting_problem(bool closed_profile) const = 0;
+  // Quality of `profile_m` (values in metres; closed: one revolution, sample unit deg or rad;
+  // open: mm). `speeds` (when known) give the frequency bands unless the analysis's own settings
+  // do. Throws InputError when the profile cannot be evaluated as configured (too few samples per
+  // cut-off, ...), naming the setting.
+  virtual ProfileQuality measure_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds) const = 0;
+  // Figures of that measurement (PNG + SVG) in out_dir, file stems starting with the plugin name.
+  virtual void plot_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds,
+                            const std::filesystem::path& out_dir) const = 0;
 };
 
 }  // namespace chatterlab

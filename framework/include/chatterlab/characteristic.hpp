@@ -8,6 +8,7 @@
 // E must have real coefficients (E(conj s) = conj E(s)): roots come in conjugate pairs, so every
 // list below covers the upper half plane Im s >= 0 only and the conjugates are implied.
 #include <complex>
+#include <string>
 #include <vector>
 
 namespace chatterlab {
@@ -51,6 +52,15 @@ class CharacteristicFunction {
   // Characteristic frequency of the system [Hz] (highest structural natural frequency); the
   // default search band is a documented multiple of it.
   virtual double natural_frequency_scale_hz() const = 0;
+
+  // What the certificate can say beyond the band |Im s| <= band_rad_s for a contour whose left
+  // edge is Re s = certified_real_part, appended to RightmostRoot::certificate (empty: nothing).
+  // E.g. that every root right of that edge is proven to lie inside the band (the certificate is
+  // then global), or, for a neutral system, where the root chains beyond the band accumulate (the
+  // spectrum of its difference operator). Must only state what the model's structure proves.
+  virtual std::string certificate_note(double /*certified_real_part*/, double /*band_rad_s*/) const {
+    return {};
+  }
 };
 
 }  // namespace chatterlab

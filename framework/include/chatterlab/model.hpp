@@ -4,10 +4,15 @@
 //
 // Capabilities beyond the physics are typed interfaces a model class may also derive from; study
 // kinds reach them through the accessors below (the model returns `this`), never by the model's
-// name or by casting to a plugin's class:
+// name or by casting to a plugin's class (stability routes: characteristic() for the roots,
+// return_difference() for the Nyquist count on the imaginary axis):
 //   ClosedFormIndicators (closed_form.hpp)    closed-form criteria reported beside the roots
 //   ProcessConditionsModel (process_conditions.hpp)  parameters that follow the process conditions
 //   StiffnessChain (below)                    the G1 stiffness chain, for the closed forms
+//   LinearisedModel (linearised_model.hpp)    the linearisation derived from the physics written
+//                                             once (derived_model.hpp): roots, Floquet
+//   MeasuredMachine (modal_fit.hpp)           the measured FRF (and modal fit) the model is built on
+//   StructuralCompliance (below)              the machine's compliance H(s) between wheel and work
 #include <limits>
 #include <memory>
 #include <optional>
@@ -15,11 +20,14 @@
 
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/dynamics.hpp"
+#include "chatterlab/nyquist.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
 
 class ClosedFormIndicators;
+class LinearisedModel;
+class MeasuredMachine;
 class ProcessConditionsModel;
 
 // A structural mode as the closed forms of MODELS.md G1/G3/S1 see it.
@@ -37,6 +45,20 @@ struct StiffnessChain {
   double wheel_wear_stiffness_n_per_m = std::numeric_limits<double>::infinity();    // kg
   double work_removal_stiffness_n_per_m = std::numeric_limits<double>::infinity();  // kw
   std::vector<ModeView> modes;
+  // G4's penetration-rate coefficient kd [N s/m] acting beside kw in the work chain (0: none).
+  // With kd > 0 the work term of eq 2-16 is 1/(kw (1 - e^{-Tw s}) + kd s), whose real part on
+  // s = jw is no longer 1/(2 kw): a closed form built on eq 2-21 (the compliance chart's process
+  // line) does not hold and must refuse such a chain.
+  double penetration_damping_n_s_per_m = 0.0;
+};
+
+// Capability of a model: the machine's structural compliance H(s) [m/N] between wheel and work
+// in the direction of the normal force (G1: the summed modal compliances), at any complex s [1/s];
+// the compliance chart draws H(jw) against the process line.
+class StructuralCompliance {
+ public:
+  virtual ~StructuralCompliance() = default;
+  virtual Complex compliance_m_per_n(Complex s) const = 0;
 };
 
 class Model {
@@ -46,6 +68,12 @@ class Model {
   // Linear stability: the characteristic function at this model's parameters, or null when the
   // model has none (e.g. a purely nonlinear model).
   virtual std::unique_ptr<CharacteristicFunction> characteristic() const { return nullptr; }
+
+  // Linear stability on the imaginary axis alone (chatterlab/nyquist.hpp): the return difference
+  // F(j w) whose Nyquist count is the number of unstable roots, or null. A model known only at
+  // s = j w (a measured FRF) has this and no characteristic function; a model with both offers
+  // two independent routes to the same boundary.
+  virtual std::unique_ptr<ReturnDifference> return_difference() const { return nullptr; }
 
   // Wheel revolution period Tg [s] if the model has a wheel; gives growth per wheel revolution
   // rho = Tg Re(s) / 2 pi (MODELS.md G3).
@@ -58,8 +86,12 @@ class Model {
   // ---- capabilities (null / nullopt: the model does not have it)
   virtual const ClosedFormIndicators* closed_forms() const { return nullptr; }
   virtual const ProcessConditionsModel* process_conditions() const { return nullptr; }
+  virtual const MeasuredMachine* measured_machine() const { return nullptr; }
   // The G1 stiffness chain, for models of the Snoeys family (plunge_regenerative, thompson, ...).
   virtual std::optional<StiffnessChain> stiffness_chain() const { return std::nullopt; }
+  // The linearisation of a model written once (DerivedModel provides it).
+  virtual const LinearisedModel* linearised() const { return nullptr; }
+  virtual const StructuralCompliance* structural_compliance() const { return nullptr; }
 };
 
 }  // namespace chatterlab

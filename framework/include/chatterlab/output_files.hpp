@@ -1,6 +1,7 @@
 #pragma once
 // Writing a study's files. Everything a run writes goes through write_file_atomically, so a
 // killed run never leaves half a file that a reader (or a resumed run) would take for complete.
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -12,8 +13,21 @@ namespace chatterlab {
 
 // Writes `content` to a temporary file next to `path` (creating the parent directories), flushes
 // it to disk and renames it over `path`: readers see the old or the new file, never a partial
-// one. Throws std::runtime_error naming the file.
+// one, and a failed write (disk full) leaves no temporary file behind. Throws OutputError
+// (chatterlab/errors.hpp) naming the file and the reason.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
+
+// A temporary name next to `path`, unique per process and call ("<path>.tmp<pid>.<n>"): for
+// files written by another program (gnuplot) and renamed into place.
+std::filesystem::path temporary_path_for(const std::filesystem::path& path);
+
+// How many output writes have failed on the calling thread so far. The runner compares it before
+// and after a grid point or the plots, so an output failure is recognised (exit 3) even when a
+// study kind catches the OutputError and rethrows it as something else.
+std::size_t failed_output_writes_on_this_thread();
+// Counts a failed output write on the calling thread (for writers other than
+// write_file_atomically, e.g. the plot service when gnuplot could not write an image).
+void note_failed_output_write();
 
 // A CSV table: header line, then one line per row, numbers in shortest round-trip form (the
 // same double always prints the same text), "\n" line ends. Every row must have header.size()

@@ -26,7 +26,8 @@
 // std::string, std::vector<double> (real_list), std::vector<std::vector<double>> (real_matrix),
 // an enum through add_choice (string with choices), a struct with its own ParamTable (table,
 // add_table), std::vector of such structs (table_list, add_tables); std::optional<T> of any of
-// the scalar ones is an optional parameter (null when absent).
+// the scalar ones is an optional parameter (null when absent). add_fields embeds a sub-struct's
+// table flat (its keys at this table's level).
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -77,6 +78,8 @@ class ParamTable {
     Field& fraction(bool one_excluded = false) { non_negative(); return one_excluded ? below(1.0) : at_most(1.0); }
     Field& choices(std::vector<std::string> names) { spec_->choices = std::move(names); return *this; }
     Field& min_items(std::size_t n) { spec_->min_items = n; return *this; }
+    // A data file name, relative to the study file (ParamSpec::data_file).
+    Field& data_file() { spec_->data_file = true; return *this; }
     // No default: the study must give it (the struct's initialiser is then only a placeholder).
     Field& required() { *required_ = true; return *this; }
 
@@ -143,6 +146,25 @@ class ParamTable {
     return Field(&e.spec, &e.required);
   }
 
+  // An optional nested table: null (std::nullopt) when left out, e.g. one of two ways to give a
+  // setting (a list of values or a range table).
+  template <class Sub>
+  Field add_optional_table(std::optional<Sub> S::*member, std::string key, std::string description,
+                           const ParamTable<Sub>& fields) {
+    Entry& e = push(param_spec(key, ValueKind::table, "", std::move(description)));
+    e.spec.fields = fields.specs();
+    e.optional = true;
+    e.read = [member, key, fields](S& s, const Json& table) {
+      const Json& v = table.at(key);
+      if (v.is_null()) s.*member = std::nullopt;
+      else s.*member = fields.read(v);
+    };
+    e.write = [member, key, fields](const S& s, Json& table) {
+      table[key] = (s.*member) ? fields.write(*(s.*member)) : Json(nullptr);
+    };
+    return Field(&e.spec, &e.required);
+  }
+
   // A list of tables ([[<table>.<key>]] or key = [{...}, ...]), each declared by `fields`.
   template <class Sub>
   Field add_tables(std::vector<Sub> S::*member, std::string key, std::string description,
@@ -159,6 +181,20 @@ class ParamTable {
       table[key] = std::move(list);
     };
     return Field(&e.spec, &e.required);
+  }
+
+  // The members of a sub-struct declared by its own table, flat in this one: a plugin whose
+  // parameters extend another parameter set (G1's plus one coefficient) declares the common part
+  // once and keeps it as one member.
+  template <class Sub>
+  void add_fields(Sub S::*member, const ParamTable<Sub>& fields) {
+    for (const auto& sub : fields.entries_) {
+      Entry& e = push(sub.spec);
+      e.required = sub.required;
+      e.optional = sub.optional;
+      e.read = [member, read = sub.read](S& s, const Json& table) { read(s.*member, table); };
+      e.write = [member, write = sub.write](const S& s, Json& table) { write(s.*member, table); };
+    }
   }
 
   // The declared parameters, in declaration order, defaults from a default-constructed S.
@@ -191,6 +227,7 @@ class ParamTable {
   }
 
  private:
+  template <class> friend class ParamTable;  // add_fields reads another table's entries
   template <class T> struct unwrap { using type = T; };
   template <class T> struct unwrap<std::optional<T>> { using type = T; };
 

@@ -45,6 +45,10 @@ struct ParamSpec {
   std::vector<ParamSpec> fields;     // element fields for table_list, the fields of a table
   std::size_t min_items = 0;         // for lists/matrices/table_list
   bool optional = false;             // absent and no default: left null, plugin decides
+  // A string naming a data file: a relative name is taken relative to the directory of the study
+  // file it is written in (as `plugins`), validation writes the absolute path back and refuses a
+  // file that does not exist.
+  bool data_file = false;
   bool required() const { return default_value.is_null() && !optional; }
 };
 

@@ -45,6 +45,11 @@ struct Registries {
 // Each entry it registers has the library's canonical path as its origin.
 void load_plugin_library(const std::string& path);
 
+// The out-of-tree plugins a study document chooses (every `type = "<name>"`, at any depth, that
+// names a plugin loaded from a library), as "model plugin 'x' (library /p/libx.so)", comma
+// separated; "" when it uses built-in plugins only. Failure messages name them.
+std::string out_of_tree_plugins_in(const Json& document);
+
 // What a loaded (or refused) library says it was built for.
 struct PluginLibraryBuild {
   int plugin_api_version = 0;

@@ -7,7 +7,9 @@
 //   [stability] ...                    # kind settings
 //   [grid]   "model.modes.0.damping_ratio" = [0.01, 0.02]      # parameter paths -> values
 //            wheel_speed_rpm = { from = 1000, to = 2000, steps = 21, log = false }
+//   [run]    point_timeout_s = 600, isolate = false              # optional, how points run
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -24,12 +26,35 @@ struct GridAxis {
   SourceLocation where;     // line of the grid key
 };
 
-// Grids with more points than this need LoadOptions::allow_large (`--allow-large`).
-inline constexpr std::size_t max_grid_points = 10'000'000;
+// What a grid costs (docs/studies.md, "Grid size"). At the end of a run rank 0 holds every
+// point's results in memory (the results table, then results.csv's text and the plots' data);
+// on disk the journal, results.csv and the plots' data hold them. Both grow with the cells of a
+// results.csv row (grid keys + output columns + status), at rates measured on stability_map
+// grids, whose certificate column makes them the most expensive per cell of the built-in kinds.
+struct GridCost {
+  // Measured (docs/performance.md, "Study runner: memory and disk per point"): 10-cell rows of a
+  // linear_dde stability map take 1050 bytes of peak memory and 1360 bytes of disk per point.
+  static constexpr std::uint64_t memory_bytes_per_cell = 110;
+  static constexpr std::uint64_t disk_bytes_per_cell = 140;
+
+  std::size_t points = 0;
+  std::size_t cells_per_point = 0;
+  std::uint64_t memory_bytes_per_point = 0;
+  std::uint64_t disk_bytes_per_point = 0;
+  std::uint64_t memory_budget_bytes = 0;  // half of this machine's physical memory
+  // The largest grid accepted without --allow-large: memory_budget / memory per point.
+  std::size_t default_max_points = 0;
+
+  std::uint64_t memory_bytes() const { return points * memory_bytes_per_point; }
+  std::uint64_t disk_bytes() const { return points * disk_bytes_per_point; }
+};
+GridCost grid_cost(std::size_t points, std::size_t grid_keys, std::size_t output_columns);
 
 struct LoadOptions {
-  bool allow_large = false;  // permit grids over max_grid_points points
+  bool allow_large = false;  // permit grids over GridCost::default_max_points points
 };
+
+class InputSnapshot;  // chatterlab/input_files.hpp
 
 struct Study {
   std::filesystem::path file;
@@ -37,13 +62,17 @@ struct Study {
   Json document;                         // the whole study, validated, defaults filled in
   std::vector<GridAxis> grid;            // empty: a single point
   std::vector<std::string> plugin_libraries;  // resolved absolute paths
+  std::vector<std::string> output_columns;    // the kind's outputs (results.csv, after the grid)
   std::shared_ptr<const SourceMap> sources;
+  // The input files as load_study read them (study file, plugin libraries, data files), with
+  // their hashes: run_study reads through this snapshot, so every point sees the same bytes.
+  std::shared_ptr<InputSnapshot> inputs;
 
   std::size_t point_count() const;  // product of axis sizes (1 without a grid)
   // Index -> per-axis value indices; the LAST axis varies fastest (row-major, "grid order").
   std::vector<std::size_t> point_indices(std::size_t point) const;
-  // The document with that point's grid values written at their paths, without the [grid]
-  // table (a point is one set of values; this also keeps the copy cheap for long grids).
+  // The document with that point's grid values written at their paths, without the [grid] and
+  // [run] tables (a point is one set of values; this also keeps the copy cheap for long grids).
   Json point_document(std::size_t point) const;
 };
 

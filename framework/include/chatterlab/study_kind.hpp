@@ -71,7 +71,9 @@ class StudyKind {
   // for long grid axes does so from several threads at once (on different documents).
   virtual void validate(Json& document, const SourceMap& sources) const = 0;
 
-  // Names of the numeric output columns (after the grid columns, before `status`).
+  // Names of the output columns (after the grid columns, before `status`). A column named
+  // `notice` holds what the user must read even when the point completed (e.g. "no stable
+  // candidate: ..."): the runner lists its non-empty cells in meta.json and on the terminal.
   virtual std::vector<std::string> output_columns(const Json& document) const = 0;
 
   // Computes one grid point from its document (grid values applied, already validated).

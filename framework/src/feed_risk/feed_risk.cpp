@@ -232,13 +232,37 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
   return risk;
 }
 
+// rate_plan's worst case per segment over the spindle speeds n (1 - tol), n, n (1 + tol).
+PlanRisk rate_plan_band(const Json& model_table, const ProcessSettings& p,
+                        const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
+                        const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
+                        int phases, double tolerance) {
+  PlanRisk worst = rate_plan(model_table, p, plan, generatrix, roots, thresholds, amplitude_ratio, phases);
+  if (!(tolerance > 0.0)) return worst;
+  for (double factor : {1.0 - tolerance, 1.0 + tolerance}) {
+    std::vector<planner::SegmentConditions> shifted = plan;
+    for (auto& c : shifted) c.spindle_speed_rpm *= factor;
+    const PlanRisk r = rate_plan(model_table, p, shifted, generatrix, roots, thresholds, amplitude_ratio, phases);
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      SegmentRisk& w = worst.segments[k];
+      w.certified = w.certified && r.segments[k].certified;
+      if (r.segments[k].growth_rate_per_s > w.growth_rate_per_s) {
+        w.growth_rate_per_s = r.segments[k].growth_rate_per_s;
+        w.chatter_frequency_hz = r.segments[k].chatter_frequency_hz;
+      }
+    }
+  }
+  accumulate(plan, thresholds, worst);
+  return worst;
+}
+
 }  // namespace
 
 PlanRisk evaluate_roots(const Json& model_table, const ProcessSettings& p,
                         const std::vector<planner::SegmentConditions>& plan,
                         const planner::Generatrix& generatrix, const RootSettings& roots,
-                        const RiskThresholds& thresholds) {
-  return rate_plan(model_table, p, plan, generatrix, roots, thresholds, 0.0, 1);
+                        const RiskThresholds& thresholds, double speed_tolerance) {
+  return rate_plan_band(model_table, p, plan, generatrix, roots, thresholds, 0.0, 1, speed_tolerance);
 }
 
 // ------------------------------------------------------------------ simulation
@@ -458,6 +482,29 @@ AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSe
 
 // ------------------------------------------------------------------ optimisation
 
+namespace {
+
+// The contiguous run of admissible candidates stable over their bands around the best one, among
+// those with its modulation amplitude (candidates are generated in increasing speed).
+void stable_window(OptimiseResult& result) {
+  const Candidate& best = result.candidates[result.best];
+  result.stable = best.worst == Risk::stable;
+  std::vector<const Candidate*> row;
+  for (const Candidate& c : result.candidates)
+    if (c.amplitude_ratio == best.amplitude_ratio) row.push_back(&c);
+  if (row.size() > 1) result.speed_spacing_rpm = row[1]->spindle_speed_rpm - row[0]->spindle_speed_rpm;
+  if (!result.stable) return;
+  std::size_t i = 0;
+  while (row[i] != &best) ++i;
+  auto ok = [&](std::size_t k) { return row[k]->admissible && row[k]->worst == Risk::stable; };
+  std::size_t lo = i, hi = i;
+  while (lo > 0 && ok(lo - 1)) --lo;
+  while (hi + 1 < row.size() && ok(hi + 1)) ++hi;
+  result.stable_window_rpm = std::pair{row[lo]->spindle_speed_rpm, row[hi]->spindle_speed_rpm};
+}
+
+}  // namespace
+
 OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const Replan& replan,
                         double baseline_time_s, const planner::Generatrix& generatrix,
                         const RootSettings& roots, const RiskThresholds& thresholds,
@@ -482,7 +529,12 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
       if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
       std::vector<planner::SegmentConditions> plan = it->second;
       for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
-      const PlanRisk risk = rate_plan(model_table, p, plan, generatrix, coarse, thresholds, a, settings.phase_samples);
+      const PlanRisk nominal =
+          rate_plan(model_table, p, plan, generatrix, coarse, thresholds, a, settings.phase_samples);
+      const PlanRisk risk = rate_plan_band(model_table, p, plan, generatrix, coarse, thresholds, a,
+                                           settings.phase_samples, settings.speed_tolerance);
+      c.nominal_max_growth_rate_per_s = nominal.max_growth_rate_per_s;
+      if (a == 0.0) c.exact_speed_ratio = kit::exact_ratio(p.wheel_speed_rpm, c.spindle_speed_rpm);
       c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
       c.time_factor = c.total_time_s / baseline_time_s;
       c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
@@ -505,7 +557,70 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
     }
   }
   if (!found) throw PointFailure("chatter-aware planning: no candidate within the time limit");
+  stable_window(result);
   return result;
+}
+
+// ------------------------------------------------------------------ levers
+
+namespace {
+
+struct LeverDefinition {
+  const char* name;
+  const char* acts_on;
+  void (*scale)(Json& table, double factor);
+};
+
+void scale_key(Json& t, const char* key, double f) { t[key] = t[key].get<double>() * f; }
+
+const LeverDefinition lever_definitions[] = {
+    {"width of cut", "contact, wheel-wear and work-removal stiffness (all proportional to the width b)",
+     [](Json& t, double f) {
+       for (const char* k : {"contact_stiffness_n_per_m", "wheel_wear_stiffness_n_per_m", "work_removal_stiffness_n_per_m"})
+         scale_key(t, k, f);
+     }},
+    {"contact stiffness", "kc b", [](Json& t, double f) { scale_key(t, "contact_stiffness_n_per_m", f); }},
+    {"structural damping", "every mode's damping ratio",
+     [](Json& t, double f) {
+       for (Json& m : t["modes"]) m["damping_ratio"] = std::min(m["damping_ratio"].get<double>() * f, 0.99);
+     }},
+    {"work speed", "work_speed_rpm", [](Json& t, double f) { scale_key(t, "work_speed_rpm", f); }},
+    {"wheel speed", "wheel_speed_rpm", [](Json& t, double f) { scale_key(t, "wheel_speed_rpm", f); }},
+};
+
+double growth_at(const Json& table, const RootSettings& roots) {
+  auto model = kit::build_model(table);
+  return kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real();
+}
+
+}  // namespace
+
+std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
+                                    double max_factor) {
+  const double growth0 = growth_at(segment_model, roots);
+  constexpr double step = 0.05;  // central difference in ln(quantity)
+  std::vector<Lever> levers;
+  for (const LeverDefinition& d : lever_definitions) {
+    Lever lever{d.name, d.acts_on};
+    Json up = segment_model, down = segment_model;
+    d.scale(up, std::exp(step));
+    d.scale(down, std::exp(-step));
+    lever.growth_per_unit_log = (growth_at(up, roots) - growth_at(down, roots)) / (2 * step);
+    if (lever.growth_per_unit_log != 0.0) {
+      const double limit = std::log(max_factor);
+      const double log_change =
+          std::clamp((target_growth_per_s - growth0) / lever.growth_per_unit_log, -limit, limit);
+      Json changed = segment_model;
+      d.scale(changed, std::exp(log_change));
+      lever.change_percent = 100.0 * (std::exp(log_change) - 1.0);
+      lever.growth_rate_after_per_s = growth_at(changed, roots);
+      lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
+    } else {
+      lever.growth_rate_after_per_s = growth0;
+    }
+    levers.push_back(std::move(lever));
+  }
+  return levers;
 }
 
 }  // namespace chatterlab::feed_risk

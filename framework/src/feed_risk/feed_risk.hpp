@@ -107,10 +107,14 @@ struct PlanRisk {
   Risk worst = Risk::stable;
   double time_in_risk_s[3] = {0.0, 0.0, 0.0};
 };
+// Each segment's rightmost root at its conditions; with speed_tolerance > 0 the worst (largest)
+// growth rate of the spindle speeds n (1 - tol), n, n (1 + tol) (issue 19: a machine holds its
+// speed only within a tolerance, and a verdict at an exact wheel/work speed ratio, where the delay
+// lattices share roots, does not survive a small speed error).
 PlanRisk evaluate_roots(const Json& model_table, const ProcessSettings& p,
                         const std::vector<planner::SegmentConditions>& plan,
                         const planner::Generatrix& generatrix, const RootSettings& roots,
-                        const RiskThresholds& thresholds);
+                        const RiskThresholds& thresholds, double speed_tolerance = 0.0);
 
 // Integral of a piecewise-constant growth rate over segments (ln of the amplitude factor), and its
 // floored running form; then the classes. Shared by evaluate_roots and the optimiser.
@@ -191,13 +195,16 @@ struct OptimiseSettings {
   int phase_samples = 8;              // frozen-speed average over a modulation cycle (S2, 5-37)
   double max_time_factor = 1.2;       // total time <= this x the baseline plan's
   double condition_tolerance = 1e-2;  // coarser grouping for the search
+  double speed_tolerance = 0.005;     // candidates rated by their worst case over n (1 +- tol)
 };
 
 struct Candidate {
   double spindle_speed_rpm = 0.0, amplitude_ratio = 0.0, planning_speed_rpm = 0.0;
   double total_time_s = 0.0, time_factor = 0.0;
   double max_growth_rate_per_s = 0.0, max_floored_log_amplification = 0.0;
-  Risk worst = Risk::stable;
+  Risk worst = Risk::stable;  // over the speed band, like the two maxima above
+  double nominal_max_growth_rate_per_s = 0.0;  // at the nominal speed alone
+  std::string exact_speed_ratio;  // wheel : work speed as p/q (q <= 12) when exact, else empty
   bool admissible = false;  // within the time limit
 };
 
@@ -208,6 +215,12 @@ struct OptimiseResult {
   std::vector<Candidate> candidates;
   std::size_t best = 0;
   std::vector<planner::SegmentConditions> best_plan;  // at the best candidate's mean speed
+  // Whether the best candidate is stable over its whole speed band, and then the contiguous range
+  // of candidate speeds around it (same modulation) that are too: the window the machine may
+  // drift in. Its ends are known to the candidate spacing.
+  bool stable = false;
+  std::optional<std::pair<double, double>> stable_window_rpm;
+  double speed_spacing_rpm = 0.0;
 };
 
 // Spindle speeds evenly over the admissible range of each amplitude ratio a (mean speeds n with
@@ -220,5 +233,26 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
                         double baseline_time_s, const planner::Generatrix& generatrix,
                         const RootSettings& roots, const RiskThresholds& thresholds,
                         const OptimiseSettings& settings);
+
+// ------------------------------------------------------------------ levers (issue 19: true advice)
+
+// What would make one segment's conditions stable: the growth rate's sensitivity to a process or
+// machine quantity, the relative change that a linear extrapolation says reaches the target
+// growth rate, and the growth rate actually computed at that change (stability lobes make the
+// speeds' response anything but linear, so the check decides, not the extrapolation).
+struct Lever {
+  std::string name;        // e.g. "width of cut"
+  std::string acts_on;     // the G1 quantities it scales
+  double growth_per_unit_log = 0.0;  // d Re s / d ln(quantity) [1/s]
+  std::optional<double> change_percent;  // the change tried (none: no effect in the model)
+  double growth_rate_after_per_s = 0.0;  // rightmost root with that change
+  bool reaches_target = false;
+};
+
+// The levers at a segment's G1 table (segment_model_table): width of cut (kc, kg, kw together),
+// contact stiffness, structural damping, work speed and wheel speed, each tried up to a factor
+// max_factor either way. target_growth_per_s < 0 is the growth rate to reach.
+std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
+                                    double max_factor = 3.0);
 
 }  // namespace chatterlab::feed_risk

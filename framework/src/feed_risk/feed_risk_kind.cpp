@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
@@ -49,7 +50,7 @@ ParamSpec param_spec_bool(std::string key, std::string description) {
 std::vector<ParamSpec> simulation_specs() {
   ParamSpec enabled = param_spec("enabled", ValueKind::boolean, "1", "run the simulation along the plan");
   enabled.default_value = true;
-  ParamSpec tolerance = with_default(positive("relative_tolerance", "1", "integrator relative tolerance"), 1e-4);
+  ParamSpec tolerance = with_default(positive("relative_tolerance", "1", "relative tolerance of the adaptive ARKODE route only (the along-plan simulation runs the fixed-step engine, which has none)"), 1e-4);
   tolerance.max = 1e-2;
   ParamSpec seed = param_spec("seed", ValueKind::integer, "1", "seed of the random initial surfaces");
   seed.default_value = 1;
@@ -93,9 +94,15 @@ std::vector<ParamSpec> optimise_specs() {
                                               "relative tolerance grouping segments in the search"),
                                      1e-2);
   tolerance.max = 0.1;
+  ParamSpec band = param_spec("speed_tolerance", ValueKind::real, "1",
+                              "spindle speed tolerance: candidates are rated by their worst case over "
+                              "n (1 +- tol) (a verdict at an exact wheel/work speed ratio does not survive it)");
+  band.default_value = 0.005;
+  band.min = 0.0;
+  band.max = 0.1;
   return {steps, amplitudes,
           with_default(positive("modulation_frequency_hz", "Hz", "modulation frequency f"), 0.5), phases,
-          factor, tolerance};
+          factor, tolerance, band};
 }
 
 fs::path study_dir(const SourceMap& sources, const std::string& key) {
@@ -176,7 +183,7 @@ PlanSource plan_source(const Json& document) {
     src.part = saved.part;
     src.wheel = saved.wheel;
     // The saved [plan] table (planner settings) for re-planning; read_saved_plan checked the file.
-    std::ifstream in(fs::path(fr["plan_dir"].get<std::string>()) / "summary.json");
+    InputFileStream in(fs::path(fr["plan_dir"].get<std::string>()) / "summary.json");
     src.plan = Json::parse(in).at("plan");
     src.segments = std::move(saved.segments);
     return src;
@@ -223,9 +230,55 @@ constexpr const char* columns[] = {
     "max_log_amplification", "max_predicted_waviness_um", "worst_risk", "chatter_time_s",
     "simulated_max_waviness_um", "simulation_status", "optimised_spindle_speed_rpm",
     "optimised_amplitude_ratio", "optimised_total_time_s", "optimised_max_predicted_waviness_um",
-    "optimised_simulated_max_waviness_um"};
+    "optimised_simulated_max_waviness_um", "replan_verdict", "notice"};
 
 Json number_or_null(double v) { return std::isfinite(v) ? Json(v) : Json(); }
+
+std::string no_stable_candidate_notice(const OptimiseResult& best, const OptimiseSettings& os, const PlanRisk& risk,
+                                       const RiskThresholds& thresholds) {
+  const Candidate& c = best.candidates[best.best];
+  return fmt::format(
+      "no stable candidate: every spindle speed in [{}, {}] rpm (amplitudes {}) chatters or is marginal over the "
+      "+-{:.2g} % speed band; the least risky, {:.1f} rpm, reaches growth {:.3g} /s (stable needs < {:.3g} /s) and is "
+      "NOT written as an optimised plan.",
+      os.spindle_min_rpm, os.spindle_max_rpm, Json(os.amplitude_ratios).dump(), 100 * os.speed_tolerance,
+      c.spindle_speed_rpm, risk.max_growth_rate_per_s, -thresholds.marginal_growth_rate_per_s);
+}
+
+// The levers at the plan's worst segment (largest band growth rate), as JSON rows.
+Json levers_at_worst_segment(const Json& model, const ProcessSettings& p, const PlanRisk& risk,
+                             const RootSettings& roots, const RiskThresholds& thresholds) {
+  std::size_t worst = 0;
+  for (std::size_t k = 1; k < risk.segments.size(); ++k)
+    if (risk.segments[k].growth_rate_per_s > risk.segments[worst].growth_rate_per_s) worst = k;
+  const Json table = segment_model_table(model, p, risk.process[worst]);
+  // A margin beyond the marginal threshold, so the change lands clearly in the stable class.
+  const double target = -1.5 * thresholds.marginal_growth_rate_per_s;
+  Json rows = Json::array();
+  for (const Lever& l : stability_levers(table, roots, target))
+    rows.push_back({{"lever", l.name},
+                    {"acts_on", l.acts_on},
+                    {"growth_per_unit_log_per_s", l.growth_per_unit_log},
+                    {"change_percent", l.change_percent ? Json(*l.change_percent) : Json()},
+                    {"growth_rate_after_per_s", l.growth_rate_after_per_s},
+                    {"reaches_stability", l.reaches_target},
+                    {"at_x_mm", risk.process[worst].x_mid_mm}});
+  return rows;
+}
+
+std::string levers_text(const Json& levers) {
+  std::string text = " Levers at the worst segment:";
+  for (const Json& l : levers) {
+    if (l["change_percent"].is_null()) {
+      text += fmt::format(" {}: no effect;", l["lever"].get<std::string>());
+      continue;
+    }
+    text += fmt::format(" {} {:+.0f} % -> {:.3g} /s{};", l["lever"].get<std::string>(), l["change_percent"].get<double>(),
+                        l["growth_rate_after_per_s"].get<double>(), l["reaches_stability"].get<bool>() ? " (stable)" : "");
+  }
+  text.pop_back();
+  return text + " (feed per revolution does not enter the linear G1 stiffnesses: no lever).";
+}
 
 // results.csv simulation_status: completed, reached_depth_of_cut (the linear model ends where the
 // wheel would leave the work; the rows up to there are kept) or failed (numerical failure).
@@ -599,12 +652,14 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
                       {"chatter_amplification", thresholds.chatter_amplification}}},
   };
   if (simulate)
-    summary["simulation"] = {{"status", sim.status}, {"failed", sim.failed}, {"diverged", sim.diverged},
+    summary["simulation"] = {{"outcome", simulation_outcome(sim)}, {"engine_status", sim.status}, {"failed", sim.failed}, {"diverged", sim.diverged},
                              {"end_time_s", sim.end_time_s}, {"steps", sim.steps},
                              {"wall_s", sim.wall_s}, {"revolutions", sim.revolutions.size()},
                              {"max_work_waviness_um", max_waviness_um(sim)}};
 
   Json optimised = Json::object();
+  bool stable_replan = false;
+  std::string notice;
   std::optional<OptimiseResult> best;
   PlanRisk best_risk;
   AlongPlanSimulation best_sim;
@@ -618,13 +673,15 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
     os.phase_samples = o.at("phase_samples").get<int>();
     os.max_time_factor = o.at("max_time_factor").get<double>();
     os.condition_tolerance = o.at("condition_tolerance").get<double>();
+    os.speed_tolerance = o.at("speed_tolerance").get<double>();
     best = optimise(model, p, [&](double rpm) { return plan_at(src, rpm); }, plan_time(src.segments), *generatrix,
                     roots, thresholds, os);
     const Candidate& c = best->candidates[best->best];
     // The chosen plan rated at full resolution (roots at the mean speed; the modulation's frozen-
     // speed average is the candidate's own rating) and simulated with the exact modulated spindle.
-    best_risk = evaluate_roots(model, p, best->best_plan, *generatrix, roots, thresholds);
-    if (simulate) {
+    best_risk = evaluate_roots(model, p, best->best_plan, *generatrix, roots, thresholds, os.speed_tolerance);
+    stable_replan = best->stable && best_risk.worst == Risk::stable;
+    if (simulate && stable_replan) {
       AlongPlanSettings s = sim_settings;
       if (c.amplitude_ratio > 0)
         s.work_speed = make_modulated_speed(c.spindle_speed_rpm, SpeedModulation::sinusoidal, c.amplitude_ratio,
@@ -636,6 +693,8 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
       rows.push_back({{"spindle_speed_rpm", k.spindle_speed_rpm}, {"amplitude_ratio", k.amplitude_ratio},
                       {"total_time_s", k.total_time_s}, {"time_factor", k.time_factor},
                       {"max_growth_rate_per_s", k.max_growth_rate_per_s},
+                      {"nominal_max_growth_rate_per_s", k.nominal_max_growth_rate_per_s},
+                      {"exact_speed_ratio", k.exact_speed_ratio},
                       {"max_log_amplification", k.max_floored_log_amplification},
                       {"worst_risk", to_string(k.worst)}, {"admissible", k.admissible}});
     optimised = {{"spindle_speed_rpm", c.spindle_speed_rpm},
@@ -650,9 +709,28 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
                  {"max_log_amplification", best_risk.max_floored_log_amplification},
                  {"max_predicted_waviness_um", predicted_um(best_risk.max_floored_log_amplification)},
                  {"worst_risk", to_string(best_risk.worst)},
+                 {"speed_tolerance", os.speed_tolerance},
+                 {"nominal_max_growth_rate_per_s", c.nominal_max_growth_rate_per_s},
+                 {"exact_speed_ratio", c.exact_speed_ratio},
+                 {"stable_over_speed_band", stable_replan},
                  {"candidates", rows}};
-    if (simulate)
-      optimised["simulation"] = {{"status", best_sim.status}, {"failed", best_sim.failed}, {"diverged", best_sim.diverged},
+    if (best->stable_window_rpm)
+      optimised["stable_window_rpm"] = {{"from", best->stable_window_rpm->first},
+                                        {"to", best->stable_window_rpm->second},
+                                        {"candidate_spacing_rpm", best->speed_spacing_rpm}};
+    if (stable_replan) {
+      optimised["verdict"] = "stable";
+      optimised["plan_written"] = true;
+    } else {
+      optimised["verdict"] = "no stable candidate";
+      optimised["plan_written"] = false;
+      notice = no_stable_candidate_notice(*best, os, best_risk, thresholds);
+      optimised["levers"] = levers_at_worst_segment(model, p, best_risk, roots, thresholds);
+      notice += levers_text(optimised["levers"]);
+      optimised["notice"] = notice;
+    }
+    if (simulate && stable_replan)
+      optimised["simulation"] = {{"outcome", simulation_outcome(best_sim)}, {"engine_status", best_sim.status}, {"failed", best_sim.failed}, {"diverged", best_sim.diverged},
                                  {"max_work_waviness_um", max_waviness_um(best_sim)}};
     summary["optimised"] = optimised;
   }
@@ -660,7 +738,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   if (!context.artifact_dir.empty()) {
     const fs::path& dir = context.artifact_dir;
     write_segments(dir / "segments.csv", src.segments, risk, predicted_um);
-    if (best) {
+    if (best && stable_replan) {
       // Re-planned once more at the chosen planning speed (deterministic: the same plan).
       write_pulses(dir / "optimised_pulses.csv",
                    schedule_at(src, best->candidates[best->best].planning_speed_rpm).plan);
@@ -669,7 +747,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
     Json failures = Json::array();
     if (context.plots) draw_plots(document, dir, src.segments, risk, simulate ? &sim : nullptr, predicted_um, failures);
     if (best) {
-      write_segments(dir / "optimised_segments.csv", best->best_plan, best_risk, predicted_um);
+      if (stable_replan) write_segments(dir / "optimised_segments.csv", best->best_plan, best_risk, predicted_um);
       const auto& cands = best->candidates;
       std::vector<std::vector<double>> c(7, std::vector<double>(cands.size()));
       for (std::size_t i = 0; i < cands.size(); ++i) {
@@ -719,7 +797,9 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
         };
         compare.series.push_back(series(fmt::format("before: {:.0f} rpm, {:.0f} s", src.segments.front().spindle_speed_rpm,
                                                     plan_time(src.segments)), src.segments, risk));
-        compare.series.push_back(series(fmt::format("after: {:.1f} rpm, a = {}, {:.0f} s", chosen.spindle_speed_rpm,
+        compare.series.push_back(series(fmt::format("{}: {:.1f} rpm, a = {}, {:.0f} s",
+                                                    stable_replan ? "after" : "least risk (NOT stable)",
+                                                    chosen.spindle_speed_rpm,
                                                     chosen.amplitude_ratio, chosen.total_time_s),
                                         best->best_plan, best_risk));
         if (simulate) {
@@ -733,7 +813,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
             return s;
           };
           compare.series.push_back(simulated("before, simulated", sim));
-          compare.series.push_back(simulated("after, simulated", best_sim));
+          if (stable_replan) compare.series.push_back(simulated("after, simulated", best_sim));
         }
         draw(compare, dir, "before_after", failures);
       }
@@ -742,8 +822,9 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
     write_json_file(dir / "summary.json", summary);
   }
 
+  // The optimised columns describe a plan only when one was written.
   auto optional_number = [&](const char* key) {
-    return optimised.contains(key) ? optimised[key] : Json();
+    return stable_replan && optimised.contains(key) ? optimised[key] : Json();
   };
   return {summary["total_time_s"],
           summary["segments"],
@@ -760,7 +841,9 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
           optional_number("modulation_amplitude_ratio"),
           optional_number("total_time_s"),
           optional_number("max_predicted_waviness_um"),
-          best && simulate ? Json(max_waviness_um(best_sim)) : Json()};
+          best && simulate && stable_replan ? Json(max_waviness_um(best_sim)) : Json(),
+          best ? Json(stable_replan ? "stable" : "no stable candidate") : Json(),
+          notice};
 }
 
 void FeedRiskKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,

@@ -1,6 +1,7 @@
 #include "planner/cam_plan.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "planner/controller_export.hpp"
 #include "planner/parametric_spline.hpp"
 #include "planner/plan_io.hpp"
 #include "planner/replay.hpp"
@@ -124,7 +126,8 @@ PluginInfo CamPlanKind::info() {
   ParamSpec step = positive("segment_angle_deg", "deg", "polar angle of the contact per segment");
   step.default_value = 0.5;
   step.max = 10.0;
-  info.params = {step, start_stop_rate_spec()};
+  const ParamSpec tick = controller_tick_spec();
+  info.params = {step, start_stop_rate_spec(), tick};
   info.thread_safety = ThreadSafety::copy_per_thread;
   info.example_params = {{"segment_angle_deg", 1.0}};
   return info;
@@ -281,8 +284,34 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       concave_at_deg = std::fmod(std::atan2(p[1], p[0]) * 180 / pi + 360.0, 360.0);
     }
   }
+  // Controller output (docs/planner.md, "Controller output"), read back: the program's pulses and
+  // durations, and the step table's states replayed through the forward kinematics.
+  const double tick_hz = controller_tick_hz(doc.at("plan"), motors);
+  const ControllerExport controller = export_plan(
+      plan, {"chatterlab cam_plan: one revolution of the cam, C in degrees (unwrapped), X slide in mm",
+             "G93 inverse time: F = 60 / segment duration"}, tick_hz);
+  double step_replay_error = 0.0;
+  std::size_t step_states = 0;
+  {
+    double ls = contact_l[0];
+    for_each_step_state(plan, controller.events, tick_hz, [&](std::size_t k, double u, const std::vector<double>& position) {
+      if (u == 0.0) ls = contact_l[k];
+      step_replay_error = std::max(step_replay_error, std::abs(cam_deviation(spline, kinematics->forward(position, {}), ls).normal_mm));
+      ++step_states;
+    });
+  }
+  const bool meets = max_lift_error <= 0.015 && per_degree <= 0.004;
+  const bool certified = certificate.ok && meets && controller.exact();
+  std::vector<std::string> failures;
+  if (!certificate.ok) failures.push_back("machine rules: " + certificate.violations.front());
+  if (!meets)
+    failures.push_back(fmt::format("lift error {:.4g} mm (limit 0.015), per degree {:.4g} mm (limit 0.004)",
+                                   max_lift_error, per_degree));
+  if (!controller.exact()) failures.push_back("controller export: program.ngc or steps.csv read back differs from the plan");
   if (!context.artifact_dir.empty()) {
     const fs::path dir = context.artifact_dir;
+    write_file_atomically(dir / "program.ngc", controller.gcode);
+    write_file_atomically(dir / "steps.csv", controller.step_table);
     write_file_atomically(dir / "pulses.csv",
                           csv_text({"segment", "start_s", "duration_s", "c_axis_pulses", "x_slide_pulses"}, cols));
     std::vector<std::vector<double>> fit_cols(4);
@@ -296,6 +325,23 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     write_file_atomically(dir / "fit_errors.csv",
                           csv_text({"angle_deg", "radius_mm", "chosen_points_error_mm", "adaptive_error_mm"}, fit_cols));
     Json summary = {
+        {"certified", certified},
+        {"certification_failures", failures},
+        {"certification", "every machine rule after integerisation and the lift requirements (K3) in "
+                          "the replay, and the controller output read back exactly"},
+        {"controller_export",
+         {{"files", {"program.ngc", "steps.csv"}},
+          {"gcode_axes", {{"C", "c_axis (deg)"}, {"X", "x_slide (mm)"}}},
+          {"tick_hz", tick_hz},
+          {"round_trip", {{"exact", controller.exact()},
+                          {"gcode_pulses_identical", controller.check.gcode_pulses_identical},
+                          {"gcode_max_duration_error_s", controller.check.gcode_max_duration_error_s},
+                          {"step_events", controller.check.step_events},
+                          {"step_positions_identical", controller.check.step_positions_identical},
+                          {"step_max_time_error_s", controller.check.step_max_time_error_s},
+                          {"step_replay_states", step_states},
+                          {"step_replay_max_profile_error_mm", step_replay_error}}},
+          {"shortest_step_interval_s", controller.check.shortest_step_interval_s}}},
         {"chosen_points", seed.chosen_angles_deg.size()},
         {"chosen_points_fit", {{"max_radius_error_mm", seed.max_radius_error_mm},
                                {"mean_abs_radius_error_mm", seed.mean_abs_radius_error_mm},
@@ -334,7 +380,7 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
         {"replayed_states", states},
         {"max_per_degree_error_mm", per_degree},
         {"max_per_degree_lift_error_mm", per_degree},
-        {"meets_requirements", max_lift_error <= 0.015 && per_degree <= 0.004},
+        {"meets_requirements", meets},
         {"min_concave_radius_mm", std::isfinite(min_concave_radius) ? Json(min_concave_radius) : Json()},
         {"min_concave_radius_at_deg", concave_at_deg},
         {"wheel_gouges_concave_parts",
@@ -368,8 +414,18 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
       e.x_label = "contact polar angle [deg]";
       e.y_label = "radial deviation [um] (+ material left)";
       plot::Series s{"lift error (deepest replayed state)", bin_angle, {}, "lines"};
-      for (double v : lift_error) s.y.push_back(1000 * v);
-      e.series = {s};
+      plot::Series binds{"requirement binds (>= 90 % of 15 um)", {}, {}, "points"};
+      for (std::size_t i = 0; i < lift_error.size(); ++i) {
+        s.y.push_back(1000 * lift_error[i]);
+        if (std::abs(lift_error[i]) >= 0.9 * 0.015) {
+          binds.x.push_back(bin_angle[i]);
+          binds.y.push_back(1000 * lift_error[i]);
+        }
+      }
+      const double gap = std::nan("");
+      plot::Series band{"requirement +-15 um (K3)", {0, 360, gap, 0, 360}, {15, 15, gap, -15, -15}, "dashes"};
+      e.series = {s, band};
+      if (!binds.x.empty()) e.series.push_back(binds);
       draw(e, "profile_error");
       plot::Curves x;
       x.title = "X slide position (tangent-point tracking)";
@@ -386,8 +442,11 @@ std::vector<Json> CamPlanKind::run_point(const Json& doc, const PointContext& co
     summary["plot_errors"] = plot_errors;
     write_json_file(dir / "summary.json", summary);
   }
+  // A plan that breaks a rule or misses the lift requirements is never "ok" (files written above).
+  if (!certified)
+    throw PointFailure(fmt::format("plan not certified: {}", fmt::join(failures, "; ")));
   return {seed.max_radius_error_mm, fit.max_radius_error_mm, static_cast<double>(fit.inserted), t,
-          lower_bound, max_error, max_lift_error, per_degree, certificate.ok};
+          lower_bound, max_error, max_lift_error, per_degree, certified};
 }
 
 }  // namespace chatterlab::planner

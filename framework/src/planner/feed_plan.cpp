@@ -1,6 +1,7 @@
 #include "planner/feed_plan.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <limits>
@@ -51,9 +52,21 @@ std::vector<ParamSpec> part_specs() {
   range.optional = true;
   ParamSpec points = param_spec("points_file", ValueKind::string, "",
                                 "instead of generatrix: CSV of x_mm, y_mm points (relative to the "
-                                "study file), natural cubic spline through them");
+                                "study file), a natural cubic spline through or near them");
   points.optional = true;
-  return {expression, range, points};
+  ParamSpec smoothing = param_spec("smoothing", ValueKind::string, "",
+                                   "points_file: cross_validated (smoothing spline, GCV), tolerance "
+                                   "(RMS residual = smoothing_tolerance_mm) or none (through the points)");
+  smoothing.choices = {"cross_validated", "tolerance", "none"};
+  smoothing.default_value = "cross_validated";
+  ParamSpec smoothing_tolerance = positive("smoothing_tolerance_mm", "mm",
+                                           "smoothing = \"tolerance\": RMS residual of the smoothing spline");
+  smoothing_tolerance.optional = true;
+  ParamSpec resolution = positive("geometry_resolution_mm", "mm",
+                                  "features narrower than this (the tangent turning by more than "
+                                  "1 rad within it, jumps, kinks) are refused");
+  resolution.default_value = default_geometry_resolution_mm;
+  return {expression, range, points, smoothing, smoothing_tolerance, resolution};
 }
 
 Json table_or_empty(const Json& document, const std::string& key, const SourceMap& sources) {
@@ -121,17 +134,38 @@ Json validate_part(const Json& document, const SourceMap& sources) {
   if (has_points == part["generatrix"].is_string() || has_points == part["x_range_mm"].is_array())
     throw InputError(fmt::format("{}: [part] needs either generatrix and x_range_mm, or points_file "
                                  "(not both)", sources.locate("part").str()));
+  if (has_points && part["smoothing"] == "tolerance" && !part["smoothing_tolerance_mm"].is_number())
+    throw InputError(fmt::format("{}: part.smoothing = \"tolerance\" needs part.smoothing_tolerance_mm "
+                                 "(the RMS residual, mm)", sources.locate("part.smoothing").str()));
+  // A smoothing key that would be ignored is a mistake worth saying (checked on the validated
+  // table, so that a validated document validates again unchanged).
+  if (part["smoothing_tolerance_mm"].is_number() && (!has_points || part["smoothing"] != "tolerance"))
+    throw InputError(fmt::format(
+        "{}: part.smoothing_tolerance_mm = {}: only used with points_file and smoothing = \"tolerance\" "
+        "(here {})", sources.locate("part.smoothing_tolerance_mm").str(), part["smoothing_tolerance_mm"].dump(),
+        has_points ? "smoothing = \"" + part["smoothing"].get<std::string>() + "\"" : "a generatrix expression"));
+  if (!has_points && part["smoothing"] != "cross_validated")
+    throw InputError(fmt::format("{}: part.smoothing = {}: smoothing applies to a points_file, not to a "
+                                 "generatrix expression", sources.locate("part.smoothing").str(),
+                                 part["smoothing"].dump()));
+  const double resolution = part["geometry_resolution_mm"].get<double>();
+  // The geometry analysis (docs/planner.md): jumps, kinks, values that are not finite and
+  // features narrower than the resolution are refused with where they are.
+  auto check_geometry = [&](const Generatrix& generatrix) {
+    check_smooth(generatrix, resolution);
+    for (int i = 0; i <= 64; ++i) {
+      const double x = generatrix.x_min_mm() + (generatrix.x_max_mm() - generatrix.x_min_mm()) * i / 64.0;
+      if (!(generatrix.evaluate(x).f >= 0))  // 0: an apex on the axis (problem 1 at x = 600)
+        throw std::invalid_argument(fmt::format("the radius f(x) must not be negative (f({}) = {})", x,
+                                                generatrix.evaluate(x).f));
+    }
+  };
   if (has_points) {
     const std::filesystem::path study_dir =
         std::filesystem::path(sources.locate("part.points_file").file).parent_path();
     part["points_file"] = std::filesystem::absolute(study_dir / part["points_file"].get<std::string>()).string();
     try {
-      auto generatrix = build_generatrix(part);  // reads and checks the table (InputError)
-      for (int i = 0; i <= 64; ++i) {
-        const double x = generatrix->x_min_mm() + (generatrix->x_max_mm() - generatrix->x_min_mm()) * i / 64.0;
-        if (!(generatrix->evaluate(x).f >= 0))
-          throw std::invalid_argument(fmt::format("the radius must not be negative (f({}) < 0)", x));
-      }
+      check_geometry(*build_generatrix(part));  // reads and checks the table (InputError)
     } catch (const std::invalid_argument& e) {
       throw InputError(fmt::format("{}: part.points_file = \"{}\": {}", sources.locate("part.points_file").str(),
                                    part["points_file"].get<std::string>(), e.what()));
@@ -143,14 +177,7 @@ Json validate_part(const Json& document, const SourceMap& sources) {
     throw InputError(fmt::format("{}: part.x_range_mm = {}: expected [a, b] with a < b",
                                  sources.locate("part.x_range_mm").str(), part["x_range_mm"].dump()));
   try {
-    auto generatrix = build_generatrix(part);
-    check_smooth(*generatrix);
-    for (int i = 0; i <= 64; ++i) {
-      const double x = range[0] + (range[1] - range[0]) * i / 64.0;
-      if (!(generatrix->evaluate(x).f >= 0))  // 0: an apex on the axis (problem 1 at x = 600)
-        throw std::invalid_argument(fmt::format("the radius f(x) must not be negative (f({}) = {})", x,
-                                                generatrix->evaluate(x).f));
-    }
+    check_geometry(*build_generatrix(part));
   } catch (const std::invalid_argument& e) {
     throw InputError(fmt::format("{}: part.generatrix = \"{}\" on x_range_mm = [{}, {}]: {}",
                                  sources.locate("part.generatrix").str(),
@@ -168,7 +195,8 @@ void check_wheel_fits(const Json& wheel, const Json& part, const SourceMap& sour
     if (!wheel["edge_radius_mm"].is_number())
       throw InputError(fmt::format("{}: missing key 'wheel.edge_radius_mm' (a profiled wheel needs "
                                    "its edge arc radius, mm)", sources.locate("wheel").str()));
-    const EdgeRadiusLimit limit = largest_edge_radius(*generatrix);
+    const EdgeRadiusLimit limit =
+        largest_edge_radius(*generatrix, generatrix->analyse(part.at("geometry_resolution_mm").get<double>()));
     if (section.edge_radius_mm > limit.radius_mm)
       throw InputError(fmt::format(
           "{}: wheel.edge_radius_mm = {}: the wheel is too large for the part: the largest edge "
@@ -214,8 +242,16 @@ PluginInfo FeedPlanKind::info() {
       "profile error, wheel limits and wear distribution";
   info.models_md_ids = "P1-P8";
   ParamSpec length = positive("segment_length_mm", "mm",
-                              "axial length of a plan segment (default: 1 s at the axial-speed bound)");
+                              "longest plan segment along x; shorter where the tolerance needs "
+                              "(default: 1 s at the axial-speed bound)");
   length.optional = true;
+  ParamSpec tolerance = positive("max_profile_error_mm", "mm",
+                                 "largest replayed normal profile error a certified plan may have");
+  tolerance.default_value = 0.005;
+  ParamSpec shortest = positive("min_segment_length_mm", "mm",
+                                "shortest segment the tolerance may ask for");
+  shortest.default_value = 0.005;
+  const ParamSpec tick = controller_tick_spec();
   ParamSpec start_stop = start_stop_rate_spec();
   ParamSpec sweep = param_spec("wear_sweep", ValueKind::string, "",
                                "contact sweep across the wheel face (MODELS.md P6)");
@@ -232,7 +268,7 @@ PluginInfo FeedPlanKind::info() {
   steps.min = 2;
   steps.max = 1000;
   steps.default_value = 5;
-  info.params = {length, start_stop, sweep, amplitude, period, steps};
+  info.params = {length, tolerance, shortest, start_stop, sweep, amplitude, period, steps, tick};
   info.thread_safety = ThreadSafety::copy_per_thread;
   info.example_params = {{"segment_length_mm", 0.2}};
   return info;
@@ -279,8 +315,13 @@ std::vector<std::string> FeedPlanKind::output_columns(const Json& /*document*/) 
 }
 
 std::vector<Json> FeedPlanKind::run_point(const Json& doc, const PointContext& context) const {
-  const PlanRun run = compute_plan(doc);
+  PlanRun run;
+  compute_plan(doc, run);
   if (!context.artifact_dir.empty()) write_plan_files(run, doc, context.artifact_dir, context.plots);
+  // A plan that breaks a rule, misses the tolerance or lets the wheel cut in is never "ok": its
+  // files are written (for inspection, `certified` false in summary.json) and the point fails.
+  if (!run.certified)
+    throw PointFailure(fmt::format("plan not certified: {}", fmt::join(run.certification_failures, "; ")));
   const Schedule& s = run.schedule;
   const double total = s.plan.total_time_s();
   return {total,

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
@@ -54,26 +55,55 @@ Json certificate_json(const Certificate& c, const FeedPlan& plan, const RateRule
   return out;
 }
 
-PlanRun compute_plan(const Json& document) {
-  PlanRun run;
+namespace {
+
+// Plans the interpolating spline of a smoothed point table the same way: the cost of grinding
+// the measurement noise in.
+NoiseEffect noise_effect(const PlanRun& run, const std::function<double(double)>& sweep,
+                         const std::function<ToolContact(double)>& contact) {
+  NoiseEffect out;
+  const Generatrix& raw = *run.part.interpolating;
+  try {
+    const TolerancePlan p =
+        plan_to_tolerance(raw, *run.kinematics, run.constraints, run.tolerance_settings, sweep, contact);
+    out.planned = true;
+    out.total_time_s = p.schedule.plan.total_time_s();
+    out.max_profile_error_mm = p.errors.total.max_abs_mm;
+    out.reversals = p.schedule.certificate.reversals;
+    out.segments = p.schedule.plan.segments.size();
+    out.tolerance_met = p.met;
+    out.max_edge_radius_mm =
+        largest_edge_radius(raw, raw.analyse(run.part.resolution_mm)).radius_mm;
+  } catch (const std::exception& e) {
+    out.failure = e.what();
+  }
+  return out;
+}
+
+}  // namespace
+
+void compute_plan(const Json& document, PlanRun& run) {
   const Json& machine = document.at("machine");
   const Json& plan = document.at("plan");
   const Json& wheel = document.at("wheel");
-  run.generatrix = build_generatrix(document.at("part"));
+  run.part = build_part(document.at("part"));
+  run.generatrix = std::move(run.part.generatrix);
+  run.geometry = run.generatrix->analyse(run.part.resolution_mm);
   run.kinematics = build_kinematics(machine);
   run.constraints = build_constraints(machine, plan, *run.kinematics);
   run.sweep = build_sweep(plan, wheel);
+  run.tolerance_settings = build_tolerance(plan, run.constraints);
+  const WheelSection section = build_wheel(wheel);
+  const auto sweep = sweep_function(run.sweep, run.generatrix->x_min_mm());
+  const auto contact = wheel_contact(section);
   try {
-    run.schedule = plan_feed(*run.generatrix, *run.kinematics, run.constraints,
-                             segment_length_mm(plan, run.constraints),
-                             sweep_function(run.sweep, run.generatrix->x_min_mm()), true,
-                             wheel_contact(build_wheel(wheel)));
+    run.tolerance = plan_to_tolerance(*run.generatrix, *run.kinematics, run.constraints,
+                                      run.tolerance_settings, sweep, contact);
   } catch (const std::exception& e) {
     throw PointFailure(fmt::format("no plan: {}", e.what()));
   }
-  run.errors = replay_errors(run.schedule, *run.generatrix, *run.kinematics);
-  run.edge_limit = largest_edge_radius(*run.generatrix);
-  run.wheel_edge_radius_limit_mm = wheel_geometry_edge_radius_mm(build_wheel(wheel));
+  run.edge_limit = largest_edge_radius(*run.generatrix, run.geometry);
+  run.wheel_edge_radius_limit_mm = wheel_geometry_edge_radius_mm(section);
   if (std::isfinite(run.edge_limit.radius_mm)) {
     run.max_edge_radius_mm = run.edge_limit.radius_mm;
     run.max_edge_radius_limited_by = run.edge_limit.local ? "concave_part" : "distant_part";
@@ -81,17 +111,146 @@ PlanRun compute_plan(const Json& document) {
     run.max_edge_radius_mm = run.wheel_edge_radius_limit_mm;
     run.max_edge_radius_limited_by = "wheel_geometry";
   }
-  run.interference = check_interference_along_plan(run.schedule, *run.generatrix, *run.kinematics,
-                                                   build_wheel(wheel));
+  run.interference = check_interference_along_plan(run.schedule, *run.generatrix, *run.kinematics, section);
   std::vector<double> durations;
   for (const auto& seg : run.schedule.plan.segments) durations.push_back(seg.duration_s);
-  run.wear = wear_distribution(run.schedule.contact_on_tool_mm, durations,
-                               sweep_half_width_mm(build_wheel(wheel)));
+  run.wear = wear_distribution(run.schedule.contact_on_tool_mm, durations, sweep_half_width_mm(section));
   run.ramp_segments = ramp_segments(run.schedule.plan, run.constraints.rate_rules());
   if (!durations.empty())
     run.ramp_time_s = static_cast<double>(run.ramp_segments) * (durations.front() + durations.back());
-  return run;
+  if (run.part.interpolating) run.noise = noise_effect(run, sweep, contact);
+
+  // Controller output, read back and replayed: the program's plan through the same replay, the
+  // step table's states through the forward kinematics.
+  const double tick_hz = controller_tick_hz(plan, run.schedule.plan.motors);
+  run.controller = export_plan(run.schedule.plan,
+                               {"chatterlab feed_plan: " + run.generatrix->describe(),
+                                "G93 inverse time: F = 60 / segment duration (docs/planner.md, Controller output)"},
+                               tick_hz);
+  Schedule reread = run.schedule;
+  reread.plan = run.controller.from_gcode;
+  run.gcode_replay_max_error_mm = replay_errors(reread, *run.generatrix, *run.kinematics).total.max_abs_mm;
+  run.step_replay = replay_step_events(run.schedule, run.controller.events, tick_hz, *run.generatrix, *run.kinematics);
+
+  // Certified: every rule, the tolerance and zero interference hold in the replay.
+  auto& failures = run.certification_failures;
+  if (!run.schedule.certificate.ok)
+    failures.push_back("machine rules: " + run.schedule.certificate.violations.front());
+  if (!run.tolerance.met)
+    failures.push_back(fmt::format("max_profile_error_mm = {} not met ({}): {}",
+                                   run.tolerance_settings.max_profile_error_mm, run.tolerance.limited_by,
+                                   run.tolerance.limit_note));
+  const Interference& hit = run.interference;
+  if (hit.contacts_with_interference > 0)
+    failures.push_back(fmt::format(
+        "the wheel cuts {:.4g} mm into the part at x = {:.3f} mm (contact at x = {:.3f} mm, t = "
+        "{:.1f} s; {} states in {} segments beyond {} mm)",
+        hit.depth_mm, hit.x_mm, hit.contact_x_mm, hit.time_s, hit.contacts_with_interference,
+        hit.segments_with_interference, hit.tolerance_mm));
+  if (!run.controller.exact())
+    failures.push_back("controller export: program.ngc or steps.csv read back differs from the plan");
+  run.certified = failures.empty();
 }
+
+namespace {
+
+Json tolerance_json(const PlanRun& run) {
+  const TolerancePlan& t = run.tolerance;
+  return {{"max_profile_error_mm", run.tolerance_settings.max_profile_error_mm},
+          {"achieved_mm", t.errors.total.max_abs_mm},
+          {"met", t.met},
+          {"limited_by", t.met ? Json() : Json(t.limited_by)},
+          {"note", t.met ? Json() : Json(t.limit_note)},
+          {"rounds", t.rounds},
+          {"segments_split", t.segments_split},
+          {"first_knot_chosen", t.first_knot_chosen},
+          {"shortest_segment_mm", t.shortest_segment_mm},
+          {"longest_segment_mm", t.longest_segment_mm},
+          {"min_segment_length_mm", run.tolerance_settings.min_segment_length_mm},
+          {"binding_segments", t.binding_segments},
+          {"binding", "segments whose replayed error uses >= 90 % of the tolerance"},
+          {"linearisation_budget_mm",
+           run.tolerance_settings.linearisation_share * run.tolerance_settings.max_profile_error_mm},
+          {"method", "segment lengths from the chord error of the axis paths (budget: a share of "
+                     "the tolerance), then segments over the tolerance in the replay split in two "
+                     "until the replay meets it"}};
+}
+
+Json geometry_json(const PlanRun& run) {
+  const GeometryAnalysis& g = run.geometry;
+  return {{"resolution_mm", g.resolution_mm},
+          {"method", g.method},
+          {"evaluations", g.evaluations},
+          {"max_concave_curvature_per_mm", g.max_concave_curvature_per_mm},
+          {"max_concave_curvature_at_x_mm", g.max_concave_curvature_at_x_mm},
+          {"max_concave_curvature_bound_per_mm", g.max_concave_curvature_bound_per_mm},
+          {"max_turn_rate_rad_per_mm", g.max_turn_rate_rad_per_mm},
+          {"max_turn_rate_at_x_mm", g.max_turn_rate_at_x_mm},
+          {"turn_rate_limit_rad_per_mm", 1.0 / g.resolution_mm}};
+}
+
+Json controller_json(const PlanRun& run) {
+  const ControllerExport& c = run.controller;
+  const std::vector<char> letters = gcode_letters(run.schedule.plan);
+  Json axes = Json::object();
+  for (std::size_t m = 0; m < letters.size(); ++m)
+    axes[std::string(1, letters[m])] = run.schedule.plan.motors[m].name;
+  return {{"files", {"program.ngc", "steps.csv"}},
+          {"gcode_axes", axes},
+          {"tick_hz", c.tick_hz},
+          {"round_trip",
+           {{"exact", c.exact()},
+            {"gcode_pulses_identical", c.check.gcode_pulses_identical},
+            {"gcode_max_duration_error_s", c.check.gcode_max_duration_error_s},
+            {"gcode_replay_max_profile_error_mm", run.gcode_replay_max_error_mm},
+            {"step_events", c.check.step_events},
+            {"step_positions_identical", c.check.step_positions_identical},
+            {"step_max_time_error_s", c.check.step_max_time_error_s},
+            {"step_replay_states", run.step_replay.states},
+            {"step_replay_max_profile_error_mm", run.step_replay.total.max_abs_mm},
+            {"step_replay_rms_profile_error_mm", run.step_replay.total.rms_mm}}},
+          {"shortest_step_interval_s", c.check.shortest_step_interval_s},
+          {"shortest_direction_setup_s",
+           std::isfinite(c.check.shortest_direction_setup_s) ? Json(c.check.shortest_direction_setup_s) : Json()}};
+}
+
+Json point_table_json(const PlanRun& run) {
+  const PartGeometry& p = run.part;
+  Json j = {{"points", p.table_x_mm.size()}, {"smoothing", p.smoothing}};
+  if (p.fit) {
+    j["lambda_mm3"] = p.fit->lambda;
+    j["residual_rms_mm"] = p.fit->residual_rms_mm;
+    j["residual_max_mm"] = p.fit->residual_max_mm;
+    j["effective_parameters"] = p.fit->effective_parameters;
+    j["noise_estimate_mm"] = p.fit->noise_estimate_mm;
+    j["gcv_score_mm2"] = p.fit->gcv_score;
+  }
+  if (p.interpolating) {
+    const NoiseEffect& n = run.noise;
+    const double t = run.schedule.plan.total_time_s();
+    Json raw = {{"planned", n.planned}};
+    if (n.planned) {
+      raw["total_time_s"] = n.total_time_s;
+      raw["time_change_percent"] = 100.0 * (n.total_time_s - t) / t;
+      raw["reversals"] = n.reversals;
+      raw["segments"] = n.segments;
+      raw["max_profile_error_mm"] = n.max_profile_error_mm;
+      raw["tolerance_met"] = n.tolerance_met;
+      raw["max_edge_radius_mm"] = n.max_edge_radius_mm;
+    } else {
+      raw["failure"] = n.failure;
+    }
+    raw["note"] = "the natural spline through the raw points planned the same way: what grinding "
+                  "the measurement noise in would cost (the plan follows the smoothed curve)";
+    j["interpolating_spline"] = raw;
+    j["smoothed"] = {{"total_time_s", t},
+                     {"reversals", run.schedule.certificate.reversals},
+                     {"max_edge_radius_mm", run.max_edge_radius_mm}};
+  }
+  return j;
+}
+
+}  // namespace
 
 Json plan_summary(const PlanRun& run, const Json& document) {
   const Schedule& s = run.schedule;
@@ -106,6 +265,12 @@ Json plan_summary(const PlanRun& run, const Json& document) {
   const bool edge_limited = std::isfinite(run.edge_limit.radius_mm);
   const WheelSection wheel = build_wheel(document.at("wheel"));
   Json summary = {
+      {"certified", run.certified},
+      {"certification_failures", run.certification_failures},
+      {"certification", "every machine rule after integerisation, the profile tolerance "
+                        "(max_profile_error_mm) and zero wheel interference, all in the replay"},
+      {"tolerance", tolerance_json(run)},
+      {"geometry", geometry_json(run)},
       {"total_time_s", total},
       {"lower_bound_s", s.lower_bound_s},
       {"lower_bound_kind", "continuous relaxation: the exact path at the largest speed each "
@@ -133,6 +298,11 @@ Json plan_summary(const PlanRun& run, const Json& document) {
                          wheel.edge_angle_deg, wheel.thickness_mm,
                          run.wheel_edge_radius_limit_mm)},
       {"edge_radius_limit_from_wheel_geometry_mm", run.wheel_edge_radius_limit_mm},
+      {"min_concave_radius_of_curvature_mm",
+       run.geometry.max_concave_curvature_per_mm > 0 ? Json(1.0 / run.geometry.max_concave_curvature_per_mm) : Json()},
+      {"min_concave_radius_of_curvature_bound_mm",
+       run.geometry.max_concave_curvature_bound_per_mm > 0
+           ? Json(1.0 / run.geometry.max_concave_curvature_bound_per_mm) : Json()},
       {"max_profile_error_mm", run.errors.total.max_abs_mm},
       {"mean_profile_error_mm", run.errors.total.mean_mm},
       {"mean_abs_profile_error_mm", run.errors.total.mean_abs_mm},
@@ -172,6 +342,8 @@ Json plan_summary(const PlanRun& run, const Json& document) {
       {"part", document.at("part")},
       {"wheel", document.at("wheel")},
       {"plan", document.at("plan")}};
+  if (!run.part.table_x_mm.empty()) summary["point_table"] = point_table_json(run);
+  summary["controller_export"] = controller_json(run);
   return summary;
 }
 
@@ -202,85 +374,14 @@ void write_plan_files(const PlanRun& run, const Json& document, const fs::path& 
                         csv_text({"segment", "x_start_mm", "x_end_mm", "radius_mm",
                                   "axial_speed_mm_per_s", "contact_on_wheel_mm"},
                                  seg_columns));
+  write_file_atomically(dir / "program.ngc", run.controller.gcode);
+  write_file_atomically(dir / "steps.csv", run.controller.step_table);
   // Plots first: a figure that fails (gnuplot missing) is listed in summary.json's plot_errors
   // and does not fail the plan, whose files are complete without it.
   Json summary = plan_summary(run, document);
   summary["plot_errors"] = Json::array();
   if (plots) draw_plan_plots(run, document, dir, summary["plot_errors"]);
   write_json_file(dir / "summary.json", summary);
-}
-
-void draw_plan_plots(const PlanRun& run, const Json& document, const fs::path& dir, Json& failures) {
-  const Schedule& s = run.schedule;
-  const FeedPlan& plan = s.plan;
-  const std::size_t n = plan.segments.size(), motors = plan.motors.size();
-  auto draw = [&](const plot::Curves& figure, const std::string& stem) {
-    try {
-      plot::render(figure, dir, stem);
-    } catch (const std::exception& e) {
-      failures.push_back(fmt::format("{}: {}", stem, e.what()));
-    }
-  };
-  const std::string name = document.contains("study") && document["study"].contains("name")
-                               ? document["study"]["name"].get<std::string>() : "feed plan";
-  // Generatrix and produced path, the deviation exaggerated to be visible at the part's scale.
-  constexpr double exaggeration = 1000.0;
-  plot::Curves profile;
-  profile.title = fmt::format("{}: generatrix and produced path (deviation x{:.0f})", name, exaggeration);
-  profile.x_label = "axial position x [mm]";
-  profile.y_label = "radius y [mm]";
-  plot::Series nominal{"generatrix f(x)", {}, {}, "lines"}, produced{
-      fmt::format("produced path, deviation x{:.0f} (segment max)", exaggeration), {}, {}, "lines"};
-  for (std::size_t k = 0; k < n; ++k) {
-    const double x = run.errors.segment_x_mm[k], f = run.generatrix->evaluate(x).f;
-    nominal.x.push_back(x);
-    nominal.y.push_back(f);
-    const double e = std::abs(run.errors.segment_max_mm[k]) > std::abs(run.errors.segment_min_mm[k])
-                         ? run.errors.segment_max_mm[k] : run.errors.segment_min_mm[k];
-    produced.x.push_back(x);
-    produced.y.push_back(f + exaggeration * e);
-  }
-  profile.series = {nominal, produced};
-  draw(profile, "profile");
-
-  plot::Curves error;
-  error.title = fmt::format("{}: replayed profile error along x", name);
-  error.x_label = "axial position x [mm]";
-  error.y_label = "normal deviation [um] (+ material left)";
-  plot::Series hi{"largest in segment", run.errors.segment_x_mm, {}, "lines"};
-  plot::Series lo{"smallest in segment", run.errors.segment_x_mm, {}, "lines"};
-  for (std::size_t k = 0; k < n; ++k) {
-    hi.y.push_back(1000.0 * run.errors.segment_max_mm[k]);
-    lo.y.push_back(1000.0 * run.errors.segment_min_mm[k]);
-  }
-  error.series = {hi, lo};
-  error.reference_y = 0.0;
-  error.reference_label = "generatrix";
-  draw(error, "error_along_x");
-
-  plot::Curves rates;
-  rates.title = fmt::format("{}: pulse rate per motor", name);
-  rates.x_label = "time t [s]";
-  rates.y_label = "pulse rate [pulses/s] (signed)";
-  for (std::size_t m = 0; m < motors; ++m) {
-    plot::Series series{plan.motors[m].name + " motor", {}, {}, "lines"};
-    for (std::size_t k = 0; k < n; ++k) {
-      series.x.push_back(plan.segments[k].start_s + 0.5 * plan.segments[k].duration_s);
-      series.y.push_back(static_cast<double>(plan.segments[k].pulses[m]) / plan.segments[k].duration_s);
-    }
-    rates.series.push_back(std::move(series));
-  }
-  draw(rates, "pulse_rates");
-
-  if (run.sweep.law != "none") {
-    plot::Curves wear;
-    wear.title = fmt::format("{}: wear (contact dwell) over the wheel face", name);
-    wear.x_label = "contact position on the wheel face [mm]";
-    wear.y_label = "dwell time per bin [s]";
-    wear.series = {{fmt::format("{} sweep, uniformity {:.3f}", run.sweep.law, run.wear.uniformity),
-                    run.wear.bin_centre_mm, run.wear.dwell_s, "steps"}};
-    draw(wear, "wear_histogram");
-  }
 }
 
 // ------------------------------------------------------------------------------ reading back
@@ -302,7 +403,7 @@ SavedPlan read_saved_plan(const fs::path& dir) {
   SavedPlan out;
   Json summary;
   {
-    std::ifstream in(summary_path);
+    InputFileStream in(summary_path);  // the run's snapshot (chatterlab/input_files.hpp)
     if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs summary.json)", summary_path.string()));
     try {
       summary = Json::parse(in);
@@ -331,7 +432,7 @@ SavedPlan read_saved_plan(const fs::path& dir) {
     out.plan.initial_position_mm.push_back(initial[position_key(m)].get<double>());
   }
 
-  std::ifstream in(pulses_path);
+  InputFileStream in(pulses_path);
   if (!in) throw InputError(fmt::format("{}: cannot open (a saved feed plan needs pulses.csv)", pulses_path.string()));
   std::string line;
   std::getline(in, line);

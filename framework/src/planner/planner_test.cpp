@@ -17,6 +17,7 @@
 #include "planner/setup.hpp"
 #include "planner/scheduler.hpp"
 #include "planner/wear.hpp"
+#include "planner/planner_test_support.hpp"
 #include "planner/wheel_limits.hpp"
 #include "unit/study_test_support.hpp"
 
@@ -34,6 +35,31 @@ std::unique_ptr<Kinematics> seed_machine() {
 }
 
 FeedConstraints seed_constraints() { return p2_constraints(); }
+
+// A disc tool's deviation is the signed distance from the profile to its centre minus its
+// radius: centres placed a known distance along the exact normal of problem 1's parabola (and a
+// circle, where the distance to the centre of curvature is known in closed form) read back to
+// 1e-9 mm, where the first-order foot point at the centre's own x errs by millimetres.
+TEST(Generatrix, DiscToolDeviationIsTheDistanceToItsCentreMinusItsRadius) {
+  auto parabola = expression_generatrix(problem1, 0.0, 600.0);
+  for (const double x0 : {0.0, 150.0, 420.0, 600.0})
+    for (const double offset : {-0.01, 0.0, 0.003, 0.5}) {
+      const GeneratrixValue v = parabola->evaluate(x0);
+      const double norm = std::sqrt(1.0 + v.d1 * v.d1), distance = 200.0 + offset;
+      const ToolInPart disc{x0 - distance * v.d1 / norm, v.f + distance / norm, 200.0};
+      EXPECT_NEAR(tool_deviation_mm(disc, *parabola), offset, 1e-9) << "x0 = " << x0;
+      const GeneratrixValue at_centre = parabola->evaluate(disc.x_mm);
+      if (x0 == 420.0) {  // what the first-order foot point would say: millimetres off
+        EXPECT_GT(std::abs((disc.y_mm - at_centre.f) / std::sqrt(1.0 + at_centre.d1 * at_centre.d1) - 200.0 - offset), 1.0);
+      }
+    }
+  // A circle of radius 500 centred at (300, -400): a disc centred at the circle's centre + (0, 700)
+  // stands 700 - 500 - R off it.
+  auto circle = expression_generatrix("sqrt(500^2 - (x - 300)^2) - 400", 100.0, 500.0);
+  EXPECT_NEAR(tool_deviation_mm({300.0 + 700.0 * std::sin(0.3), -400.0 + 700.0 * std::cos(0.3), 150.0}, *circle),
+              50.0, 1e-9);
+  EXPECT_NEAR(tool_deviation_mm({300.0, 100.002, 0.0}, *circle), 0.002, 1e-12);  // a point tool
+}
 
 TEST(Generatrix, DerivativesMatchAnalyticOnes) {
   auto g = expression_generatrix(problem2, 0.0, 600.0);
@@ -78,12 +104,15 @@ TEST(Generatrix, DiscontinuitiesKinksAndDomainAreReported) {
   EXPECT_EQ(smooth_error(problem2, 0, 600), "");
   const std::string jump = smooth_error("x < 300 ? 100 : 103", 0, 600);
   EXPECT_NE(jump.find("f jumps by 3"), std::string::npos) << jump;
-  EXPECT_NE(jump.find("near x = 300"), std::string::npos) << jump;
-  const std::string kink = smooth_error("100 + abs(x - 250)", 0, 600);
-  EXPECT_NE(kink.find("slope f' jumps by 2"), std::string::npos) << kink;
-  const auto at = kink.find("near x = ");
-  ASSERT_NE(at, std::string::npos) << kink;
-  EXPECT_NEAR(std::stod(kink.substr(at + 9)), 250.0, 0.01) << kink;
+  EXPECT_NE(jump.find("at x = 300"), std::string::npos) << jump;
+  // Kinks on and off the old 4096-cell check grid (600/4096 = 0.146 mm): all found (geometry_test).
+  for (const double c : {300.0, 250.0}) {
+    const std::string kink = smooth_error(fmt::format("100 + abs(x - {})", c), 0, 600);
+    EXPECT_NE(kink.find("slope f' jumps by 2"), std::string::npos) << kink;
+    const auto at = kink.find("at x = ");
+    ASSERT_NE(at, std::string::npos) << kink;
+    EXPECT_NEAR(std::stod(kink.substr(at + 7)), c, 1e-6) << kink;
+  }
   const std::string domain = smooth_error("sqrt(x)", 0, 100);
   EXPECT_NE(domain.find("not finite"), std::string::npos) << domain;
   EXPECT_THROW(expression_generatrix("x +* 2", 0, 1), std::invalid_argument);
@@ -296,36 +325,8 @@ TEST(Wear, TriangleSweepDwellsUniformlySineAtTheEdges) {
   EXPECT_NEAR(tri.used_width_mm, 20.0, 1e-9);
 }
 
-constexpr const char* study_text = R"(
-[study]
-kind = "feed_plan"
-[machine]
-type = "three_table_revolution"
-pivot_to_nut_mm = 300.0
-fixture_to_pivot_mm = 250.0
-screw_pitch_mm = 12.0
-gear_ratio = 10.0
-step_angle_deg = 1.0
-max_pulse_rate_hz = 100.0
-max_relative_rate_change = 0.1
-spindle_speed_rpm = { from = 250.0, to = 300.0 }
-max_axial_advance_mm_per_100_rev = 4.0
-[part]
-generatrix = "30*exp(-x/400)*sin((x + 25*_pi)/100) + 130"
-x_range_mm = [0.0, 600.0]
-[wheel]
-type = "profiled"
-diameter_mm = 400.0
-thickness_mm = 40.0
-edge_radius_mm = 20.0
-edge_angle_deg = 180.0
-)";
-
-std::string replace(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  return at == std::string::npos ? text : text.replace(at, from.size(), to);
-}
+using testing::replace;
+constexpr const char* study_text = testing::problem2_study_text;
 
 TEST(FeedPlanStudy, WritesAPlanThatReadsBack) {
   TempDir dir;

@@ -1,5 +1,7 @@
 #include "planner/replay.hpp"
 
+#include "planner/controller_export.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -28,10 +30,31 @@ struct Accumulator {
 }  // namespace
 
 double tool_deviation_mm(const ToolInPart& tool, const Generatrix& generatrix) {
-  // First-order foot point: exact for a straight profile; the curvature term is
-  // O(d^2 kappa) ~ 1e-12 mm for micrometre deviations on metre radii.
-  const GeneratrixValue v = generatrix.evaluate(tool.x_mm);
-  return (tool.y_mm - v.f) / std::sqrt(1.0 + v.d1 * v.d1) - tool.radius_mm;
+  GeneratrixValue v = generatrix.evaluate(tool.x_mm);
+  // A point tool (the nominal contact itself, P4): first-order foot point, exact for a straight
+  // profile; the curvature term is O(d^2 kappa) ~ 1e-12 mm for micrometre deviations d on metre
+  // radii of curvature.
+  if (tool.radius_mm == 0.0) return (tool.y_mm - v.f) / std::sqrt(1.0 + v.d1 * v.d1);
+  // A disc: its centre stands a whole radius R off the profile, where the first-order formula
+  // errs by about R^2 kappa / 2 (a 200 mm wheel on a 1300 mm radius of curvature: 15 mm). The
+  // foot point of the normal through the centre c solves g(x) = (x - c_x) + (f(x) - c_y) f'(x) = 0;
+  // Newton from the first-order foot, Gauss-Newton (g' = 1 + f'^2) where the centre lies near or
+  // beyond the centre of curvature and g' is not safely positive.
+  double x = tool.x_mm + (tool.y_mm - v.f) * v.d1 / (1.0 + v.d1 * v.d1);
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    v = generatrix.evaluate(x);
+    const double g = (x - tool.x_mm) + (v.f - tool.y_mm) * v.d1;
+    const double gauss_newton = 1.0 + v.d1 * v.d1;
+    const double newton = gauss_newton + (v.f - tool.y_mm) * v.d2;
+    const double step = g / (newton > 0.1 * gauss_newton ? newton : gauss_newton);
+    if (!std::isfinite(step)) break;
+    x -= step;
+    if (std::abs(step) <= 1e-14 * std::max(1.0, std::abs(x))) break;
+  }
+  v = generatrix.evaluate(x);
+  const double dx = tool.x_mm - x, dy = tool.y_mm - v.f;
+  // The side: the centre's offset along the profile normal (-f', 1) (positive: away from the axis).
+  return std::copysign(std::hypot(dx, dy), dy - v.d1 * dx) - tool.radius_mm;
 }
 
 ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatrix,
@@ -43,13 +66,16 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   std::vector<double> exact(motors);
   double area = 0.0, last_x = 0.0, last_e = 0.0;
   bool first = true;
-  double lo = 1e300, hi = -1e300;
+  double lo = 1e300, hi = -1e300, lin = 0.0, quant = 0.0;
   auto close_segment = [&](std::size_t k) {
     out.segment_x_mm.push_back(0.5 * (schedule.knots_mm[k] + schedule.knots_mm[k + 1]));
     out.segment_min_mm.push_back(lo);
     out.segment_max_mm.push_back(hi);
+    out.segment_linearisation_mm.push_back(lin);
+    out.segment_quantisation_mm.push_back(quant);
     lo = 1e300;
     hi = -1e300;
+    lin = quant = 0.0;
   };
   for_each_pulse_state(plan, [&](std::size_t k, double u, const std::vector<double>& position) {
     if (u == 0.0 && k > 0) close_segment(k - 1);
@@ -67,6 +93,8 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
     quantisation.add(e - e_linear);
     lo = std::min(lo, e);
     hi = std::max(hi, e);
+    lin = std::max(lin, std::abs(e_linear));
+    quant = std::max(quant, std::abs(e - e_linear));
     if (!first) area += 0.5 * (std::abs(e) + std::abs(last_e)) * std::abs(tool.x_mm - last_x);
     first = false;
     last_x = tool.x_mm;
@@ -88,6 +116,17 @@ ProfileErrors replay_errors(const Schedule& schedule, const Generatrix& generatr
   out.quantisation = quantisation.stats();
   out.states = total.n;
   return out;
+}
+
+StepTableReplay replay_step_events(const Schedule& schedule, const std::vector<StepEvent>& events,
+                                   double tick_hz, const Generatrix& generatrix, const Kinematics& kinematics) {
+  Accumulator total;
+  for_each_step_state(schedule.plan, events, tick_hz, [&](std::size_t k, double u, const std::vector<double>& position) {
+    const double zeta = schedule.contact_on_tool_mm[k] +
+                        u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
+    total.add(tool_deviation_mm(kinematics.forward(position, schedule.contact_at(zeta)), generatrix));
+  });
+  return {total.stats(), total.n};
 }
 
 }  // namespace chatterlab::planner

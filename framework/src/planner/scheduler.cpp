@@ -39,15 +39,49 @@ std::vector<double> FeedPlan::positions_after(std::size_t segment_count) const {
   return out;
 }
 
-Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
-                   const FeedConstraints& constraints, double segment_length_mm,
-                   const std::function<double(double)>& contact_on_tool, bool choose_knots,
-                   const std::function<ToolContact(double)>& tool_contact) {
-  const double a = generatrix.x_min_mm(), b = generatrix.x_max_mm();
+std::vector<double> uniform_knots(double a, double b, double segment_length_mm) {
   if (!(segment_length_mm > 0.0) || !(b > a))
     throw std::invalid_argument("plan_feed: empty x range or segment length");
   const auto segment_count =
       static_cast<std::size_t>(std::max(1.0, std::ceil((b - a) / segment_length_mm - 1e-9)));
+  std::vector<double> knots(segment_count + 1);
+  const double spacing = (b - a) / static_cast<double>(segment_count);
+  for (std::size_t k = 0; k < segment_count; ++k) knots[k] = a + spacing * static_cast<double>(k);
+  knots[segment_count] = b;
+  return knots;
+}
+
+Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
+                   const FeedConstraints& constraints, double segment_length_mm,
+                   const std::function<double(double)>& contact_on_tool, bool choose_knots,
+                   const std::function<ToolContact(double)>& tool_contact) {
+  return plan_feed_on_knots(generatrix, kinematics, constraints,
+                            uniform_knots(generatrix.x_min_mm(), generatrix.x_max_mm(), segment_length_mm),
+                            contact_on_tool, choose_knots, tool_contact);
+}
+
+ExactTarget exact_target(const Generatrix& generatrix, const Kinematics& kinematics,
+                         const std::function<double(double)>& contact_on_tool,
+                         const std::function<ToolContact(double)>& tool_contact, double x) {
+  ExactTarget t;
+  t.x_mm = x;
+  const GeneratrixValue v = generatrix.evaluate(x);
+  t.contact_on_tool_mm = contact_on_tool ? contact_on_tool(x) : 0.0;
+  t.positions_mm.resize(kinematics.motors().size());
+  const ToolContact contact =
+      tool_contact ? tool_contact(t.contact_on_tool_mm) : ToolContact{t.contact_on_tool_mm, 0.0, 0.0};
+  kinematics.inverse({x, v.f, 1.0, v.d1}, contact, t.positions_mm);
+  return t;
+}
+
+Schedule plan_feed_on_knots(const Generatrix& generatrix, const Kinematics& kinematics,
+                            const FeedConstraints& constraints, const std::vector<double>& nominal,
+                            const std::function<double(double)>& contact_on_tool, bool choose_knots,
+                            const std::function<ToolContact(double)>& tool_contact,
+                            bool keep_first_segment) {
+  if (nominal.size() < 2 || !(nominal.back() > nominal.front()))
+    throw std::invalid_argument("plan_feed: fewer than two knots");
+  const std::size_t segment_count = nominal.size() - 1;
   Schedule out;
   out.tool_contact = tool_contact;
   FeedPlan& plan = out.plan;
@@ -60,34 +94,32 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
   out.contact_on_tool_mm.resize(segment_count + 1);
   out.target_mm.assign(segment_count + 1, std::vector<double>(motors));
   auto place = [&](std::size_t k, double x) {
+    ExactTarget t = exact_target(generatrix, kinematics, contact_on_tool, tool_contact, x);
     out.knots_mm[k] = x;
-    const GeneratrixValue v = generatrix.evaluate(x);
-    const double zeta = contact_on_tool ? contact_on_tool(x) : 0.0;
-    out.contact_on_tool_mm[k] = zeta;
-    kinematics.inverse({x, v.f, 1.0, v.d1}, out.contact_at(zeta), out.target_mm[k]);
+    out.contact_on_tool_mm[k] = t.contact_on_tool_mm;
+    out.target_mm[k] = std::move(t.positions_mm);
   };
-  const double spacing = (b - a) / static_cast<double>(segment_count);
-  place(0, a);
+  place(0, nominal.front());
   std::vector<double> behind(motors), ahead(motors), sensitivity(motors);
   for (std::size_t k = 1; k <= segment_count; ++k) {
-    const double nominal = k == segment_count ? b : a + spacing * static_cast<double>(k);
     // x_1 stays nominal: the first segment is then the seed's (0.2 mm in 1 s at the bound),
     // comparable row for row with seed 000's table (MODELS.md P8).
-    if (k == 1 || k == segment_count || !choose_knots) {
-      place(k, nominal);
+    if ((k == 1 && keep_first_segment) || k == segment_count || !choose_knots) {
+      place(k, nominal[k]);
       continue;
     }
-    // Knot choice: within +-window of the nominal spacing, the x where the rounding residues of
-    // the axes, weighted by how far a step of each moves the tool off the profile, are
-    // smallest. An axis is then off by at most |residue| + 1/2 step inside a segment (pulses
+    // Knot choice: within +-window of the local nominal spacing, the x where the rounding
+    // residues of the axes, weighted by how far a step of each moves the tool off the profile,
+    // are smallest. An axis is then off by at most |residue| + 1/2 step inside a segment (pulses
     // spread evenly) instead of up to a whole step. Positions over the window come from a
     // quadratic through three exact evaluations (error ~ w^3 q'''/6: micro-steps).
-    const double w = knot_window * spacing;
-    place(k, nominal - w);
+    const double w = knot_window * std::min(nominal[k] - nominal[k - 1], nominal[k + 1] - nominal[k]);
+    const double centre = nominal[k];
+    place(k, centre - w);
     behind = out.target_mm[k];
-    place(k, nominal + w);
+    place(k, centre + w);
     ahead = out.target_mm[k];
-    place(k, nominal);
+    place(k, centre);
     const ToolContact contact = out.contact_at(out.contact_on_tool_mm[k]);
     const double here = tool_deviation_mm(kinematics.forward(out.target_mm[k], contact), generatrix);
     for (std::size_t m = 0; m < motors; ++m) {
@@ -112,7 +144,7 @@ Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
         best_t = t;
       }
     }
-    place(k, nominal + best_t * w);
+    place(k, centre + best_t * w);
   }
   quantise_targets(plan, out.target_mm);
 

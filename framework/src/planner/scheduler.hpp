@@ -76,15 +76,37 @@ struct Schedule {
 
 // contact_on_tool(x) gives the contact's coordinate s on the tool along the path (nullptr: 0), and
 // tool_contact(s) where that is on the tool (nullptr: s along the rails, no tilt: a cylindrical
-// wheel's face). choose_knots: place each interior
-// knot within +-25 % of the nominal spacing where the axes' rounding residues move the tool least
-// off the profile (false: uniform knots). Throws std::domain_error when the constraints admit no
-// plan (naming the constraint and where).
+// wheel's face). choose_knots: place each interior knot within +-25 % of its local nominal
+// spacing where the axes' rounding residues move the tool least off the profile (false: the
+// nominal knots). keep_first_segment: x_1 stays nominal (the seed's first segment, MODELS.md P8)
+// even when knots are chosen. Throws std::domain_error when the constraints admit no plan (naming
+// the constraint and where).
+Schedule plan_feed_on_knots(const Generatrix& generatrix, const Kinematics& kinematics,
+                            const FeedConstraints& constraints, const std::vector<double>& nominal_knots_mm,
+                            const std::function<double(double)>& contact_on_tool = nullptr,
+                            bool choose_knots = true,
+                            const std::function<ToolContact(double)>& tool_contact = nullptr,
+                            bool keep_first_segment = true);
+
+// Knots a = x_0 < ... < x_N = b equally spaced, at most segment_length_mm apart.
+std::vector<double> uniform_knots(double a, double b, double segment_length_mm);
+
+// plan_feed_on_knots on uniform_knots.
 Schedule plan_feed(const Generatrix& generatrix, const Kinematics& kinematics,
                    const FeedConstraints& constraints, double segment_length_mm,
                    const std::function<double(double)>& contact_on_tool = nullptr,
                    bool choose_knots = true,
                    const std::function<ToolContact(double)>& tool_contact = nullptr);
+
+// The exact axis positions (P4 inverse kinematics) of the contact at x, with its place on the
+// tool.
+struct ExactTarget {
+  double x_mm = 0.0, contact_on_tool_mm = 0.0;
+  std::vector<double> positions_mm;
+};
+ExactTarget exact_target(const Generatrix& generatrix, const Kinematics& kinematics,
+                         const std::function<double(double)>& contact_on_tool,
+                         const std::function<ToolContact(double)>& tool_contact, double x_mm);
 
 // The parts of the scheduler that do not depend on the geometry (shared by feed_plan and
 // cam_plan, MODELS.md P2/K2):

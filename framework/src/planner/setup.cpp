@@ -8,6 +8,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "planner/geometry.hpp"
 
 namespace chatterlab::planner {
 
@@ -18,17 +19,50 @@ std::unique_ptr<Kinematics> build_kinematics(const Json& machine) {
   return kinematics_registry().at(machine.at("type").get<std::string>()).create(ParamValues(std::move(params)));
 }
 
-std::unique_ptr<Generatrix> build_generatrix(const Json& part) {
-  if (part.contains("points_file") && part["points_file"].is_string()) {
-    // Point table: first column x (mm), second y (mm); natural cubic spline through the rows.
-    const DataTable table = read_data_table(part["points_file"].get<std::string>());
-    if (table.columns.size() < 2)
-      throw InputError(fmt::format("{}: needs two columns, x_mm and y_mm", table.file.string()));
-    return spline_generatrix(table.columns[0], table.columns[1]);
-  }
-  const auto range = part.at("x_range_mm").get<std::vector<double>>();
-  return expression_generatrix(part.at("generatrix").get<std::string>(), range.at(0), range.at(1));
+namespace {
+
+double number_or(const Json& table, const char* key, double fallback) {
+  return table.contains(key) && table[key].is_number() ? table[key].get<double>() : fallback;
 }
+
+std::string string_or(const Json& table, const char* key, const std::string& fallback) {
+  return table.contains(key) && table[key].is_string() ? table[key].get<std::string>() : fallback;
+}
+
+}  // namespace
+
+PartGeometry build_part(const Json& part) {
+  PartGeometry out;
+  out.resolution_mm = number_or(part, "geometry_resolution_mm", default_geometry_resolution_mm);
+  if (!(part.contains("points_file") && part["points_file"].is_string())) {
+    const auto range = part.at("x_range_mm").get<std::vector<double>>();
+    out.generatrix = expression_generatrix(part.at("generatrix").get<std::string>(), range.at(0), range.at(1));
+    return out;
+  }
+  // Point table: first column x (mm), second y (mm).
+  const DataTable table = read_data_table(part["points_file"].get<std::string>());
+  if (table.columns.size() < 2)
+    throw InputError(fmt::format("{}: needs two columns, x_mm and y_mm", table.file.string()));
+  out.table_x_mm = table.columns[0];
+  out.table_y_mm = table.columns[1];
+  out.smoothing = string_or(part, "smoothing", "cross_validated");
+  const std::size_t n = out.table_x_mm.size();
+  if (out.smoothing == "none") {
+    out.generatrix = spline_generatrix(out.table_x_mm, out.table_y_mm);
+    return out;
+  }
+  out.fit = out.smoothing == "tolerance"
+                ? tolerance_spline(out.table_x_mm, out.table_y_mm, part.at("smoothing_tolerance_mm").get<double>())
+                : cross_validated_spline(out.table_x_mm, out.table_y_mm);
+  out.generatrix = cubic_spline_generatrix(
+      out.fit->spline,
+      fmt::format("smoothing spline through {} points ({}, RMS residual {:.3g} mm)", n, out.smoothing,
+                  out.fit->residual_rms_mm));
+  out.interpolating = spline_generatrix(out.table_x_mm, out.table_y_mm);
+  return out;
+}
+
+std::unique_ptr<Generatrix> build_generatrix(const Json& part) { return build_part(part).generatrix; }
 
 ParamSpec relative_rate_change_spec() {
   ParamSpec delta = positive_spec("max_relative_rate_change", "1",
@@ -37,6 +71,22 @@ ParamSpec relative_rate_change_spec() {
   delta.max = 1.0;
   delta.max_exclusive = true;
   return delta;
+}
+
+ParamSpec controller_tick_spec() {
+  ParamSpec tick = positive_spec("controller_tick_hz", "1/s",
+                                 "time resolution of steps.csv, ticks per second (default: 100 per "
+                                 "step at the fastest motor's top rate, at least 1e6)");
+  tick.optional = true;
+  return tick;
+}
+
+double controller_tick_hz(const Json& plan, const std::vector<MotorAxis>& motors) {
+  if (plan.contains("controller_tick_hz") && plan["controller_tick_hz"].is_number())
+    return plan["controller_tick_hz"].get<double>();
+  double fastest = 0.0;
+  for (const MotorAxis& m : motors) fastest = std::max(fastest, m.max_pulse_rate_hz);
+  return std::max(1e6, std::pow(10.0, std::ceil(std::log10(std::max(100.0 * fastest, 1.0)))));
 }
 
 ParamSpec start_stop_rate_spec() {
@@ -109,9 +159,17 @@ WearSweep build_sweep(const Json& plan, const Json& wheel) {
 }
 
 double segment_length_mm(const Json& plan, const FeedConstraints& constraints) {
-  const Json& length = plan.at("segment_length_mm");
   // Default: one second at the axial-speed bound (seed 000's 1 s segments).
-  return length.is_number() ? length.get<double>() : constraints.max_axial_speed_mm_per_s() * 1.0;
+  return number_or(plan, "segment_length_mm", constraints.max_axial_speed_mm_per_s() * 1.0);
+}
+
+ToleranceSettings build_tolerance(const Json& plan, const FeedConstraints& constraints) {
+  ToleranceSettings t;
+  t.max_profile_error_mm = number_or(plan, "max_profile_error_mm", t.max_profile_error_mm);
+  t.segment_length_mm = segment_length_mm(plan, constraints);
+  t.min_segment_length_mm =
+      std::min(number_or(plan, "min_segment_length_mm", t.min_segment_length_mm), t.segment_length_mm);
+  return t;
 }
 
 }  // namespace chatterlab::planner

@@ -3,12 +3,16 @@
 // saved-plan reader).
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "chatterlab/kinematics.hpp"
 #include "chatterlab/params.hpp"
 #include "planner/scheduler.hpp"
+#include "planner/smoothing_spline.hpp"
+#include "planner/tolerance.hpp"
 #include "planner/wear.hpp"
 #include "planner/wheel_limits.hpp"
 
@@ -30,11 +34,29 @@ inline constexpr const char* machine_constraint_keys[] = {
 // and [plan] start_stop_rate_hz (f_ss, default delta x the slowest motor's top rate, so the
 // allowance never permits more than the seed rule permits at full speed).
 ParamSpec relative_rate_change_spec();
+// [plan] controller_tick_hz: time resolution of steps.csv; default 100 ticks per step at the
+// fastest motor's top rate, rounded up to a power of ten, at least 1 MHz.
+ParamSpec controller_tick_spec();
+double controller_tick_hz(const Json& plan, const std::vector<MotorAxis>& motors);
 ParamSpec start_stop_rate_spec();
 RateRules build_rate_rules(const Json& machine, const Json& plan, const Kinematics& kinematics);
 
 std::unique_ptr<Kinematics> build_kinematics(const Json& machine);
-std::unique_ptr<Generatrix> build_generatrix(const Json& part);
+
+// The part: the generatrix the plan follows and, for a point table, the table itself, the
+// interpolating spline through it and the smoothing fit ([part] smoothing = "cross_validated"
+// (default for tables), "tolerance" with smoothing_tolerance_mm, or "none"; docs/planner.md,
+// "Measured parts"). Missing keys take their defaults (geometry_resolution_mm 0.01).
+struct PartGeometry {
+  std::unique_ptr<Generatrix> generatrix;
+  double resolution_mm = default_geometry_resolution_mm;
+  std::string smoothing = "none";  // what was applied: none, cross_validated, tolerance
+  std::vector<double> table_x_mm, table_y_mm;    // point tables only
+  std::unique_ptr<Generatrix> interpolating;     // smoothed tables: the spline through the raw points
+  std::optional<SmoothingSpline> fit;            // smoothed tables
+};
+PartGeometry build_part(const Json& part);
+std::unique_ptr<Generatrix> build_generatrix(const Json& part);  // build_part(part).generatrix
 FeedConstraints build_constraints(const Json& machine, const Json& plan,
                                   const Kinematics& kinematics);
 WheelSection build_wheel(const Json& wheel);
@@ -46,6 +68,9 @@ std::function<ToolContact(double)> wheel_contact(const WheelSection& wheel);
 double sweep_half_width_mm(const WheelSection& wheel);
 WearSweep build_sweep(const Json& plan, const Json& wheel);
 double segment_length_mm(const Json& plan, const FeedConstraints& constraints);
+// [plan] max_profile_error_mm (default 0.005), segment_length_mm (the longest segment),
+// min_segment_length_mm (default 0.005).
+ToleranceSettings build_tolerance(const Json& plan, const FeedConstraints& constraints);
 
 }  // namespace chatterlab::planner
 

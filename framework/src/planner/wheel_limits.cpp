@@ -24,29 +24,47 @@ Frame frame_at(const Generatrix& g, double x) {
 
 }  // namespace
 
-EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples) {
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, const GeometryAnalysis& geometry,
+                                    std::size_t samples) {
   const double a = generatrix.x_min_mm(), b = generatrix.x_max_mm();
   std::vector<Frame> frames(samples);
   for (std::size_t i = 0; i < samples; ++i)
     frames[i] = frame_at(generatrix, a + (b - a) * static_cast<double>(i) / static_cast<double>(samples - 1));
-  EdgeRadiusLimit best{std::numeric_limits<double>::infinity(), 0.0, false};
+  const double inf = std::numeric_limits<double>::infinity();
+  EdgeRadiusLimit best{inf, 0.0, false, inf};
+  if (geometry.max_concave_curvature_per_mm > 0)
+    best = {1.0 / geometry.max_concave_curvature_per_mm, geometry.max_concave_curvature_at_x_mm, true, inf};
+  if (geometry.max_concave_curvature_bound_per_mm > 0)
+    best.curvature_bound_radius_mm = 1.0 / geometry.max_concave_curvature_bound_per_mm;
+  double distant = inf, distant_x = 0.0;
   for (std::size_t i = 0; i < samples; ++i) {
     const Frame& p = frames[i];
-    const GeneratrixValue v = generatrix.evaluate(p.x);
-    if (v.d2 > 0) {
-      const double rho = std::pow(1.0 + v.d1 * v.d1, 1.5) / v.d2;
-      if (rho < best.radius_mm) best = {rho, p.x, true};
-    }
     for (std::size_t j = 0; j < samples; ++j) {
-      if (j + 1 >= i && j <= i + 1) continue;  // neighbours: the local term above is exact
+      if (j + 1 >= i && j <= i + 1) continue;  // neighbours: the local term is exact
       const double dx = frames[j].x - p.x, dy = frames[j].y - p.y;
       const double along_normal = dx * p.nx + dy * p.ny;
       if (along_normal <= 0) continue;
       const double r = (dx * dx + dy * dy) / (2 * along_normal);
-      if (r < best.radius_mm) best = {r, p.x, false};
+      if (r < distant) {
+        distant = r;
+        distant_x = p.x;
+      }
     }
   }
+  // A chord between nearby samples only approximates the local curvature, which the analysis
+  // has exactly: the limit is "distant" only where a point beats the local radius by 0.1 %.
+  if (distant < best.radius_mm * (1 - 1e-3)) {
+    best.radius_mm = distant;
+    best.x_mm = distant_x;
+    best.local = false;
+  } else {
+    best.radius_mm = std::min(best.radius_mm, distant);
+  }
   return best;
+}
+
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples) {
+  return largest_edge_radius(generatrix, generatrix.analyse(default_geometry_resolution_mm), samples);
 }
 
 double wheel_geometry_edge_radius_mm(const WheelSection& wheel) {
@@ -80,6 +98,14 @@ class TabulatedProfile {
     const double d1 = (1 - t) * d1_[i] + t * d1_[i + 1];
     return (f - qy) / std::sqrt(1.0 + d1 * d1);
   }
+  // The same, with the profile continued along its end tangents beyond the part's ends: for the
+  // contact's own cut when the replayed contact lies a rounding step past an end.
+  double depth_continued(double qx, double qy) const {
+    if (qx >= a_ && qx <= b_) return depth(qx, qy);
+    const bool before = qx < a_;
+    const double x0 = before ? a_ : b_, f0 = before ? f_.front() : f_.back(), d0 = before ? d1_.front() : d1_.back();
+    return (f0 + d0 * (qx - x0) - qy) / std::sqrt(1.0 + d0 * d0);
+  }
   double max_curvature_per_mm() const { return max_curvature_; }  // max |f''| (bounds curvature)
 
  private:
@@ -104,12 +130,18 @@ struct Deepest {
 // deeper of them (`sampling_bound_mm`).
 class SectionProbe {
  public:
-  explicit SectionProbe(const WheelSection& wheel, double part_curvature) : wheel_(wheel) {
+  // Samples: enough that the sampling bound is at most half the tolerance (at least 64, at most
+  // 4096), so that the golden-section refinement is needed only where a sample itself comes
+  // within half the tolerance of interfering (the contact's own point lies on the section and
+  // sits exactly at its own cut: with a coarser sampling every state would be refined).
+  SectionProbe(const WheelSection& wheel, double part_curvature, double tolerance_mm) : wheel_(wheel) {
     half_angle_ = 0.5 * wheel.edge_angle_deg * std::numbers::pi / 180.0;
-    for (int i = 0; i <= samples; ++i) points_.push_back(tool_point(-1.0 + 2.0 * i / samples));
-    const double spacing = wheel.profiled ? wheel.edge_radius_mm * 2 * half_angle_ / samples
-                                          : wheel.thickness_mm / samples;
+    const double width = wheel.profiled ? wheel.edge_radius_mm * 2 * half_angle_ : wheel.thickness_mm;
     const double k = (wheel.profiled ? 1.0 / wheel.edge_radius_mm : 0.0) + part_curvature;
+    const double wanted = k > 0 ? width / std::sqrt(8.0 * 0.5 * tolerance_mm / k) : 0.0;
+    samples_ = static_cast<int>(std::clamp(std::ceil(wanted), 64.0, 4096.0));
+    for (int i = 0; i <= samples_; ++i) points_.push_back(tool_point(-1.0 + 2.0 * i / samples_));
+    const double spacing = width / samples_;
     sampling_bound_mm_ = k * spacing * spacing / 8.0;
   }
   double sampling_bound_mm() const { return sampling_bound_mm_; }
@@ -122,7 +154,7 @@ class SectionProbe {
     };
     Deepest best{-std::numeric_limits<double>::infinity(), 0.0};
     int best_i = 0;
-    for (int i = 0; i <= samples; ++i) {
+    for (int i = 0; i <= samples_; ++i) {
       const Deepest d = at(points_[static_cast<std::size_t>(i)]);
       if (d.depth_mm > best.depth_mm) {
         best = d;
@@ -130,8 +162,8 @@ class SectionProbe {
       }
     }
     if (!std::isfinite(best.depth_mm) || best.depth_mm <= refine_above_mm) return best;
-    double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples;
-    double hi = -1.0 + 2.0 * std::min(samples, best_i + 1) / samples;
+    double lo = -1.0 + 2.0 * std::max(0, best_i - 1) / samples_;
+    double hi = -1.0 + 2.0 * std::min(samples_, best_i + 1) / samples_;
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     for (int it = 0; it < 24; ++it) {
       const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
@@ -142,7 +174,7 @@ class SectionProbe {
   }
 
  private:
-  static constexpr int samples = 64;
+  int samples_ = 64;
   std::array<double, 2> tool_point(double t) const {  // t in [-1, 1] along the section
     if (!wheel_.profiled) return {0.5 * wheel_.thickness_mm * t, 0.0};
     const double phi = half_angle_ * t, r = wheel_.edge_radius_mm;
@@ -160,7 +192,7 @@ constexpr std::size_t table_intervals = 20000;
 Interference check_interference(const Generatrix& generatrix, const WheelSection& wheel,
                                 const std::vector<double>& contacts_mm, double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
-  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm(), tolerance_mm);
   Interference out;
   out.tolerance_mm = tolerance_mm;
   for (double x : contacts_mm) {
@@ -184,7 +216,7 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
                                            const Kinematics& kinematics, const WheelSection& wheel,
                                            double tolerance_mm) {
   const TabulatedProfile profile(generatrix, table_intervals);
-  const SectionProbe probe(wheel, profile.max_curvature_per_mm());
+  const SectionProbe probe(wheel, profile.max_curvature_per_mm(), tolerance_mm);
   const FeedPlan& plan = schedule.plan;
   Interference out;
   out.tolerance_mm = tolerance_mm;
@@ -198,7 +230,9 @@ Interference check_interference_along_plan(const Schedule& schedule, const Gener
     const double zeta = schedule.contact_on_tool_mm[k] +
                         u * (schedule.contact_on_tool_mm[k + 1] - schedule.contact_on_tool_mm[k]);
     const ToolInPart contact = kinematics.forward(position, schedule.contact_at(zeta));
-    const double own_cut = std::max(0.0, profile.depth(contact.x_mm, contact.y_mm));
+    // A contact a rounding step beyond the part's end still has its own cut (the profile
+    // continued along its end tangent).
+    const double own_cut = std::max(0.0, profile.depth_continued(contact.x_mm, contact.y_mm));
     const Deepest d = probe.deepest(profile, frame, own_cut + tolerance_mm - probe.sampling_bound_mm());
     ++out.states_checked;
     const double excess = d.depth_mm - own_cut;

@@ -19,12 +19,20 @@ struct EdgeRadiusLimit {
   double radius_mm = 0.0;  // +inf when no part of the profile limits it
   double x_mm = 0.0;       // contact position that sets the limit
   bool local = false;      // set by the local curvature (concave part) rather than a distant point
+  // The local term's certified bound: no concave radius of curvature anywhere is below it
+  // (GeometryAnalysis::max_concave_curvature_bound_per_mm); +inf for a convex part.
+  double curvature_bound_radius_mm = 0.0;
 };
 
 // For every contact point P (outward normal n, towards the wheel) a circle of radius r tangent at
 // P stays outside the part iff r <= |Q-P|^2 / (2 (Q-P).n) for every profile point Q with
 // (Q-P).n > 0 (seed 000's normal-line condition, 5.21-5.23); near P this tends to the radius of
-// curvature (1+f'^2)^1.5 / f'' of a concave part (f'' > 0). Minimised over P on `samples` points.
+// curvature (1+f'^2)^1.5 / f'' of a concave part (f'' > 0). The local term is the true smallest
+// concave radius of curvature from the geometry analysis (every point of the range, spline knots
+// included); the distant term is minimised over P and Q on `samples` points.
+EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, const GeometryAnalysis& geometry,
+                                    std::size_t samples = 2001);
+// Analyses the generatrix at the default resolution first.
 EdgeRadiusLimit largest_edge_radius(const Generatrix& generatrix, std::size_t samples = 2001);
 
 // Largest edge radius the wheel itself can carry: an arc of opening alpha is 2 r sin(alpha/2)
@@ -52,7 +60,9 @@ Interference check_interference(const Generatrix& generatrix, const WheelSection
 // through the forward kinematics; the tool frame in the part (nominal point O, along-rails U,
 // across W) follows from forward() at tool points (0,0), (1,0), (0,1); the section (face
 // [-a/2, a/2] x {0}, or edge arc (r sin phi, r (1 - cos phi)), |phi| <= alpha/2) is probed for
-// its deepest point below the generatrix (64 samples, then golden-section refinement; the
+// its deepest point below the generatrix (samples dense enough that a point between two of them
+// lies at most half the tolerance deeper, 64 to 4096, then golden-section refinement where a
+// sample comes that close; the
 // generatrix tabulated as a cubic Hermite on 20000 intervals). Interference at a state: the
 // deepest penetration minus the contact's own cut-in (the profile error, reported separately),
 // beyond tolerance_mm (default 1 um: a nut step tilts a 20 mm half face by 0.2 um).

@@ -40,7 +40,8 @@ int journal_session(const std::string& name) {
 
 }  // namespace
 
-void prepare_output_dir(const fs::path& dir, bool resume) {
+std::unique_ptr<OutputLock> prepare_output_dir(const fs::path& dir, bool resume,
+                                               const std::string& study_file) {
   std::error_code ec;
   fs::file_status status = fs::status(dir, ec);
   if (fs::exists(status) && !fs::is_directory(status))
@@ -49,14 +50,23 @@ void prepare_output_dir(const fs::path& dir, bool resume) {
     fs::create_directories(dir, ec);
     if (ec) unusable(dir, "cannot be created: " + ec.message());
   }
-  const fs::path marker = dir / output_marker_name;
-  bool ours = fs::exists(marker, ec);
-  bool empty = fs::is_empty(dir, ec);
+  // chatterlab's own hidden files (the lock, the marker being written under a temporary name)
+  // do not make a directory someone else's: a run that starts at the same instant may have
+  // created them a moment ago, and must then hear about that run, not about foreign files. The
+  // marker is looked for after the listing: a run writes it before any other file, so whatever
+  // the listing saw of that run, its marker is there by now.
+  bool empty = true;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().filename().string().rfind(".chatterlab-", 0) != 0) empty = false;
   if (ec) unusable(dir, "cannot be read: " + ec.message());
+  const fs::path marker = dir / output_marker_name;
+  const bool ours = fs::exists(marker, ec);
   if (!ours && !empty)
     unusable(dir, fmt::format("is not empty and was not written by chatterlab (no {} file); "
                               "choose a new or empty directory with --out",
                               output_marker_name));
+  // Before anything is changed: a second run into a directory in use must leave it untouched.
+  auto lock = std::make_unique<OutputLock>(dir, study_file);
   // Writing the marker is the writability probe: it happens before any computation and before a
   // previous run is deleted.
   try {
@@ -64,10 +74,12 @@ void prepare_output_dir(const fs::path& dir, bool resume) {
   } catch (const std::exception& e) {
     unusable(dir, std::string("is not writable: ") + e.what());
   }
-  if (resume) return;
+  if (resume) return lock;
   std::vector<fs::path> previous;  // listed first: removing while iterating is unspecified
   for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.path().filename() != output_marker_name) previous.push_back(entry.path());
+    if (entry.path().filename() != output_marker_name &&
+        entry.path().filename() != output_lock_name)
+      previous.push_back(entry.path());
   if (ec) unusable(dir, "cannot be listed: " + ec.message());
   for (const auto& path : previous) {
     fs::remove_all(path, ec);
@@ -75,6 +87,7 @@ void prepare_output_dir(const fs::path& dir, bool resume) {
       unusable(dir, fmt::format("cannot remove the previous run's {}: {}", path.filename().string(),
                                 ec.message()));
   }
+  return lock;
 }
 
 fs::path journal_dir(const fs::path& out_dir) { return out_dir / "journal"; }

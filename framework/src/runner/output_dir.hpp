@@ -5,20 +5,29 @@
 // `.chatterlab-output` file. A run without --resume into a marked directory deletes the previous
 // run's files first (a clean replacement: no stale plots or journals from another grid survive).
 // A non-empty directory WITHOUT the mark is refused (InputError), so a mistyped --out can never
-// wipe a user's own files. With --resume the directory is kept and its journals are read.
+// wipe a user's own files. With --resume the directory is kept and its journals are read. One
+// run at a time: the run holds an OutputLock on the directory from before it changes anything
+// until its last file is written.
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "runner/output_lock.hpp"
 
 namespace chatterlab::runner {
 
 inline constexpr const char* output_marker_name = ".chatterlab-output";
+// Space set aside while a run goes, given back to write meta.json when the disk fills up.
+inline constexpr const char* output_reserve_name = ".chatterlab-reserve";
 
-// Creates or checks `dir` and proves it writable by writing the marker; without `resume` removes
-// a previous run. Throws InputError with the directory and the reason; touches nothing when the
-// directory is unusable or not ours.
-void prepare_output_dir(const std::filesystem::path& dir, bool resume);
+// Creates or checks `dir`, locks it (the returned lock must live until the run's last write) and
+// proves it writable by writing the marker; without `resume` removes a previous run. Throws
+// InputError with the directory and the reason; touches nothing when the directory is unusable,
+// not ours, or locked by another run.
+std::unique_ptr<OutputLock> prepare_output_dir(const std::filesystem::path& dir, bool resume,
+                                               const std::string& study_file);
 
 std::filesystem::path journal_dir(const std::filesystem::path& out_dir);
 

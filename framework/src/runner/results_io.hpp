@@ -36,27 +36,45 @@ std::string format_csv(const ResultTable& table, int threads = 1);
 struct PointResult {
   bool done = false;
   std::vector<Json> outputs;  // one per output column; null cells for a failed point
-  std::string status;         // "ok" or "failed: <reason>"
+  std::string status;         // "ok", "failed: <reason>" or "timeout: <reason>"
+  double elapsed_s = 0.0;     // timeouts only: how long the point ran before it was stopped
 };
 
 // "failed: <reason>" on one line: line breaks in exception texts would split CSV rows for line
 // tools (awk, grep) even though quoting keeps the CSV itself valid.
 std::string failure_status(std::string_view reason);
+// "timeout: <reason>", for a point stopped at its time limit.
+std::string timeout_status(std::string_view reason);
+
+// What a status says: ok, failed or timeout, and the reason after the prefix.
+enum class PointOutcome { ok, failed, timeout };
+PointOutcome outcome_of(std::string_view status);
+std::string_view reason_of(std::string_view status);
 
 // ------------------------------------------------------------------ journal
 // File layout: a header line, then one line per finished point, each a complete JSON object
 // terminated by '\n'. A reader therefore recognises a line cut by a kill (no '\n') and drops it.
-//   {"chatterlab_journal":1,"study":"<fingerprint>","points":N,"columns":[...]}
-//   {"i":<point>,"out":[...],"status":"ok"}
+//   {"chatterlab_journal":2,"study":"<fingerprint>","points":N,"columns":[...],"inputs":{...}}
+//   {"i":<point>,"out":[...],"status":"ok"}          (timeouts add "elapsed_s")
 struct JournalHeader {
   std::string study_fingerprint;
   std::size_t points = 0;
   std::vector<std::string> columns;
+  Json inputs = Json::object();  // result_inputs(): names the file when a resume is refused
 };
 
-// Identifies a resolved study (kind, document, grid, output columns): a journal is only reused
-// for the very same computation. FNV-1a over the canonical JSON text, as 16 hex digits.
+// Identifies everything that decides a run's numbers: the kind, the resolved document (keys
+// sorted, without [study] name and description and without [run]: they change no number), the
+// grid axes in order, the output columns, and the content hashes of the data files and plugin
+// libraries. A journal is only reused for the very same computation. SHA-256 of that canonical
+// text, 64 hex digits.
 std::string study_fingerprint(const Study& study, const std::vector<std::string>& columns);
+
+// A study document without what changes no result: [study] name and description, and [run].
+Json result_relevant(const Json& document);
+
+// The input files that decide results (data, plugin libraries) as {path: sha256}.
+Json result_inputs(const Study& study);
 
 std::string journal_header_line(const JournalHeader& header);
 std::string journal_line(std::size_t point, const PointResult& result);
@@ -80,12 +98,16 @@ JournalContents parse_journal_records(std::string_view text, std::size_t points,
 // ------------------------------------------------------------------ grid order
 // The result table in grid order: row i = grid values of point i, then its outputs. Every point
 // must be done (a programming error otherwise: std::logic_error).
+// The results are moved into the table (for a large grid they are most of rank 0's memory).
 ResultTable assemble_results(const Study& study, const std::vector<std::string>& output_columns,
-                             const std::vector<PointResult>& results);
+                             std::vector<PointResult> results);
 
 // ------------------------------------------------------------------ files
 using chatterlab::write_file_atomically;  // chatterlab/output_files.hpp
 
 std::string read_file(const std::filesystem::path& path);
+
+// The current time as "2026-01-01T12:00:00Z".
+std::string utc_now();
 
 }  // namespace chatterlab::runner

@@ -2,44 +2,55 @@
 //
 // Work split: MPI rank r of R computes the points with index % R == r (an interleaved split keeps
 // ranks balanced when cost varies smoothly across the grid); inside a rank OpenMP threads take
-// points dynamically. Each point's result is appended to this rank's journal as soon as it is
-// known (resume), then sent to rank 0 at the end; rank 0 alone writes results.csv (in grid order,
-// numbers in round-trip form, no timings or ranks), meta.json and the plots. So the bytes of
-// results.csv depend only on the study, never on ranks, threads or interruptions.
+// points dynamically, or, with --isolate or a time limit per point, worker processes do
+// (runner/worker_pool.hpp). Each point's result is queued for this rank's journal as soon as it
+// is known (a writer thread puts it on disk within 0.1 s), then sent to rank 0 at the end; rank 0
+// alone writes results.csv (in grid order, numbers in round-trip form, no timings or ranks),
+// meta.json and the plots. So the bytes of results.csv depend only on the study, never on ranks,
+// threads, worker processes or interruptions.
+//
+// Order of a run, so that exit code 2 means "nothing was written": everything that can reject the
+// run (the study's output columns, the ranks' input files, starting the worker processes, the
+// output directory's lock, the journals of a --resume) is checked before the first file changes.
 #include "chatterlab/runner.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <omp.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
 #include <chrono>
-#include <cmath>
-#include <cstring>
-#include <ctime>
 #include <functional>
-#include <mutex>
+#include <iostream>
 #include <stdexcept>
 
 #include "chatterlab/detail/mpi_env.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/plugin_api.hpp"
 #include "chatterlab/study_kind.hpp"
-#include "runner/build_info.hpp"
+#include "runner/input_watch.hpp"
+#include "runner/journal_writer.hpp"
 #include "runner/mpi_exchange.hpp"
 #include "runner/output_dir.hpp"
+#include "runner/point_compute.hpp"
 #include "runner/progress.hpp"
 #include "runner/results_io.hpp"
+#include "runner/resume.hpp"
+#include "runner/run_meta.hpp"
+#include "runner/worker_pool.hpp"
 
 namespace chatterlab {
 
 namespace {
 
 namespace fs = std::filesystem;
+using runner::ComputedPoint;
 using runner::JournalContents;
 using runner::JournalHeader;
+using runner::JournalWriter;
+using runner::MetaInputs;
 using runner::PointResult;
 using Clock = std::chrono::steady_clock;
 
@@ -47,143 +58,86 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-std::string utc_now() {
-  std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
+// Runs `step` on every rank; rank-local exceptions become the same InputError on every rank (an
+// exception on one rank alone would leave the others waiting in the next collective call).
+template <class Step>
+void collectively(Step&& step) {
+  std::string error;
+  try {
+    step();
+  } catch (...) {
+    error = describe_current_exception();
+    if (error.empty()) error = "unknown error";
+  }
+  std::vector<std::string> errors = runner::gather_to_root(error);
+  std::string first;
+  for (std::size_t r = 0; r < errors.size() && first.empty(); ++r)
+    if (!errors[r].empty())
+      first = r == 0 ? errors[r] : fmt::format("(rank {}) {}", r, errors[r]);
+  runner::broadcast_from_root(first);
+  if (!first.empty()) throw InputError(first);
 }
 
-// This rank's journal for the current session. Lines are buffered and written whole at most
-// every 0.1 s: a kill loses at most that much work, and thousands of points per second do not
-// become thousands of system calls. A write error (disk full) stops journaling but not the run:
-// the results are still complete in memory; meta.json reports the error.
-class JournalWriter {
- public:
-  JournalWriter(const fs::path& file, const std::string& header) : file_(file) {
-    fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_APPEND | O_CLOEXEC, 0644);
-    if (fd_ < 0 || !write_all(header))
-      throw std::runtime_error(
-          fmt::format("cannot write {}: {}", file.string(), std::strerror(errno)));
-    last_flush_ = Clock::now();
-  }
-  JournalWriter(const JournalWriter&) = delete;
-  JournalWriter& operator=(const JournalWriter&) = delete;
-  ~JournalWriter() {
-    flush();
-    if (fd_ >= 0) ::close(fd_);
-  }
+// Every rank must have read the same bytes (a cluster node with another copy of a data file
+// would silently compute something else).
+void check_ranks_read_the_same_inputs(const Study& study) {
+  const std::string mine = runner::json_text(runner::result_inputs(study));
+  std::vector<std::string> all = runner::gather_to_root(mine);
+  std::string message;
+  for (std::size_t r = 1; r < all.size() && message.empty(); ++r)
+    if (all[r] != all[0])
+      message = fmt::format(
+          "MPI rank {} read other input files than rank 0 ({} on rank {}, {} on rank 0): every "
+          "rank must see the same files",
+          r, all[r], r, all[0]);
+  runner::broadcast_from_root(message);
+  if (!message.empty()) throw InputError(message);
+}
 
-  void append(const std::string& line) {
-    std::lock_guard lock(mutex_);
-    buffer_ += line;
-    if (Clock::now() - last_flush_ > flush_interval) flush_locked();
-  }
-  void flush() {
-    std::lock_guard lock(mutex_);
-    flush_locked();
-  }
-  std::string error() const { return error_; }
-
- private:
-  static constexpr auto flush_interval = std::chrono::milliseconds(100);
-
-  void flush_locked() {
-    last_flush_ = Clock::now();
-    if (buffer_.empty() || !error_.empty()) return;
-    if (!write_all(buffer_))
-      error_ = fmt::format("journal {} not written: {}", file_.string(), std::strerror(errno));
-    buffer_.clear();
-  }
-  bool write_all(std::string_view text) {
-    while (!text.empty()) {
-      ssize_t n = ::write(fd_, text.data(), text.size());
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0) return false;
-      text.remove_prefix(static_cast<std::size_t>(n));
-    }
-    return true;
-  }
-
-  fs::path file_;
-  int fd_ = -1;
-  std::string buffer_;
-  std::string error_;
-  Clock::time_point last_flush_;
-  std::mutex mutex_;
-};
-
-// One grid point. Nothing escapes: this runs inside the OpenMP region.
-PointResult compute_point(const StudyKind& kind, const Study& study, std::size_t point,
-                          const std::vector<std::string>& columns, const RunOptions& options) {
-  PointResult result;
-  result.done = true;
-  try {
-    PointContext context;
-    context.index = point;
-    context.point_count = study.point_count();
-    context.artifact_dir = runner::point_artifact_dir(options.out_dir, point, context.point_count);
-    context.plots = options.plots;
-    std::vector<Json> outputs = kind.run_point(study.point_document(point), context);
-    if (outputs.size() != columns.size())
-      throw std::logic_error(fmt::format("study kind {} returned {} outputs for {} columns",
-                                         study.kind, outputs.size(), columns.size()));
-    // A non-finite number is no result (and JSON, hence the journal, cannot carry it).
-    for (std::size_t c = 0; c < columns.size(); ++c)
-      if (outputs[c].is_number_float() && !std::isfinite(outputs[c].get<double>()))
-        throw PointFailure(
-            fmt::format("{} is not finite ({})", columns[c], outputs[c].get<double>()));
-    result.outputs = std::move(outputs);
-    result.status = "ok";
-  } catch (const std::exception& e) {
-    result.outputs.assign(columns.size(), Json());
-    result.status = runner::failure_status(e.what());
-  } catch (...) {
-    result.outputs.assign(columns.size(), Json());
-    result.status = runner::failure_status("unknown exception");
-  }
-  return result;
+// A warning (not a refusal: the estimate is for the heaviest kind per cell, and a resume needs
+// less) when the output file system has less room than the grid's results are estimated to take.
+void warn_if_the_disk_is_too_small(const fs::path& out_dir, const GridCost& cost) {
+  fs::path existing = fs::absolute(out_dir);
+  while (!existing.empty() && !fs::exists(existing) && existing != existing.parent_path())
+    existing = existing.parent_path();
+  std::error_code ec;
+  const fs::space_info space = fs::space(existing, ec);
+  if (ec || space.available >= cost.disk_bytes()) return;
+  std::cerr << fmt::format(
+      "chatterlab: warning: {} has {:.1f} MiB free, and this grid's results are estimated to take "
+      "{:.1f} MiB ({} points x {} bytes): the run may end with exit code 3 (output could not be "
+      "written)\n",
+      existing.string(), static_cast<double>(space.available) / (1 << 20),
+      static_cast<double>(cost.disk_bytes()) / (1 << 20), cost.points, cost.disk_bytes_per_point);
 }
 
 // What rank 0 learns before the computation and every rank needs.
 struct Preparation {
   int session = 1;
   std::string done;  // one '0'/'1' per point: finished in an earlier session
-  std::vector<std::pair<std::size_t, PointResult>> resumed;  // rank 0 only
-  std::size_t journal_lines_truncated = 0;
-  std::size_t journal_lines_invalid = 0;
+  runner::ResumedPoints resumed;                // rank 0 only
+  std::unique_ptr<runner::OutputLock> lock;     // rank 0 only: held until the run's last write
 };
 
 Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expected,
-                            const std::function<Json()>& running_meta) {
-  runner::prepare_output_dir(options.out_dir, options.resume);
+                            const Study& study, const Json& running_meta) {
   Preparation prep;
+  warn_if_the_disk_is_too_small(
+      options.out_dir, grid_cost(expected.points, study.grid.size(), expected.columns.size()));
+  prep.lock = runner::prepare_output_dir(options.out_dir, options.resume, study.file.string());
   prep.done.assign(expected.points, '0');
   if (options.resume) {
-    for (const auto& file : runner::journal_files(options.out_dir)) {
-      JournalContents journal = runner::parse_journal(runner::read_file(file));
-      prep.journal_lines_truncated += journal.truncated_lines;
-      prep.journal_lines_invalid += journal.invalid_lines;
-      if (!journal.header_found) continue;  // killed before its first line was complete
-      if (journal.header.study_fingerprint != expected.study_fingerprint ||
-          journal.header.points != expected.points || journal.header.columns != expected.columns)
-        throw InputError(fmt::format(
-            "cannot resume from {}: it was written for a different study (the resolved study, "
-            "its grid or the output columns changed); run without --resume to start over",
-            file.string()));
-      for (auto& record : journal.records) {
-        if (prep.done[record.first] == '1') continue;  // the first record of a point wins
-        prep.done[record.first] = '1';
-        prep.resumed.push_back(std::move(record));
-      }
-    }
+    prep.resumed = runner::read_journals(options.out_dir, expected, study, options.retry_failed);
+    for (const auto& record : prep.resumed.records) prep.done[record.first] = '1';
   }
   // Only now, when the journals were accepted: a refused --resume leaves the old run untouched.
   // A run that is killed leaves meta.json saying so, next to its journal.
-  runner::write_file_atomically(options.out_dir / "meta.json",
-                                runner::json_text(running_meta(), 2) + "\n");
+  const std::string meta_text = runner::json_text(running_meta, 2) + "\n";
+  runner::write_file_atomically(options.out_dir / "meta.json", meta_text);
+  // Room for the final meta.json, given back if the disk fills up (then meta.json can still say
+  // what could not be written): twice this meta.json plus 64 KiB.
+  runner::write_file_atomically(options.out_dir / runner::output_reserve_name,
+                                std::string(2 * meta_text.size() + 65536, '\0'));
   prep.session = runner::next_journal_session(options.out_dir);
   std::error_code ec;
   fs::create_directories(runner::journal_dir(options.out_dir), ec);
@@ -194,19 +148,17 @@ Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expe
 }
 
 // Rank 0 prepares; every rank gets the session and the finished points, or the same InputError.
-// Everything rank 0 does here is inside the try: an exception on one rank alone would leave the
-// others waiting in the broadcast.
-Preparation prepare(const RunOptions& options, const JournalHeader& expected,
-                    const std::function<Json()>& running_meta) {
+Preparation prepare(const RunOptions& options, const JournalHeader& expected, const Study& study,
+                    const Json& running_meta) {
   Preparation prep;
   std::string message;
   if (mpi_rank() == 0) {
     Json outcome;
     try {
-      prep = prepare_on_root(options, expected, running_meta);
+      prep = prepare_on_root(options, expected, study, running_meta);
       outcome = {{"session", prep.session}, {"done", prep.done}};
-    } catch (const std::exception& e) {
-      outcome = {{"error", e.what()}};
+    } catch (...) {
+      outcome = {{"error", describe_current_exception()}};
     }
     message = runner::json_text(outcome);
   }
@@ -220,6 +172,15 @@ Preparation prepare(const RunOptions& options, const JournalHeader& expected,
   return prep;
 }
 
+// Removes what prepare() wrote when the run cannot start after all (a rank cannot journal):
+// exit 2 then leaves no meta.json claiming a run.
+void undo_prepare(const RunOptions& options) {
+  if (mpi_rank() != 0) return;
+  std::error_code ignored;
+  fs::remove(options.out_dir / "meta.json", ignored);
+  fs::remove(options.out_dir / runner::output_reserve_name, ignored);
+}
+
 std::unique_ptr<JournalWriter> open_journal(const RunOptions& options, const Preparation& prep,
                                             const JournalHeader& header) {
   std::unique_ptr<JournalWriter> journal;
@@ -231,11 +192,13 @@ std::unique_ptr<JournalWriter> open_journal(const RunOptions& options, const Pre
   } catch (const std::exception& e) {
     error = e.what();
   }
-  if (!runner::all_ranks_agree(error.empty()))
+  if (!runner::all_ranks_agree(error.empty())) {
+    undo_prepare(options);
     throw InputError(fmt::format(
         "output directory {}: a rank cannot write its journal{} (under MPI the output directory "
         "must be on a file system every rank sees)",
         options.out_dir.string(), error.empty() ? "" : ": " + error));
+  }
   return journal;
 }
 
@@ -243,86 +206,84 @@ std::unique_ptr<JournalWriter> open_journal(const RunOptions& options, const Pre
 struct ComputeStats {
   std::size_t computed = 0;
   double compute_s = 0.0;  // summed over points (thread time spent in run_point)
+  std::size_t output_failures = 0;  // points that could not write their files
   std::vector<std::string> journal_errors;
+  std::vector<std::string> input_changes;
 };
 
-struct MetaInputs {
-  const Study& study;
-  const RunOptions& options;
-  const std::vector<std::string>& columns;
-  std::string started_utc;
-  int threads = 1;
-  bool serial = false;
+struct OutputsWritten {
+  std::size_t failed = 0, timed_out = 0;
+  std::string output_error;
+  Json notices = Json::array();  // [{point, notice}]
 };
 
-Json run_description(const MetaInputs& in) {
-  Json run = Json::object();
-  run["started_utc"] = in.started_utc;
-  run["out_dir"] = fs::absolute(in.options.out_dir).string();
-  run["resume"] = in.options.resume;
-  run["ranks"] = mpi_size();
-  run["threads_per_rank"] = in.threads;
-  if (in.serial) run["serial_reason"] = "a plugin of this study is serial-only";
-  return run;
+// The kind's `notice` column (study_kind.hpp): what the user must read even when every point
+// completed, e.g. "no stable candidate".
+Json point_notices(const ResultTable& table) {
+  Json notices = Json::array();
+  const auto column = std::find(table.output_columns.begin(), table.output_columns.end(), "notice");
+  if (column == table.output_columns.end()) return notices;
+  const std::size_t c = table.grid_columns.size() + static_cast<std::size_t>(column - table.output_columns.begin());
+  for (std::size_t p = 0; p < table.rows.size(); ++p)
+    if (c < table.rows[p].size() && table.rows[p][c].is_string() && !table.rows[p][c].get<std::string>().empty())
+      notices.push_back({{"point", p}, {"notice", table.rows[p][c]}});
+  return notices;
 }
 
-Json meta_header(const MetaInputs& in) {
-  Json meta = Json::object();
-  meta["study_file"] = fs::absolute(in.study.file).string();
-  meta["kind"] = in.study.kind;
-  meta["study"] = in.study.document;
-  Json grid = Json::array();
-  for (const auto& axis : in.study.grid)
-    grid.push_back({{"key", axis.key}, {"path", axis.path}, {"values", axis.values.size()}});
-  meta["grid"] = std::move(grid);
-  meta["output_columns"] = in.columns;
-  meta["points"] = in.study.point_count();
-  meta["build"] = runner::build_info();
-  return meta;
-}
-
-Json failed_points(const Study& study, const ResultTable& table) {
-  Json failed = Json::array();
-  for (std::size_t p = 0; p < table.status.size(); ++p) {
-    if (table.status[p] == "ok") continue;
-    Json grid = Json::object();
-    for (std::size_t a = 0; a < study.grid.size(); ++a) grid[study.grid[a].key] = table.rows[p][a];
-    std::string reason = table.status[p].substr(std::string_view("failed: ").size());
-    failed.push_back({{"point", p}, {"grid", std::move(grid)}, {"reason", std::move(reason)}});
-  }
-  return failed;
-}
-
-// Rank 0 after all points: results.csv, plots, meta.json. Returns the number of failed points.
-std::size_t write_outputs(const StudyKind& kind, const MetaInputs& in, const Preparation& prep,
-                          const std::vector<PointResult>& results, const ComputeStats& stats,
-                          Clock::time_point start) {
+// Rank 0 after all points: results.csv, plots, meta.json. An output that cannot be written (disk
+// full, I/O error) is reported, not thrown: meta.json then says so (state output_failed), using
+// the space reserved for it, and the run exits 3.
+OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const Preparation& prep,
+                             std::vector<PointResult> results, const ComputeStats& stats,
+                             Clock::time_point start) {
   const fs::path& out = in.options.out_dir;
-  ResultTable table = runner::assemble_results(in.study, in.columns, results);
-  runner::write_file_atomically(out / "results.csv", runner::format_csv(table, in.threads));
+  std::vector<double> elapsed(results.size());
+  for (std::size_t p = 0; p < results.size(); ++p) elapsed[p] = results[p].elapsed_s;
+  ResultTable table = runner::assemble_results(in.study, in.columns, std::move(results));
+  OutputsWritten written;
+  try {
+    runner::write_file_atomically(out / "results.csv", runner::format_csv(table, in.threads));
+  } catch (const std::exception& e) {
+    written.output_error = e.what();
+  }
 
   Json plot_errors = Json::array();
-  if (in.options.plots) {
-    // A plot that cannot be drawn (gnuplot missing) must not cost the user the computed grid.
+  if (in.options.plots && written.output_error.empty()) {
+    // A plot that cannot be drawn (gnuplot missing) must not cost the user the computed grid;
+    // a plot that cannot be written (the disk) is an output failure.
+    const std::size_t failed_writes = failed_output_writes_on_this_thread();
     try {
       kind.write_artifacts(in.study, table, out);
     } catch (const std::exception& e) {
-      plot_errors.push_back(e.what());
+      if (failed_output_writes_on_this_thread() != failed_writes)
+        written.output_error = std::string("plots: ") + e.what();
+      else
+        plot_errors.push_back(e.what());
     }
   }
+  if (stats.output_failures > 0)  // first: the points' own files come before the plots
+    written.output_error = fmt::format(
+        "{} point(s) could not write their files (recorded as failed: run again with --resume "
+        "--retry-failed once the disk has room){}{}",
+        stats.output_failures, written.output_error.empty() ? "" : "; ", written.output_error);
 
-  Json failed = failed_points(in.study, table);
-  const std::size_t failed_count = failed.size();
-  Json meta = meta_header(in);
-  meta["state"] = "complete";
-  meta["points_failed"] = failed_count;
+  Json failed = runner::failed_points(in.study, table, elapsed);
+  written.failed = failed.size();
+  for (const auto& f : failed) written.timed_out += f["status"] == "timeout" ? 1 : 0;
+  Json meta = runner::meta_header(in);
+  meta["state"] = written.output_error.empty() ? runner::state_complete : runner::state_output_failed;
+  if (!written.output_error.empty()) meta["output_error"] = written.output_error;
+  meta["points_failed"] = written.failed;
+  meta["points_timed_out"] = written.timed_out;
+  written.notices = point_notices(table);
+  meta["notices"] = written.notices;
   meta["failed_points"] = std::move(failed);
-  Json run = run_description(in);
+  Json run = runner::run_description(in);
   run["journal_session"] = prep.session;
-  run["points_resumed"] = prep.resumed.size();
+  run["points_resumed"] = prep.resumed.records.size();
   run["points_computed"] = stats.computed;
-  run["journal_lines_ignored"] = {{"truncated", prep.journal_lines_truncated},
-                                  {"invalid", prep.journal_lines_invalid}};
+  run["journal_lines_ignored"] = {{"truncated", prep.resumed.truncated_lines},
+                                  {"invalid", prep.resumed.invalid_lines}};
   if (!stats.journal_errors.empty()) run["journal_errors"] = stats.journal_errors;
   meta["run"] = std::move(run);
   const double wall = seconds_since(start);
@@ -335,31 +296,91 @@ std::size_t write_outputs(const StudyKind& kind, const MetaInputs& in, const Pre
   }
   meta["timings"] = std::move(timings);
   meta["plot_errors"] = std::move(plot_errors);
-  runner::write_file_atomically(out / "meta.json", runner::json_text(meta, 2) + "\n");
-  return failed_count;
+  // The reserve goes first: its space is what lets meta.json be written on a full disk.
+  std::error_code ignored;
+  fs::remove(out / runner::output_reserve_name, ignored);
+  try {
+    runner::write_file_atomically(out / "meta.json", runner::json_text(meta, 2) + "\n");
+  } catch (const std::exception& e) {
+    if (written.output_error.empty()) written.output_error = e.what();
+  }
+  return written;
+}
+
+// An input file changed while the run went: its results describe data that is no longer there.
+// meta.json says so (results.csv is not written), and the run ends with exit 2.
+std::string input_changed(const MetaInputs& in, const std::vector<std::string>& changes) {
+  std::string message = fmt::format(
+      "an input file changed while the study ran, so the run was stopped and results.csv was not "
+      "written: {}. Run the study again (without --resume: the finished points belong to the old "
+      "file)",
+      fmt::join(changes, "; "));
+  Json meta = runner::meta_with_state(in, runner::state_input_changed);
+  meta["input_changes"] = changes;
+  std::error_code ignored;
+  fs::remove(in.options.out_dir / runner::output_reserve_name, ignored);
+  try {
+    runner::write_file_atomically(in.options.out_dir / "meta.json",
+                                  runner::json_text(meta, 2) + "\n");
+  } catch (const std::exception&) {  // the message on stderr still says it
+  }
+  return message;
 }
 
 }  // namespace
 
 RunSummary run_study(const Study& study, const RunOptions& options) {
   const Clock::time_point start = Clock::now();
-  const std::string started_utc = utc_now();
+  const std::string started_utc = runner::utc_now();
   const int rank = mpi_rank(), ranks = mpi_size();
+  // Every data file a point reads comes from the snapshot load_study took.
+  InputScope reads_through(study.inputs);
 
   auto kind = study_kind_registry().at(study.kind).create(ParamValues{});
-  const std::vector<std::string> columns = kind->output_columns(study.document);
+  std::vector<std::string> columns;
+  collectively([&] {
+    try {
+      columns = kind->output_columns(study.document);
+    } catch (...) {
+      throw InputError(fmt::format("{}: the study kind cannot list its outputs: {}",
+                                   study.file.string(),
+                                   runner::with_plugin_context(describe_current_exception(),
+                                                               study.document,
+                                                               study.file.string())));
+    }
+  });
+  check_ranks_read_the_same_inputs(study);
   const std::size_t n = study.point_count();
-  const JournalHeader header{runner::study_fingerprint(study, columns), n, columns};
+  const std::string fingerprint = runner::study_fingerprint(study, columns);
+  const JournalHeader header{fingerprint, n, columns, runner::result_inputs(study)};
+
+  const Json run_table = study.document.value("run", Json::object());
+  std::optional<double> timeout_s = options.point_timeout_s;
+  if (!timeout_s && run_table.contains("point_timeout_s") && run_table["point_timeout_s"].is_number())
+    timeout_s = run_table["point_timeout_s"].get<double>();
+  std::string isolation;
+  if (timeout_s)
+    isolation = "a time limit per point (point_timeout_s)";
+  else if (options.isolate)
+    isolation = "--isolate";
+  else if (run_table.value("isolate", false))
+    isolation = "[run] isolate = true";
 
   const bool serial = kind->requires_serial(study.document);
   const int threads = serial ? 1 : options.threads > 0 ? options.threads : omp_get_max_threads();
-  const MetaInputs meta_in{study, options, columns, started_utc, threads, serial};
-  Preparation prep = prepare(options, header, [&meta_in] {
-    Json meta = meta_header(meta_in);
-    meta["state"] = "running (or interrupted: complete it with --resume)";
-    meta["run"] = run_description(meta_in);
-    return meta;
-  });
+  const MetaInputs meta_in{study, options, columns, fingerprint, started_utc,
+                           threads, serial,  isolation, timeout_s};
+
+  // Worker processes start before the output directory is touched: one that cannot start is
+  // bad input with nothing written.
+  std::unique_ptr<runner::WorkerPool> pool;
+  if (!isolation.empty())
+    collectively([&] {
+      pool = std::make_unique<runner::WorkerPool>(study, columns, options, threads, timeout_s);
+    });
+
+  Preparation prep =
+      prepare(options, header, study, runner::meta_with_state(meta_in, runner::state_running));
   std::unique_ptr<JournalWriter> journal = open_journal(options, prep, header);
 
   std::vector<std::size_t> todo;
@@ -369,32 +390,75 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   runner::ProgressBar progress(rank == 0 && options.progress.value_or(runner::stderr_is_terminal()),
                                todo.size());
   std::vector<PointResult> mine(todo.size());
+  double compute_s = 0.0;
   std::atomic<std::size_t> points_done{0};
   if (options.on_point_done) options.on_point_done(0, todo.size());
-  double compute_s = 0.0;
-  const auto count = static_cast<std::ptrdiff_t>(todo.size());
-#pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
-  for (std::ptrdiff_t k = 0; k < count; ++k) {
-    const Clock::time_point point_start = Clock::now();
-    const std::size_t p = todo[static_cast<std::size_t>(k)];
-    PointResult result = compute_point(*kind, study, p, columns, options);
-    compute_s += seconds_since(point_start);
-    journal->append(runner::journal_line(p, result));
-    mine[static_cast<std::size_t>(k)] = std::move(result);
+  std::atomic<std::size_t> output_failures{0};
+  runner::InputWatch watch(study.inputs);
+  auto keep = [&](std::size_t k, ComputedPoint&& computed) {
+    journal->append(runner::journal_line(todo[k], computed.result));
+    if (computed.output_failed) ++output_failures;
+    mine[k] = std::move(computed.result);
     progress.point_done();
     if (options.on_point_done) options.on_point_done(++points_done, todo.size());
+  };
+  if (pool) {
+    pool->run(todo, [&](std::size_t k, ComputedPoint&& computed) {
+      compute_s += computed.compute_s;
+      keep(k, std::move(computed));
+    }, watch.changed());
+    pool.reset();
+  } else {
+    // A plugin that crashes or calls exit() here takes the process with it: the guard says which
+    // point did it, and records an exit() in meta.json.
+    runner::InProcessGuard guard(
+        threads,
+        [&](const std::string& message) {
+          journal->flush();
+          if (rank != 0) return;
+          Json meta = runner::meta_with_state(meta_in, runner::state_ended_by_plugin);
+          meta["error"] = message;
+          runner::write_file_atomically(options.out_dir / "meta.json",
+                                        runner::json_text(meta, 2) + "\n");
+        },
+        [](void* writer) { static_cast<JournalWriter*>(writer)->flush_before_dying(); },
+        journal.get());
+    const auto count = static_cast<std::ptrdiff_t>(todo.size());
+#pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      if (watch.changed().load()) continue;  // stopped: the inputs are not what they were
+      const auto index = static_cast<std::size_t>(k);
+      guard.started(omp_get_thread_num(), todo[index]);
+      ComputedPoint computed =
+          runner::compute_point(*kind, study, todo[index], columns, options.out_dir, options.plots);
+      guard.finished(omp_get_thread_num());
+      compute_s += computed.compute_s;
+      keep(index, std::move(computed));
+    }
   }
   journal->flush();
   progress.finish();
 
+  // The files on disk compared in full once more: a change the watch has not seen yet (or one
+  // that kept size and times) still fails the run.
+  std::vector<std::string> changes = watch.changes();
+  if (changes.empty() && study.inputs) changes = study.inputs->changes();
+
   // Every rank's new points to rank 0, in the journal's round-trip format.
-  Json payload = {
-      {"computed", todo.size()}, {"compute_s", compute_s}, {"journal_error", journal->error()}};
+  std::size_t computed = 0;
+  for (const PointResult& r : mine) computed += r.done ? 1 : 0;
+  Json payload = {{"computed", computed},
+                  {"compute_s", compute_s},
+                  {"output_failures", output_failures.load()},
+                  {"journal_error", journal->error()},
+                  {"input_changes", changes}};
   if (rank != 0) {
     std::string records;
-    for (std::size_t k = 0; k < todo.size(); ++k) records += runner::journal_line(todo[k], mine[k]);
+    for (std::size_t k = 0; k < todo.size(); ++k)
+      if (mine[k].done) records += runner::journal_line(todo[k], mine[k]);
     payload["records"] = std::move(records);
   }
+  journal.reset();
   std::vector<std::string> payloads = runner::gather_to_root(runner::json_text(payload));
 
   std::string outcome;
@@ -402,15 +466,21 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     Json result = Json::object();
     try {
       std::vector<PointResult> results(n);
-      for (auto& [p, r] : prep.resumed) results[p] = std::move(r);
+      for (auto& [p, r] : prep.resumed.records) results[p] = std::move(r);
       for (std::size_t k = 0; k < todo.size(); ++k) results[todo[k]] = std::move(mine[k]);
       ComputeStats stats;
       for (std::size_t r = 0; r < payloads.size(); ++r) {
         Json from = Json::parse(payloads[r]);
+        std::string().swap(payloads[r]);  // rank 0 holds every rank's results: one copy at a time
         stats.computed += from["computed"].get<std::size_t>();
         stats.compute_s += from["compute_s"].get<double>();
+        stats.output_failures += from["output_failures"].get<std::size_t>();
         if (auto error = from["journal_error"].get<std::string>(); !error.empty())
           stats.journal_errors.push_back(error);
+        for (const auto& change : from["input_changes"])
+          if (std::find(stats.input_changes.begin(), stats.input_changes.end(), change) ==
+              stats.input_changes.end())
+            stats.input_changes.push_back(change.get<std::string>());
         if (r == 0) continue;
         JournalContents records =
             runner::parse_journal_records(from["records"].get<std::string>(), n, columns.size());
@@ -418,7 +488,16 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
           throw std::logic_error(fmt::format("runner: garbled results from rank {}", r));
         for (auto& [p, record] : records.records) results[p] = std::move(record);
       }
-      result["failed"] = write_outputs(*kind, meta_in, prep, results, stats, start);
+      if (!stats.input_changes.empty()) {
+        result["input_error"] = input_changed(meta_in, stats.input_changes);
+      } else {
+        OutputsWritten written =
+            write_outputs(*kind, meta_in, prep, std::move(results), stats, start);
+        result["failed"] = written.failed;
+        result["timed_out"] = written.timed_out;
+        result["output_error"] = written.output_error;
+        result["notices"] = written.notices;
+      }
     } catch (const std::exception& e) {
       if (ranks == 1) throw;
       result["error"] = e.what();
@@ -428,11 +507,17 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   // Every rank returns the same summary (and exit code), or fails the same way.
   runner::broadcast_from_root(outcome);
   Json result = Json::parse(outcome);
+  if (result.contains("input_error")) throw InputError(result["input_error"].get<std::string>());
   if (result.contains("error")) throw std::runtime_error(result["error"].get<std::string>());
 
   RunSummary summary;
   summary.points = n;
   summary.failed = result["failed"].get<std::size_t>();
+  summary.timed_out = result["timed_out"].get<std::size_t>();
+  summary.output_error = result["output_error"].get<std::string>();
+  if (result.contains("notices"))
+    for (const Json& n : result["notices"])
+      summary.notices.push_back({n["point"].get<std::size_t>(), n["notice"].get<std::string>()});
   summary.resumed = static_cast<std::size_t>(std::count(prep.done.begin(), prep.done.end(), '1'));
   return summary;
 }

@@ -125,6 +125,9 @@ class GridBuilder {
       if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
       fail(axis, "[grid] {}, value {} of {} ({}): {}", axis.key, first_bad + 1, count,
            messages::show(axis.values[first_bad]), reason);
+    } catch (...) {  // a plugin's constructor or check threw something else: still bad input
+      fail(axis, "[grid] {}, value {} of {} ({}): {}", axis.key, first_bad + 1, count,
+           messages::show(axis.values[first_bad]), describe_current_exception());
     }
   }
 
@@ -188,7 +191,8 @@ std::optional<std::size_t> grid_point_count(const std::vector<std::size_t>& axis
 }
 
 std::vector<GridAxis> build_grid(const Json& grid, const Json& validated, const StudyKind& kind,
-                                 const SourceMap& sources, const LoadOptions& options) {
+                                 const SourceMap& sources, const LoadOptions& options,
+                                 std::size_t output_columns) {
   GridBuilder builder(validated, kind, sources);
   std::vector<PendingAxis> pending;
   for (const auto& [key, spec] : grid.items()) {
@@ -214,10 +218,14 @@ std::vector<GridAxis> build_grid(const Json& grid, const Json& validated, const 
   std::string where = sources.locate("grid").str();
   if (!count)
     throw InputError(fmt::format("{}: [grid] has more points ({}) than can be counted", where, shape));
-  if (*count > max_grid_points && !options.allow_large)
-    throw InputError(fmt::format("{}: [grid] has {} points ({}), more than the limit of {}; pass "
-                                 "--allow-large to run it anyway", where, *count, shape,
-                                 max_grid_points));
+  const GridCost cost = grid_cost(*count, pending.size(), output_columns);
+  if (*count > cost.default_max_points && !options.allow_large)
+    throw InputError(fmt::format(
+        "{}: [grid] has {} points ({}), more than the limit of {} on this machine: its results "
+        "would take about {:.1f} GiB of memory ({} bytes per point), more than half of the "
+        "machine's memory; pass --allow-large to run it anyway",
+        where, *count, shape, cost.default_max_points,
+        static_cast<double>(cost.memory_bytes()) / (1u << 30), cost.memory_bytes_per_point));
 
   std::vector<GridAxis> axes;
   for (auto& [axis, range] : pending) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/plugin_api.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
@@ -19,8 +20,25 @@ namespace {
 
 // Keys every study may have, whatever its kind.
 const std::vector<std::string>& generic_keys() {
-  static const std::vector<std::string> keys = {"plugins", "study", "grid"};
+  static const std::vector<std::string> keys = {"plugins", "study", "grid", "run"};
   return keys;
+}
+
+// [run]: how the runner treats the points (docs/studies.md, "[run]"). Not seen by the kind and
+// not part of the resume fingerprint: these settings never change an ok point's numbers.
+std::vector<ParamSpec> run_table_specs() {
+  std::vector<ParamSpec> specs = {
+      param_spec("point_timeout_s", ValueKind::real, "s",
+                 "time limit of one grid point; a point still running then is killed and "
+                 "recorded as timeout (points run in worker processes); absent: no limit"),
+      param_spec("isolate", ValueKind::boolean, "1",
+                 "run every point in a worker process, so that a crashing plugin fails only its "
+                 "point (as --isolate)")};
+  specs[0].min = 0.0;
+  specs[0].min_exclusive = true;
+  specs[0].optional = true;
+  specs[1].default_value = false;
+  return specs;
 }
 
 std::vector<std::string> study_kind_names() {
@@ -69,6 +87,9 @@ std::vector<std::string> load_plugins(Json& document, const std::filesystem::pat
     } catch (const InputError& e) {
       fail(path, fmt::format("{} = {} ({}): {}", path, messages::show(entry), absolute, e.what()));
     }
+    // Its hash goes into meta.json and the resume fingerprint (the library decides results).
+    if (auto snapshot = current_input_snapshot())
+      snapshot->read(absolute, InputRole::plugin, /*keep_bytes=*/false);
     resolved.push_back(absolute);
   }
   *it = resolved;
@@ -108,32 +129,80 @@ void check_top_level(const Json& document, const StudyKind& kind, const SourceMa
   }
 }
 
+// The document a kind sees: without [grid] and [run] (the runner's tables).
 Json without_grid(const Json& document) {
   Json out = Json::object();
   for (const auto& [key, value] : document.items())
-    if (key != "grid") out[key] = value;
+    if (key != "grid" && key != "run") out[key] = value;
   return out;
+}
+
+// "<file>:<line>" of the table that chose `plugin` (type = "<plugin>"), or the file alone.
+std::string plugin_table_location(const Json& document, const std::string& plugin,
+                                  const SourceMap& sources, const std::filesystem::path& file) {
+  // A study kind from a library (plugin API 2) is chosen by [study] kind.
+  if (const auto study = document.find("study"); study != document.end() && study->is_object() &&
+                                                  study->value("kind", Json()) == Json(plugin))
+    return sources.locate("study.kind").str();
+  for (const auto& [key, value] : document.items())
+    if (value.is_object() && value.value("type", Json()) == Json(plugin))
+      return sources.locate(key + ".type").str();
+  return file.string();
+}
+
+// Runs the kind's checks. Whatever a plugin throws while being built or asked during validation
+// is bad input (exit 2) with the study file, the table's line and the plugin named; only
+// InputError passes unchanged (it carries its own location).
+template <class Check>
+void with_plugin_errors_as_input_errors(const Json& document, const SourceMap& sources,
+                                        const std::filesystem::path& file, Check&& check) {
+  try {
+    check();
+  } catch (const InputError&) {
+    throw;
+  } catch (const PluginError& e) {
+    throw InputError(fmt::format("{}: {}", plugin_table_location(document, e.plugin(), sources, file),
+                                 e.what()));
+  } catch (...) {
+    std::string plugins = out_of_tree_plugins_in(document);
+    throw InputError(fmt::format("{}: checking the study failed: {}{}", file.string(),
+                                 describe_current_exception(),
+                                 plugins.empty() ? "" : " (out-of-tree plugins: " + plugins + ")"));
+  }
 }
 
 }  // namespace
 
 namespace {
 
+// The caller has an InputScope of `snapshot` open: every file read while the study is checked
+// (its plugin libraries, its data files) is recorded with its hash, and its bytes are what the
+// run's points will see.
 Study load_parsed(Json document, const std::filesystem::path& file, std::shared_ptr<const SourceMap> source_map,
-                  const LoadOptions& options) {
+                  std::shared_ptr<InputSnapshot> snapshot, const LoadOptions& options) {
   const SourceMap& sources = *source_map;
   Study study;
   study.file = file;
   study.sources = std::move(source_map);
+  study.inputs = std::move(snapshot);
   study.plugin_libraries = load_plugins(document, file, sources);
   study.kind = validate_study_table(document, file, sources);
-  auto kind = study_kind_registry().at(study.kind).create(ParamValues());
+  std::unique_ptr<StudyKind> kind;  // from a library, its constructor is plugin code too
+  with_plugin_errors_as_input_errors(document, sources, file, [&] {
+    kind = study_kind_registry().at(study.kind).create(ParamValues());
+  });
   check_top_level(document, *kind, sources);
+  if (document.contains("run"))
+    document["run"] = validate_params(document["run"], run_table_specs(), "run", sources);
 
   Json grid = document.contains("grid") ? document["grid"] : Json::object();
   Json validated = without_grid(document);
-  kind->validate(validated, sources);
-  study.grid = build_grid(grid, validated, *kind, sources, options);
+  with_plugin_errors_as_input_errors(document, sources, file, [&] {
+    kind->validate(validated, sources);
+    study.output_columns = kind->output_columns(validated);
+    study.grid =
+        build_grid(grid, validated, *kind, sources, options, study.output_columns.size());
+  });
 
   // The resolved study in the order the file was written; [grid] as written (flat).
   study.document = Json::object();
@@ -147,15 +216,20 @@ Study load_parsed(Json document, const std::filesystem::path& file, std::shared_
 }  // namespace
 
 Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
+  auto snapshot = std::make_shared<InputSnapshot>();
+  InputScope reads_through(snapshot);  // the study file itself is an input too
   TomlDocument toml = read_toml_study(file);
-  return load_parsed(std::move(toml.document), file, std::move(toml.sources), options);
+  return load_parsed(std::move(toml.document), file, std::move(toml.sources), std::move(snapshot), options);
 }
 
 Study load_study_document(Json document, const std::filesystem::path& origin, const LoadOptions& options) {
   if (!document.is_object())
     throw InputError(fmt::format("{}: a study is a table of tables ([study], [model], ...), not {}",
                                  origin.string(), messages::show(document)));
-  return load_parsed(std::move(document), origin, std::make_shared<LineSourceMap>(origin.string()), options);
+  auto snapshot = std::make_shared<InputSnapshot>();
+  InputScope reads_through(snapshot);
+  return load_parsed(std::move(document), origin, std::make_shared<LineSourceMap>(origin.string()),
+                     std::move(snapshot), options);
 }
 
 std::size_t Study::point_count() const {

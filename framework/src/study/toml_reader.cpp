@@ -4,8 +4,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -14,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "study/messages.hpp"
 
 namespace chatterlab {
@@ -131,11 +130,12 @@ std::string read_file(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     throw InputError(fmt::format("{}: cannot read the study file: it is a directory", file.string()));
-  std::ifstream in(file, std::ios::binary);
-  if (!in)
+  // Through the input snapshot: meta.json records the hash of exactly the text that was parsed.
+  std::shared_ptr<const std::string> text = try_read_input_file(file, InputRole::study);
+  if (!text)
     throw InputError(fmt::format("{}: cannot read the study file: {}", file.string(),
                                  std::strerror(errno)));
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return *text;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/input_files.hpp"
 #include "chatterlab/plot.hpp"
 
 namespace chatterlab {
@@ -216,7 +217,7 @@ ChatterNetwork ChatterNetwork::from_json(const Json& j, const std::string& sourc
 }
 
 ChatterNetwork ChatterNetwork::load(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  InputFileStream in(file);  // the run's snapshot (chatterlab/input_files.hpp)
   if (!in) throw InputError(fmt::format("{}: cannot open the weights file", file.string()));
   std::stringstream text;
   text << in.rdbuf();

@@ -35,6 +35,10 @@ struct CorrelationSums {
   std::vector<double> pairs;  // per block
   // Upper edge of `bin` as a fraction of the range (bin 0: distances below 2^-octaves).
   static double edge(std::size_t bin);
+  // ln C(r) of dimension d at the upper bin edges r = range x edge (all blocks; NaN where no pair
+  // is counted or beyond the cut), and ln r there.
+  std::vector<double> log_correlation(int d) const;
+  std::vector<double> log_radii() const;
 };
 CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references);

@@ -17,8 +17,8 @@ namespace {
 using nonlinear::Embedding;
 using nonlinear::NeighbourSearch;
 
-// Reference vectors used by FNN/Cao at most (evenly spread): enough for fractions of 0.1 %.
-constexpr std::size_t max_fnn_references = 20000;
+// Reference vectors used by FNN/Cao at most (evenly spread): fractions to 0.1 % (10 vectors).
+constexpr std::size_t max_fnn_references = 10000;
 
 std::vector<double> autocorrelation(const std::vector<double>& x, std::size_t max_lag) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
@@ -199,9 +199,12 @@ Choice choose_all(const std::vector<double>& x, std::size_t max_lag, int bins, i
   const std::size_t provisional =
       nonlinear::space_time_theiler(plane, theiler_range(c.delay.delay)).window;
   c.dimension = choose_dimension(x, c.delay.delay, max_dimension, provisional, ratio, threshold);
+  // Neither criterion settled: the largest dimension examined (FNN stops where the series no
+  // longer holds minimum_vectors vectors, so a short series never gets an infeasible dimension).
+  const int examined = std::max(1, int(c.dimension.fnn_fraction.size()));
   c.chosen_dimension = c.dimension.fnn_dimension > 0   ? c.dimension.fnn_dimension
                        : c.dimension.cao_dimension > 0 ? c.dimension.cao_dimension
-                                                       : max_dimension;
+                                                       : std::min(max_dimension, examined);
   const Embedding chosen(x, c.chosen_dimension, c.delay.delay);
   c.theiler = nonlinear::space_time_theiler(chosen, theiler_range(c.delay.delay));
   return c;
@@ -322,7 +325,7 @@ Json EmbeddingAnalysis::analyse(const SampledSeries& series, const Json& /*conte
       c.delay.from_mutual_information || c.delay.rule.rfind("given", 0) == 0 ? "good"
                                                                              : "uncertain",
       c.delay.rule);
-  out["delay_" + series.sample_unit] = c.delay.delay * dt;
+  if (series.sample_unit != "sample") out["delay_" + series.sample_unit] = c.delay.delay * dt;
   const auto& d = c.dimension;
   std::string quality = "good", reason;
   if (d.fnn_dimension > 0 && d.cao_dimension > 0) {

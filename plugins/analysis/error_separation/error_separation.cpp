@@ -255,12 +255,56 @@ std::vector<int> suppressed_harmonics(const ProbeLayout& layout, int max_harmoni
   return out;
 }
 
-WorstTransfer worst_q(const ProbeLayout& layout, int max_harmonic) {
+WorstTransfer worst_q(const ProbeLayout& layout, int max_harmonic, double suppression_tolerance,
+                      int min_harmonic) {
   WorstTransfer worst;
   const Transfer t = transfer(layout, max_harmonic);
-  for (std::size_t l = 2; l < t.q.size(); ++l)
-    if (std::isfinite(t.q[l]) && t.q[l] > worst.q) worst = {t.q[l], static_cast<int>(l)};
+  const double zero = suppression_tolerance * sum_abs(layout.weights);
+  for (std::size_t l = static_cast<std::size_t>(std::max(min_harmonic, 2)); l < t.q.size(); ++l) {
+    if (t.g_abs[l] <= zero) {
+      if (worst.lost++ == 0) worst.harmonic = static_cast<int>(l);
+      continue;
+    }
+    if (t.q[l] > worst.seen_q) {
+      worst.seen_q = t.q[l];
+      worst.seen_harmonic = static_cast<int>(l);
+    }
+  }
+  if (worst.lost > 0) {
+    worst.q = std::numeric_limits<double>::infinity();
+  } else {
+    worst.q = worst.seen_q;
+    worst.harmonic = worst.seen_harmonic;
+  }
   return worst;
+}
+
+LostSpectrum lost_spectrum(std::span<const std::vector<double>> probes, const std::vector<int>& lost,
+                           int min_harmonic, int max_harmonic) {
+  const std::size_t n = common_length(probes);
+  const int top = harmonic_limit(max_harmonic, n);
+  LostSpectrum out;
+  out.amplitude.assign(static_cast<std::size_t>(top) + 1, 0.0);
+  RealFft fft(n);
+  for (const auto& p : probes) {
+    const auto spectrum = fft.forward(p);
+    for (int l = 0; l <= top; ++l) {
+      // One-sided amplitude: 2|X(l)|/N (|X(0)|/N and at N/2).
+      const bool edge = l == 0 || 2 * static_cast<std::size_t>(l) == n;
+      out.amplitude[static_cast<std::size_t>(l)] +=
+          (edge ? 1.0 : 2.0) * std::abs(spectrum[static_cast<std::size_t>(l)]) / static_cast<double>(n) /
+          static_cast<double>(probes.size());
+    }
+  }
+  double band = 0.0, missing = 0.0;
+  for (int l = std::max(min_harmonic, 2); l <= top; ++l) band += std::pow(out.amplitude[static_cast<std::size_t>(l)], 2);
+  for (int l : lost)
+    if (l >= min_harmonic && l <= top) {
+      out.harmonics.push_back(l);
+      missing += std::pow(out.amplitude[static_cast<std::size_t>(l)], 2);
+    }
+  out.lost_share = band > 0 ? missing / band : 0.0;
+  return out;
 }
 
 FirDesign design_zero_phase_lowpass(double passband_upr, double stopband_upr,
@@ -474,7 +518,8 @@ std::vector<double> remove_first_harmonic(std::span<const double> profile) {
 }
 
 AngleOptimum optimise_three_point_angles(std::size_t samples_per_rev, int max_harmonic,
-                                         double max_span_rad, double suppression_tolerance) {
+                                         double max_span_rad, double suppression_tolerance,
+                                         int min_harmonic) {
   AngleOptimum best;
   const std::size_t n = samples_per_rev;
   const std::size_t step = std::max<std::size_t>(1, n / 360);
@@ -497,17 +542,21 @@ AngleOptimum optimise_three_point_angles(std::size_t samples_per_rev, int max_ha
       const double zero = suppression_tolerance * sum_abs(c);
       const double weight_norm = norm2(c);
       // G(l) by rotation: e^{j (l+1) phi} = e^{j l phi} e^{j phi}.
+      const int first = std::max(min_harmonic, 2);
       const Complex step1 = std::polar(1.0, angles[1]), step2 = std::polar(1.0, angles[2]);
-      Complex e1 = step1 * step1, e2 = step2 * step2;
+      Complex e1 = std::polar(1.0, first * angles[1]), e2 = std::polar(1.0, first * angles[2]);
       WorstTransfer worst;
       bool ok = true;
-      for (int l = 2; l <= top; ++l) {
+      for (int l = first; l <= top; ++l) {
         const double a = std::abs(c[0] + c[1] * e1 + c[2] * e2);
         if (a <= zero) {
           ok = false;
           break;
         }
-        if (weight_norm / a > worst.q) worst = {weight_norm / a, l};
+        if (weight_norm / a > worst.q) {
+          worst.q = worst.seen_q = weight_norm / a;
+          worst.harmonic = worst.seen_harmonic = l;
+        }
         if (best.found && worst.q >= best.worst.q) {
           ok = false;  // already worse than the best layout
           break;

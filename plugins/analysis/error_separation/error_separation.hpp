@@ -59,13 +59,32 @@ Transfer transfer(const ProbeLayout& layout, int max_harmonic);
 std::vector<int> suppressed_harmonics(const ProbeLayout& layout, int max_harmonic,
                                       double tolerance);
 
-// The worst (largest) Q(l) over the harmonics l = 2..max_harmonic the layout sees (G(l) != 0;
-// a suppressed harmonic is reported by suppressed_harmonics, not as an infinite Q).
+// The worst (largest) error transfer Q(l) over the band l = min_harmonic..max_harmonic: infinite
+// when the layout suppresses a harmonic of the band (|G(l)| <= suppression_tolerance sum |c|:
+// noise there is amplified without bound and the form there is not measured at all); the worst
+// over the harmonics the layout sees is reported beside it.
 struct WorstTransfer {
-  double q = 0.0;
-  int harmonic = 0;
+  double q = 0.0;             // +inf when a harmonic of the band is lost
+  int harmonic = 0;           // where (the first lost harmonic when infinite)
+  double seen_q = 0.0;        // over the harmonics the layout sees
+  int seen_harmonic = 0;
+  std::size_t lost = 0;       // lost harmonics in the band
 };
-WorstTransfer worst_q(const ProbeLayout& layout, int max_harmonic);
+WorstTransfer worst_q(const ProbeLayout& layout, int max_harmonic, double suppression_tolerance = 1e-6,
+                      int min_harmonic = 2);
+
+// What a layout loses of the measured signals: the probe signals' amplitude per harmonic (mean
+// over the probes, l = 0..max_harmonic) and the share of their power in the band
+// min_harmonic..max_harmonic that lies at the lost harmonics. The form there cannot be told from
+// spindle motion; this share is what the separated profile may miss (an upper estimate of the
+// form's share when the spindle moves little).
+struct LostSpectrum {
+  std::vector<int> harmonics;      // lost harmonics in the band
+  std::vector<double> amplitude;   // mean probe amplitude per harmonic 0..max_harmonic
+  double lost_share = 0.0;         // lost power / band power (0..1)
+};
+LostSpectrum lost_spectrum(std::span<const std::vector<double>> probes, const std::vector<int>& lost,
+                           int min_harmonic, int max_harmonic);
 
 // Zero-phase FIR low-pass (E3): a Hamming-windowed sinc, symmetric h(-k) = h(k) (real response:
 // no phase shift), cut off half-way between passband_upr and stopband_upr. Length: the smallest odd
@@ -152,8 +171,8 @@ ProbeLayout two_point_layout(double phi0_rad, std::size_t samples_per_rev);
 std::vector<double> remove_first_harmonic(std::span<const double> profile);
 
 // Probe-angle optimisation (E2): over probe angles on a grid of `step` samples (phi0 = 0,
-// 0 < phi1 < phi2 <= max_span), the three-point layout with no suppressed harmonic in
-// 2..max_harmonic and the smallest worst Q(l).
+// 0 < phi1 < phi2 <= max_span), the three-point layout with no suppressed harmonic in the band
+// min_harmonic..max_harmonic and the smallest worst Q(l) there.
 struct AngleOptimum {
   bool found = false;
   std::vector<double> angles_rad;
@@ -161,7 +180,8 @@ struct AngleOptimum {
   std::size_t layouts_checked = 0;
 };
 AngleOptimum optimise_three_point_angles(std::size_t samples_per_rev, int max_harmonic,
-                                         double max_span_rad, double suppression_tolerance);
+                                         double max_span_rad, double suppression_tolerance,
+                                         int min_harmonic = 2);
 
 // |G(l)| / sum|c| of the three-point layout (0, phi1, phi2) for a row of phi2 values and
 // l = 2..max_harmonic: the harmonic-suppression map (row-major, phi2 slowest). NaN where the

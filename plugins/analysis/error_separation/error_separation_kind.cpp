@@ -71,6 +71,11 @@ std::vector<ParamSpec> probe_specs() {
                  "error (exit 2)");
   on_suppressed.default_value = "warn";
   on_suppressed.choices = {"warn", "error"};
+  ParamSpec opt_lo = param_spec("optimise_min_harmonic", ValueKind::integer, "1",
+                                "probe-angle optimisation: lowest harmonic of the band that must be seen");
+  opt_lo.default_value = 2;
+  opt_lo.min = 2;
+  opt_lo.max = 10000;
   ParamSpec opt_h = param_spec("optimise_max_harmonic", ValueKind::integer, "1",
                                "probe-angle optimisation: no suppressed harmonic up to this order");
   opt_h.default_value = 50;
@@ -83,7 +88,7 @@ std::vector<ParamSpec> probe_specs() {
   opt_span.min = 0.0;
   opt_span.min_exclusive = true;
   opt_span.max = 360.0;
-  return {angles, method, weights, on_suppressed, opt_h, opt_span};
+  return {angles, method, weights, on_suppressed, opt_lo, opt_h, opt_span};
 }
 
 std::vector<ParamSpec> separation_specs() {
@@ -134,7 +139,7 @@ struct Config {
   std::string method;
   std::vector<double> weights;
   std::string on_suppressed;
-  int optimise_max_harmonic = 50;
+  int optimise_min_harmonic = 2, optimise_max_harmonic = 50;
   double optimise_max_span_deg = 180;
   std::optional<int> max_harmonic;
   double suppression_tolerance = 1e-6, validity_fraction = 0.05;
@@ -163,6 +168,7 @@ Config read_config(const Json& document) {
   c.method = probes.at("method").get<std::string>();
   if (!probes.at("weights").is_null()) c.weights = probes.at("weights").get<std::vector<double>>();
   c.on_suppressed = probes.at("on_suppressed").get<std::string>();
+  c.optimise_min_harmonic = probes.at("optimise_min_harmonic").get<int>();
   c.optimise_max_harmonic = probes.at("optimise_max_harmonic").get<int>();
   c.optimise_max_span_deg = probes.at("optimise_max_span_deg").get<double>();
   if (!sep.at("max_harmonic").is_null()) c.max_harmonic = sep.at("max_harmonic").get<int>();
@@ -384,6 +390,36 @@ std::string suppression_message(const Config& c, const std::vector<int>& suppres
       fmt::join(c.angles_deg, ", "), harmonic_list(suppressed), top);
 }
 
+// What the layout cannot see in the evaluated band 2..max_harmonic: the run is `degraded` when
+// it loses a harmonic there, with the lost harmonics, their share of the probe signals' power
+// and an infinite worst error transfer.
+struct Degradation {
+  std::string status = "ok";  // ok | degraded
+  es::WorstTransfer worst;
+  es::LostSpectrum lost;
+  bool degraded() const { return status == "degraded"; }
+};
+
+// An error transfer factor for JSON and CSV: "inf" where it is infinite (JSON has no infinity).
+Json transfer_factor(double q) { return std::isfinite(q) ? Json(q) : Json("inf"); }
+
+std::string degradation_message(const Config& c, const Degradation& d, int top,
+                                const es::AngleOptimum& proposal, int band_lo, int band_hi) {
+  std::string message = fmt::format(
+      "probes.angles_deg = [{}]: degraded: harmonics {} of 2..{} are lost ({} harmonics, |G(l)| = "
+      "0): they hold {:.1f} % of the probe signals' power in that band, the separated profile "
+      "lacks them (its roundness can be low by as much) and the worst error transfer is infinite",
+      fmt::join(c.angles_deg, ", "), harmonic_list(d.lost.harmonics), top, d.lost.harmonics.size(),
+      100.0 * d.lost.lost_share);
+  if (proposal.found) {
+    std::vector<double> a;
+    for (double r : proposal.angles_rad) a.push_back(std::round(r * 180.0 / std::numbers::pi * 1e6) / 1e6);
+    message += fmt::format("; probes at [{}] deg see every harmonic {}..{} (worst Q {:.3g} at l = {})",
+                           fmt::join(a, ", "), band_lo, band_hi, proposal.worst.q, proposal.worst.harmonic);
+  }
+  return message;
+}
+
 // ------------------------------------------------------------------ outputs
 std::vector<double> angles_deg_of(std::size_t n) {
   std::vector<double> a(n);
@@ -392,34 +428,44 @@ std::vector<double> angles_deg_of(std::size_t n) {
   return a;
 }
 
-// Worst Q and smallest |G| over the harmonics 2..top the layout sees.
-Json transfer_json(const es::ProbeLayout& layout, const es::Transfer& t, int top) {
-  const es::WorstTransfer worst = es::worst_q(layout, top);
+// Worst Q over the band (infinite when a harmonic is lost), the worst over the harmonics the
+// layout sees, and the smallest |G| there.
+Json transfer_json(const es::Transfer& t, const Degradation& d, int top) {
   double min_g = std::numeric_limits<double>::infinity();
   for (std::size_t l = 2; l < t.g_abs.size() && static_cast<int>(l) <= top; ++l)
     if (t.g_abs[l] > 0) min_g = std::min(min_g, t.g_abs[l]);
   Json j;
-  j["worst_error_transfer_q"] = worst.q;
-  j["harmonic_of_worst_q"] = worst.harmonic;
-  j["min_abs_g"] = min_g;
+  j["worst_error_transfer_q"] = transfer_factor(d.worst.q);
+  j["harmonic_of_worst_q"] = d.worst.harmonic;
+  j["worst_error_transfer_q_seen"] = d.worst.seen_q;
+  j["harmonic_of_worst_q_seen"] = d.worst.seen_harmonic;
+  j["min_abs_g"] = std::isfinite(min_g) ? Json(min_g) : Json();
+  j["band"] = {2, top};
   return j;
 }
 
 void plot_figures(const std::string& title, const Method& m, const es::Separation& sep,
-                  const es::Transfer& t, const fs::path& dir) {
+                  const es::Transfer& t, const Degradation& d, const fs::path& dir) {
   namespace pl = plot;
   const std::size_t n = sep.profile.size();
   const std::vector<double> angle = angles_deg_of(n);
   std::vector<std::pair<std::string, std::function<void()>>> figures;
+  // Every profile figure says what it cannot show: "DEGRADED" in the title, what is lost in the
+  // key (the title has no room for it).
+  const std::string lost_note = d.degraded() ? " - DEGRADED" : "";
+  const std::string lost_detail =
+      d.degraded() ? fmt::format(", without its {} lost harmonics ({:.1f} % of the probe power)",
+                                 d.lost.harmonics.size(), 100.0 * d.lost.lost_share)
+                   : std::string();
 
   figures.emplace_back("profile_linear", [&] {
     pl::Curves f;
     f.title =
-        fmt::format("{}: separated profile, RONt = {:.4g} um (LS centre)", title, sep.roundness());
+        fmt::format("{}: profile, RONt {:.4g} um (LS centre){}", title, sep.roundness(), lost_note);
     f.x_label = "angle [deg]";
     f.y_label = "radius deviation [um]";
     f.series.push_back(
-        {"profile r(theta) - mean, 1st harmonic removed", angle, sep.profile, "lines"});
+        {"profile r(theta) - mean, 1st harmonic removed" + lost_detail, angle, sep.profile, "lines"});
     f.reference_y = 0.0;
     f.reference_label = "least-squares circle";
     pl::render(f, dir, "profile_linear");
@@ -428,11 +474,11 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
     const double rng = std::max(sep.roundness(), 1e-12);
     const double base = 2.0 * rng;  // deviation drawn around a base circle of twice its P-V
     pl::Curves f;
-    f.title = fmt::format("{}: polar profile (base circle {:.3g} um + deviation)", title, base);
-    f.x_label = "x = (base + deviation) cos(theta) [um]";
+    f.title = fmt::format("{}: polar profile{}", title, lost_note);
+    f.x_label = fmt::format("x = (base circle {:.3g} + deviation) cos(theta) [um]", base);
     f.y_label = "y [um]";
     f.equal_aspect = true;  // a round part must look round
-    pl::Series profile{"separated profile", {}, {}, "lines"},
+    pl::Series profile{"separated profile" + lost_detail, {}, {}, "lines"},
         circle{"least-squares circle", {}, {}, "lines"};
     for (std::size_t i = 0; i <= n; ++i) {
       const double th = 2 * std::numbers::pi * static_cast<double>(i % n) / static_cast<double>(n);
@@ -455,12 +501,11 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
   });
   figures.emplace_back("transfer_g", [&] {
     pl::Curves f;
-    f.title = fmt::format("{}: weight function |G(l)| ({} suppressed harmonics)", title,
-                          sep.suppressed.size());
+    f.title = fmt::format("{}: |G(l)|, {} lost harmonics", title, sep.suppressed.size());
     f.x_label = "harmonic l [undulations per revolution]";
     f.y_label = "|G(l)|";
     pl::Series g{"|G(l)|", {}, {}, "impulses"},
-        zero{"suppressed harmonics (G = 0)", {}, {}, "points"};
+        zero{"lost harmonics (G = 0: not measured)", {}, {}, "points"};
     for (std::size_t l = 2; l < t.g_abs.size(); ++l) {
       g.x.push_back(static_cast<double>(l));
       g.y.push_back(t.g_abs[l]);
@@ -481,16 +526,48 @@ void plot_figures(const std::string& title, const Method& m, const es::Separatio
     f.log_y = true;
     pl::Series q{"Q(l) = sqrt(sum c^2)/|G(l)|", {}, {}, "lines"},
         w{"W(l) = 1/|G(l)|", {}, {}, "lines"};
+    double top = 1.0;
     for (std::size_t l = 2; l < t.q.size(); ++l) {
-      if (!std::isfinite(t.q[l])) continue;  // suppressed: marked on transfer_g
+      if (!std::isfinite(t.q[l])) continue;  // lost: marked at the top below
       q.x.push_back(static_cast<double>(l));
       q.y.push_back(t.q[l]);
       w.x.push_back(static_cast<double>(l));
       w.y.push_back(t.w[l]);
+      top = std::max({top, t.q[l], t.w[l]});
     }
-    if (q.x.empty()) return;
-    f.series = {q, w};
+    // A lost harmonic has Q = W = infinity: marked above every finite value.
+    pl::Series lost{"lost harmonic: Q infinite (drawn at the top)", {}, {}, "points"};
+    for (int l : sep.suppressed) {
+      lost.x.push_back(l);
+      lost.y.push_back(2.0 * top);
+    }
+    if (q.x.empty() && lost.x.empty()) return;
+    f.title = fmt::format("{}: transfer W = 1/|G|, Q (worst Q {})", title,
+                          std::isfinite(d.worst.q) ? fmt::format("{:.3g}", d.worst.q) : "infinite");
+    if (!q.x.empty()) f.series = {q, w};
+    if (!lost.x.empty()) f.series.push_back(lost);
     pl::render(f, dir, "transfer_q");
+  });
+  figures.emplace_back("probe_spectrum", [&] {
+    // What the probes measured per harmonic, and which of it the layout cannot separate.
+    pl::Curves f;
+    f.title = fmt::format("{}: probe amplitude per harmonic{}", title, lost_note);
+    f.x_label = "harmonic l [undulations per revolution]";
+    f.y_label = "mean probe amplitude [um]";
+    pl::Series seen{"amplitude (mean over the probes)", {}, {}, "impulses"},
+        lost{fmt::format("lost harmonic (not separable from spindle motion): {:.1f} % of the band's power",
+                         100.0 * d.lost.lost_share), {}, {}, "points"};
+    for (std::size_t l = 2; l < d.lost.amplitude.size(); ++l) {
+      seen.x.push_back(static_cast<double>(l));
+      seen.y.push_back(d.lost.amplitude[l]);
+    }
+    for (int l : d.lost.harmonics) {
+      lost.x.push_back(l);
+      lost.y.push_back(d.lost.amplitude[static_cast<std::size_t>(l)]);
+    }
+    f.series.push_back(seen);
+    if (!lost.x.empty()) f.series.push_back(lost);
+    pl::render(f, dir, "probe_spectrum");
   });
   figures.emplace_back("suppression_map", [&] {
     // |G(l)|/sum|c| of three-probe layouts (0, alpha, phi2) with this study's alpha.
@@ -638,7 +715,8 @@ void ErrorSeparationKind::validate(Json& document, const SourceMap& sources) con
 std::vector<std::string> ErrorSeparationKind::output_columns(const Json& document) const {
   std::vector<std::string> columns{"roundness_um", "mean_radius_offset_um",
                                    "suppressed_harmonic_count", "worst_error_transfer_q",
-                                   "first_harmonic_valid"};
+                                   "first_harmonic_valid", "separation_status",
+                                   "lost_share_percent"};
   if (!document.at("input").at("section_column").is_null()) columns.push_back("cylindricity_um");
   return columns;
 }
@@ -650,7 +728,6 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
   const ProbeData data = load_probe_data(c, sources);
   const Method m = build_method(c, data.n, sources);
   const es::Transfer t = es::transfer(m.layout, m.max_harmonic);
-  const es::WorstTransfer worst = es::worst_q(m.layout, m.max_harmonic);
   const bool cylinder = !c.section_column.empty();
 
   auto separate = [&](std::span<const std::vector<double>> probes) {
@@ -673,9 +750,21 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
     first = separate(data.sections.front());
   }
 
+  // Optimal probe angles for this N and the band (E2): proposed where this layout loses harmonics.
+  const int band_hi = std::min(c.optimise_max_harmonic, static_cast<int>(data.n / 2));
+  const int band_lo = std::min(c.optimise_min_harmonic, band_hi);
+  const es::AngleOptimum best = es::optimise_three_point_angles(
+      data.n, band_hi, c.optimise_max_span_deg * deg, c.suppression_tolerance, band_lo);
+
+  // Degraded: the layout loses harmonics of the evaluated band 2..max_harmonic.
+  Degradation degradation;
+  degradation.worst = es::worst_q(m.layout, m.max_harmonic, c.suppression_tolerance);
+  degradation.lost = es::lost_spectrum(data.sections.front(), first.suppressed, 2, m.max_harmonic);
+  if (!first.suppressed.empty()) degradation.status = "degraded";
+
   std::vector<std::string> warnings;
-  if (!first.suppressed.empty())
-    warnings.push_back(suppression_message(c, first.suppressed, m.max_harmonic));
+  if (degradation.degraded())
+    warnings.push_back(degradation_message(c, degradation, m.max_harmonic, best, band_lo, band_hi));
   bool all_valid = true;
   std::vector<const es::Separation*> seps;
   if (cyl)
@@ -692,11 +781,6 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
           seps[j]->first_harmonic.amplitude, seps[j]->first_harmonic.limit, c.validity_fraction));
     }
   for (const auto& w : warnings) ss::warn(w);
-
-  // Optimal probe angles for this N (E2): reported next to this layout's worst Q.
-  const es::AngleOptimum best = es::optimise_three_point_angles(
-      data.n, std::min(c.optimise_max_harmonic, static_cast<int>(data.n / 2)),
-      c.optimise_max_span_deg * deg, c.suppression_tolerance);
 
   double roundness = 0.0;
   for (const auto* s : seps) roundness = std::max(roundness, s->roundness());
@@ -750,21 +834,35 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
                                       "centre_y_um", "roundness_um", "first_harmonic_valid"},
                                      sections));
     }
-    // Harmonics 2..max_harmonic the layout sees (W and Q are undefined where G = 0: those
-    // harmonics are listed in summary.json instead).
-    std::vector<std::vector<double>> tcols(4);
+    // Harmonics 2..max_harmonic; a lost one (G = 0) has infinite W and Q and lost = 1.
+    std::vector<std::vector<double>> tcols(5);
+    const double inf = std::numeric_limits<double>::infinity();
     for (std::size_t l = 2; l < t.harmonic.size(); ++l) {
-      if (!std::isfinite(t.q[l])) continue;
+      const bool lost = std::binary_search(first.suppressed.begin(), first.suppressed.end(), t.harmonic[l]);
       tcols[0].push_back(t.harmonic[l]);
       tcols[1].push_back(t.g_abs[l]);
-      tcols[2].push_back(t.w[l]);
-      tcols[3].push_back(t.q[l]);
+      tcols[2].push_back(lost ? inf : t.w[l]);
+      tcols[3].push_back(lost ? inf : t.q[l]);
+      tcols[4].push_back(lost ? 1.0 : 0.0);
     }
     write_file_atomically(
         dir / "transfer.csv",
-        csv_text({"harmonic", "abs_g", "amplitude_transfer_w", "error_transfer_q"}, tcols));
+        csv_text({"harmonic", "abs_g", "amplitude_transfer_w", "error_transfer_q", "lost"}, tcols));
 
     Json summary;
+    summary["status"] = degradation.status;
+    summary["status_meaning"] =
+        degradation.degraded()
+            ? "degraded: the probe layout loses harmonics of the evaluated band (2..max_harmonic); "
+              "the profile lacks them and the worst error transfer is infinite"
+            : "ok: the probe layout sees every harmonic of the evaluated band";
+    summary["lost_harmonics"] = {
+        {"count", degradation.lost.harmonics.size()},
+        {"harmonics", degradation.lost.harmonics},
+        {"band", {2, m.max_harmonic}},
+        {"lost_share_of_probe_power", degradation.lost.lost_share},
+        {"note", "share of the probe signals' power (mean over the probes) in the band at the lost "
+                 "harmonics: the form there cannot be told from spindle motion"}};
     summary["method"] = c.method;
     summary["samples_per_rev"] = data.n;
     summary["revolutions"] = data.revolutions;
@@ -794,7 +892,7 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
                                        {"limit_um", first.first_harmonic.limit},
                                        {"validity_fraction", c.validity_fraction},
                                        {"valid", all_valid}};
-    Json transfer = transfer_json(m.layout, t, m.max_harmonic);
+    Json transfer = transfer_json(t, degradation, m.max_harmonic);
     summary["transfer"] = transfer;
     if (c.method == "time_recursion") summary["recursion_passes"] = first.recursion_passes;
     if (m.options.fir)
@@ -803,7 +901,8 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
                         {"taps", m.options.fir->taps.size()},
                         {"design", "Hamming-windowed sinc, symmetric (zero phase), unit DC gain"}};
     Json opt;
-    opt["max_harmonic"] = std::min(c.optimise_max_harmonic, static_cast<int>(data.n / 2));
+    opt["min_harmonic"] = band_lo;
+    opt["max_harmonic"] = band_hi;
     opt["max_span_deg"] = c.optimise_max_span_deg;
     opt["layouts_checked"] = best.layouts_checked;
     opt["found"] = best.found;
@@ -816,8 +915,9 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
       opt["worst_error_transfer_q"] = best.worst.q;
       opt["harmonic_of_worst_q"] = best.worst.harmonic;
     }
-    const es::WorstTransfer this_worst = es::worst_q(m.layout, opt["max_harmonic"].get<int>());
-    opt["this_layout_worst_q"] = this_worst.q;
+    const es::WorstTransfer this_worst = es::worst_q(m.layout, band_hi, c.suppression_tolerance, band_lo);
+    opt["this_layout_worst_q"] = transfer_factor(this_worst.q);
+    opt["this_layout_lost_harmonics"] = this_worst.lost;
     summary["angle_optimisation"] = opt;
     if (cyl) {
       Json cj;
@@ -837,7 +937,7 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
       try {
         const std::string title =
             fmt::format("{} ({})", ss::study_title(point_document, "error_separation"), c.method);
-        plot_figures(title, m, first, t, dir);
+        plot_figures(title, m, first, t, degradation, dir);
         if (cyl) plot_cylinder(title, c.section_column, *cyl, dir);
       } catch (const plot::PlotError& e) {
         summary["plot_errors"] = e.what();
@@ -846,9 +946,13 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
     write_json_file(dir / "summary.json", summary);
   }
 
-  std::vector<Json> out{roundness, first.mean_radius_known ? Json(first.mean_radius) : Json(),
+  std::vector<Json> out{roundness,
+                        first.mean_radius_known ? Json(first.mean_radius) : Json(),
                         first.suppressed.size(),
-                        worst.q, all_valid};
+                        transfer_factor(degradation.worst.q),
+                        all_valid,
+                        degradation.status,
+                        100.0 * degradation.lost.lost_share};
   if (cyl) out.emplace_back(cyl->cylindricity);
   return out;
 }

@@ -4,6 +4,7 @@
 // input with the message text.
 #include "analysis/error_separation/error_separation_kind.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -128,7 +129,11 @@ TEST(ErrorSeparationKind, SuppressedHarmonicsAreReportedOrRefused) {
   EXPECT_EQ(suppressed[2], 71);
   EXPECT_EQ(suppressed[3], 73);
   EXPECT_EQ(row[2], suppressed.size());
-  EXPECT_TRUE(row[3].is_number());  // worst Q over the harmonics the probes see
+  EXPECT_EQ(row[3], "inf");  // worst Q over the band: infinite at a lost harmonic
+  EXPECT_EQ(row[5], "degraded");
+  EXPECT_EQ(summary.at("status"), "degraded");
+  EXPECT_EQ(summary.at("transfer").at("worst_error_transfer_q"), "inf");
+  EXPECT_TRUE(summary.at("transfer").at("worst_error_transfer_q_seen").is_number());
   ASSERT_FALSE(summary.at("warnings").empty());
   EXPECT_NE(summary.at("warnings")[0].get<std::string>().find("harmonics 35, 37, 71"),
             std::string::npos);
@@ -198,6 +203,81 @@ TEST(ErrorSeparationKind, TwoPointApproximation) {
   }
 }
 
+// Probes at 0, 90, 180 degrees on the shipped form (harmonics 3, 5, 18, 40): the odd 3 and 5 are
+// lost. The run is degraded, says so everywhere (summary, results row, warning, transfer.csv),
+// and proposes a layout that sees the band.
+TEST(ErrorSeparationKind, OppositeProbeLayoutIsDegraded) {
+  TempDir dir;
+  dir.write("probes.csv", probe_csv({0, 90, 180}, 360));
+  const Study study = load_text(dir, study_text("angles_deg = [0, 90, 180]\n"));
+  const fs::path out = dir.path() / "out";
+  const auto row = run_single(study, out);
+  const Json summary = read_json(out / "summary.json");
+  EXPECT_EQ(summary.at("status"), "degraded");
+  EXPECT_EQ(row[5], "degraded");
+  EXPECT_EQ(row[3], "inf");
+  EXPECT_EQ(summary.at("lost_harmonics").at("count"), 89);
+  EXPECT_EQ(summary.at("suppressed_harmonics").size(), 89u);
+  // The probes hold amplitude 2 at l = 3 and 1 at l = 5 (lost) and 0.5 at 18, 0.3 at 40 (seen),
+  // plus the spindle's 2, 4 and 7 (dx, dy seen through cos/sin of the probe angle): the lost
+  // share is what those amplitudes say, computed here independently.
+  double lost = 0, band = 0;
+  for (int l : {3, 5, 7, 2, 4, 18, 40}) {
+    double a = 0;  // mean over the probes of the amplitude at l
+    for (double phi_deg : {0.0, 90.0, 180.0}) {
+      const double phi = phi_deg * pi / 180;
+      double c = 0, s = 0;  // cos / sin coefficients of the probe signal at l
+      for (std::size_t i = 0; i < 360; ++i) {
+        const double th = 2 * pi * static_cast<double>(i) / 360;
+        const double dx = 1.5 * std::cos(2 * th) + 0.8 * std::sin(7 * th);
+        const double dy = 1.2 * std::sin(2 * th + 0.4) - 0.5 * std::cos(4 * th);
+        const double y = true_r(th + phi) + dx * std::cos(phi) + dy * std::sin(phi);
+        c += y * std::cos(l * th) * 2 / 360;
+        s += y * std::sin(l * th) * 2 / 360;
+      }
+      a += std::hypot(c, s) / 3;
+    }
+    band += a * a;
+    if (l % 2 == 1) lost += a * a;
+  }
+  EXPECT_NEAR(summary.at("lost_harmonics").at("lost_share_of_probe_power").get<double>(), lost / band, 1e-9);
+  EXPECT_NEAR(row[6].get<double>(), 100 * lost / band, 1e-7);
+  EXPECT_GT(lost / band, 0.5);
+  // The separated roundness misses harmonics 3 and 5: it is far below the form's.
+  double lo = 1e300, hi = -1e300;
+  for (std::size_t i = 0; i < 3600; ++i) {
+    const double v = true_r(2 * pi * static_cast<double>(i) / 3600);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  EXPECT_LT(row[0].get<double>(), 0.7 * (hi - lo));
+  // transfer.csv: a row per harmonic 2..180, the lost ones with infinite W and Q ("inf", which
+  // the project's own table reader refuses as a number: read as text).
+  std::ifstream csv(out / "transfer.csv");
+  std::string header, l2, l3;
+  std::getline(csv, header);
+  std::getline(csv, l2);
+  std::getline(csv, l3);
+  EXPECT_EQ(header, "harmonic,abs_g,amplitude_transfer_w,error_transfer_q,lost");
+  EXPECT_EQ(l3.substr(0, 2), "3,");
+  EXPECT_EQ(l3.substr(l3.size() - 9), "inf,inf,1") << l3;
+  EXPECT_EQ(l2.substr(l2.size() - 2), ",0") << l2;
+  std::size_t rows = 2;
+  for (std::string line; std::getline(csv, line);) rows += line.empty() ? 0 : 1;
+  EXPECT_EQ(rows, 179u);
+  // The warning says degraded, the lost share and a layout that sees the band.
+  ASSERT_FALSE(summary.at("warnings").empty());
+  const std::string warning = summary.at("warnings")[0].get<std::string>();
+  EXPECT_NE(warning.find("degraded: harmonics 3, 5, 7"), std::string::npos) << warning;
+  EXPECT_NE(warning.find(fmt::format("{:.1f} % of the probe signals' power", 100 * lost / band)),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("see every harmonic 2..50"), std::string::npos) << warning;
+  const Json& opt = summary.at("angle_optimisation");
+  EXPECT_TRUE(opt.at("found").get<bool>());
+  EXPECT_EQ(opt.at("this_layout_worst_q"), "inf");
+  EXPECT_EQ(opt.at("this_layout_lost_harmonics"), 24);  // odd 3..49
+}
+
 TEST(ErrorSeparationKind, ShippedStudiesReproduceTheirStatedTruth) {
   const fs::path studies = fs::path(CHATTERLAB_SOURCE_DIR) / "studies";
   TempDir dir;
@@ -221,7 +301,8 @@ TEST(ErrorSeparationKind, ShippedStudiesReproduceTheirStatedTruth) {
   const DataTable transfer = read_data_table(dir.path() / "avg" / "transfer.csv");
   const auto h = error_separation::fir_response(
       error_separation::design_zero_phase_lowpass(50, 100, 360), 360);
-  ASSERT_EQ(transfer.rows(), 179u);  // harmonics 2..180, none suppressed
+  ASSERT_EQ(transfer.rows(), 179u);  // harmonics 2..180, none lost
+  EXPECT_EQ(read_json(dir.path() / "avg" / "summary.json").at("status"), "ok");
   double predicted = 0;
   for (std::size_t row = 0; row < transfer.rows(); ++row) {
     const auto l = static_cast<std::size_t>(transfer.column("harmonic")[row]);

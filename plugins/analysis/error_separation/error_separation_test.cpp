@@ -174,10 +174,18 @@ TEST(ErrorSeparation, OffsetsSharingAFactorWithNSuppressHarmonics) {
     if (36 * k + 1 <= 180) expected.push_back(36 * k + 1);
   }
   EXPECT_EQ(suppressed_harmonics(layout, 180, 1e-6), expected);
-  // The worst Q is taken over the harmonics the layout sees: finite, not at a suppressed one.
+  // Noise at a lost harmonic is amplified without bound: the worst Q over the band is infinite,
+  // at the first lost harmonic; the worst over the harmonics the layout sees is finite and at
+  // none of the lost ones.
   const WorstTransfer worst = worst_q(layout, 180);
-  EXPECT_TRUE(std::isfinite(worst.q));
-  EXPECT_EQ(std::count(expected.begin(), expected.end(), worst.harmonic), 0);
+  EXPECT_TRUE(std::isinf(worst.q));
+  EXPECT_EQ(worst.harmonic, 35);
+  EXPECT_EQ(worst.lost, expected.size());
+  EXPECT_TRUE(std::isfinite(worst.seen_q));
+  EXPECT_EQ(std::count(expected.begin(), expected.end(), worst.seen_harmonic), 0);
+  // Below the first lost harmonic the band is clean: finite worst Q there.
+  EXPECT_TRUE(std::isfinite(worst_q(layout, 34).q));
+  EXPECT_EQ(worst_q(layout, 34).lost, 0u);
   // A coprime layout suppresses nothing.
   ProbeLayout coprime{samples_to_angles({0, 31, 100}, n), {}};
   coprime.weights = three_point_weights(coprime.angles_rad);
@@ -400,6 +408,58 @@ TEST(ErrorSeparation, AngleOptimiserFindsTheBestGridLayout) {
       brute = std::min(brute, worst_q(l, top).q);
     }
   EXPECT_LE(best.worst.q, brute * (1 + 1e-12));
+}
+
+// The layout of the issue: probes at 0, 90 and 180 degrees. c1 = -sin(180)/sin(90) = 0, so
+// G(l) = 1 + e^{j l pi}: every odd harmonic is lost. Its share of the probe signals' power is
+// what the data hold there; the separated profile lacks exactly those harmonics.
+TEST(ErrorSeparation, OppositeProbesLoseTheOddHarmonicsAndTheirShareIsMeasured) {
+  const std::size_t n = 360;
+  ProbeLayout layout{samples_to_angles({0, 90, 180}, n), {}};
+  layout.weights = three_point_weights(layout.angles_rad);
+  const auto lost = suppressed_harmonics(layout, 180, 1e-6);
+  ASSERT_EQ(lost.size(), 89u);  // 3, 5, ..., 179
+  const WorstTransfer worst = worst_q(layout, 180);
+  EXPECT_TRUE(std::isinf(worst.q));
+  EXPECT_EQ(worst.lost, 89u);
+  EXPECT_NEAR(worst.seen_q, std::sqrt(2.0) / 2.0, 1e-12);  // |G| = 2 on even l, sqrt(c0^2+c2^2) = sqrt 2
+  // Form 2 cos 3t + 1 cos 4t (odd 3 lost, even 4 seen), no spindle motion: every probe holds
+  // amplitude 2 at l = 3 and 1 at l = 4, so the lost share is 4 / (4 + 1) = 0.8 exactly.
+  std::vector<std::vector<double>> probes(3, std::vector<double>(n));
+  for (std::size_t q = 0; q < 3; ++q)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = theta(i, n) + layout.angles_rad[q];
+      probes[q][i] = 2 * std::cos(3 * t) + std::cos(4 * t + 0.3);
+    }
+  const LostSpectrum spectrum = lost_spectrum(probes, lost, 2, 180);
+  EXPECT_NEAR(spectrum.lost_share, 0.8, 1e-12);
+  EXPECT_NEAR(spectrum.amplitude[3], 2.0, 1e-12);
+  EXPECT_NEAR(spectrum.amplitude[4], 1.0, 1e-12);
+  EXPECT_EQ(spectrum.harmonics, lost);
+  // The separated profile keeps harmonic 4 and has nothing of harmonic 3: its roundness is that
+  // of cos 4t (2), not of the form (about 4.9): the loss the report warns of.
+  const Separation sep = separate_frequency(probes, layout, SeparationOptions{});
+  EXPECT_EQ(sep.suppressed, lost);
+  for (std::size_t i = 0; i < n; i += 17) EXPECT_NEAR(sep.profile[i], std::cos(4 * theta(i, n) + 0.3), 1e-9);
+  EXPECT_NEAR(sep.roundness(), 2.0, 1e-3);
+}
+
+// The optimiser for a band: no lost harmonic in [lo, hi], smallest worst Q there; a band that
+// starts higher is easier (its optimum is at most the full band's).
+TEST(ErrorSeparation, AngleOptimiserServesABand) {
+  const std::size_t n = 360;
+  const AngleOptimum full = optimise_three_point_angles(n, 50, pi, 1e-6, 2);
+  const AngleOptimum upper = optimise_three_point_angles(n, 50, pi, 1e-6, 20);
+  ASSERT_TRUE(full.found);
+  ASSERT_TRUE(upper.found);
+  EXPECT_LE(upper.worst.q, full.worst.q * (1 + 1e-12));
+  ProbeLayout layout{upper.angles_rad, three_point_weights(upper.angles_rad)};
+  const WorstTransfer in_band = worst_q(layout, 50, 1e-6, 20);
+  EXPECT_EQ(in_band.lost, 0u);
+  EXPECT_NEAR(in_band.q, upper.worst.q, 1e-9 * upper.worst.q);
+  EXPECT_GE(in_band.harmonic, 20);
+  // [0, 90, 180] sees none of the odd harmonics: the optimiser never proposes it.
+  EXPECT_FALSE(std::abs(full.angles_rad[1] - pi / 2) < 1e-9 && std::abs(full.angles_rad[2] - pi) < 1e-9);
 }
 
 TEST(ErrorSeparation, SuppressionMapMarksZeros) {

@@ -20,20 +20,41 @@ constexpr std::size_t minimum_pairs_margin = 100;  // vectors beyond one separat
 
 }  // namespace
 
-std::vector<double> KantzScan::curve(std::size_t r, int m) const {
-  const std::size_t dims = dimensions(), nr = radii.size();
-  const std::size_t d = std::size_t(m - min_dimension);
+std::vector<double> BlockCurve::mean(const std::vector<double>& weights) const {
   std::vector<double> y(steps, 0.0), c(steps, 0.0);
-  for (std::size_t b = 0; b < kantz_blocks; ++b) {
-    const std::size_t row = (b * nr + r) * dims + d;
+  for (std::size_t b = 0; b < kantz_blocks; ++b)
     for (std::size_t k = 0; k < steps; ++k) {
-      y[k] += sum[row * steps + k];
-      c[k] += count[row * steps + k];
+      y[k] += weights[b] * sum[b * steps + k];
+      c[k] += weights[b] * count[b * steps + k];
     }
-  }
   for (std::size_t k = 0; k < steps; ++k) y[k] = c[k] > 0 ? y[k] / c[k] : nan;
   return y;
 }
+
+double BlockCurve::references_at_start() const {
+  double n = 0;
+  for (std::size_t b = 0; b < kantz_blocks; ++b) n += count[b * steps];
+  return n;
+}
+
+BlockCurve KantzScan::block_curve(std::size_t r, int m) const {
+  const std::size_t dims = dimensions(), nr = radii.size();
+  const std::size_t d = std::size_t(m - min_dimension);
+  BlockCurve out;
+  out.steps = steps;
+  out.sum.resize(kantz_blocks * steps);
+  out.count.resize(kantz_blocks * steps);
+  for (std::size_t b = 0; b < kantz_blocks; ++b) {
+    const std::size_t row = (b * nr + r) * dims + d;
+    std::copy_n(sum.begin() + std::ptrdiff_t(row * steps), steps,
+                out.sum.begin() + std::ptrdiff_t(b * steps));
+    std::copy_n(count.begin() + std::ptrdiff_t(row * steps), steps,
+                out.count.begin() + std::ptrdiff_t(b * steps));
+  }
+  return out;
+}
+
+std::vector<double> KantzScan::curve(std::size_t r, int m) const { return block_curve(r, m).mean(); }
 
 namespace {
 
@@ -44,7 +65,10 @@ using Code4 = std::int32_t __attribute__((vector_size(16)));  // four profile co
 
 struct ScanShape {
   int min_dimension = 1, axes = 1;
-  std::size_t dims = 1, radii = 1, step = 1, history = 0, padded = 0, theiler = 0;
+  // step: the delay in samples (delay coordinates); history_stride: samples between stored
+  // history samples; history_step = step / history_stride: the delay in history samples.
+  std::size_t dims = 1, radii = 1, step = 1, history_stride = 1, history_step = 1, history = 0,
+              padded = 0, theiler = 0;
   const double* radii2 = nullptr;  // squared radii, ascending
   double floor2 = 0;               // coincident vectors (closer than this) are skipped
   double centre = 0;        // histories hold float(x - centre): mid-range halves the rounding
@@ -104,7 +128,7 @@ struct NeighbourSums {
 
 // The points of a grid row and the reach_rows rows on either side (rows: boxes of the first
 // axis), each row sorted along the second axis (one-axis grid: the first) and copied in that
-// order: their separation histories x_{j + t} (t < history, zero padded), their delay
+// order: their separation histories x_{j + t stride} (t < history, zero padded), their delay
 // coordinates x_{j + l delay}, one column per coordinate (structure of arrays: the distance pass
 // takes four consecutive candidates per vector), and their time indices. Sorted rows make a
 // reference's candidates in a row one contiguous stretch of +-eps along the sort axis (the three
@@ -147,7 +171,8 @@ struct RowWindow {
         float* to = histories.data() + c * plane_width * count + w * width(c);
         const std::size_t t0 = c * plane_width;
         const std::size_t valid = t0 < s.history ? std::min(width(c), s.history - t0) : 0;
-        for (std::size_t u = 0; u < valid; ++u) to[u] = float(x[j + t0 + u] - s.centre);
+        const double* from = x + j + t0 * s.history_stride;
+        for (std::size_t u = 0; u < valid; ++u) to[u] = float(from[u * s.history_stride] - s.centre);
         std::fill(to + valid, to + width(c), 0.0f);
       }
     }
@@ -426,22 +451,26 @@ template <std::size_t Radii>
 // `factors`. Returns whether a product approaches under/overflow.
 [[gnu::target_clones("avx2", "default")]] bool multiply_mean_squares(
     const ScanShape& s, std::size_t steps, const double* bins, const double* counts,
-    double* running, double* mean_square, double* product, double* factors) {
+    double* mean_square, double* product, double* factors) {
   bool extreme = false;
   for (std::size_t d = 0; d < s.dims; ++d) {
     const std::size_t m = std::size_t(s.min_dimension) + d;
-    std::fill_n(running, s.padded, 0.0);
     double n = 0;
     for (std::size_t ri = 0; ri < s.radii; ++ri) {
-      // Neighbours within radius r are those of bins 0..r: running sums over the radii.
-      const double* bin = bins + (ri * s.dims + d) * s.padded;
-      for (std::size_t t = 0; t < s.padded; ++t) running[t] += bin[t];
-      n += counts[ri * s.dims + d];
+      // Neighbours within radius r are those of bins 0..r: the m-dimensional sums
+      // sum_j |X_{i+k} - X_{j+k}|^2 of each bin added up over the radii. An empty bin leaves them
+      // as they are (few neighbours: most bins of a reference are empty).
+      const double added = counts[ri * s.dims + d];
+      if (added > 0) {
+        const double* bin = bins + (ri * s.dims + d) * s.padded;
+        if (n == 0) std::fill_n(mean_square, steps, 0.0);
+        for (std::size_t l = 0; l < m; ++l) {
+          const double* shifted = bin + l * s.history_step;
+          for (std::size_t k = 0; k < steps; ++k) mean_square[k] += shifted[k];
+        }
+        n += added;
+      }
       if (n == 0) continue;
-      // < |X_{i+k} - X_{j+k}|^2 >_j in m dimensions
-      std::copy_n(running, steps, mean_square);
-      for (std::size_t l = 1; l < m; ++l)
-        for (std::size_t k = 0; k < steps; ++k) mean_square[k] += running[k + l * s.step];
       const double inverse = 1.0 / n;
       double* __restrict p = product + (ri * s.dims + d) * steps;
       double* __restrict f = factors + (ri * s.dims + d) * steps;
@@ -483,27 +512,32 @@ template <std::size_t Radii>
 
 KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_dimension, int delay,
                      std::size_t theiler, std::size_t steps, std::size_t references,
-                     std::vector<double> radii) {
+                     std::vector<double> radii, std::size_t stride) {
   KantzScan out;
   if (min_dimension < 1 || max_dimension < min_dimension || delay < 1 || steps < 1 ||
-      radii.empty())
+      radii.empty() || stride < 1 || std::size_t(delay) % stride != 0)
     throw PointFailure("kantz_scan: needs 1 <= min_dimension <= max_dimension, delay >= 1, "
-                       "steps >= 1 and at least one radius");
+                       "steps >= 1, at least one radius and a stride that divides the delay");
   std::sort(radii.begin(), radii.end());
   if (!(radii.front() > 0)) throw PointFailure("kantz_scan: radii must be positive");
-  const std::size_t span = std::size_t(max_dimension - 1) * std::size_t(delay);
-  const std::size_t history = steps + span;  // samples of a separation history
-  if (x.size() < history + minimum_pairs_margin)
-    throw PointFailure(fmt::format("kantz_scan: {} samples are too few for {} steps in {} "
-                                   "dimensions (need at least {})",
-                                   x.size(), steps, max_dimension, history + minimum_pairs_margin));
+  const std::size_t history_step = std::size_t(delay) / stride;
+  // History samples (every `stride` samples) of a separation history: steps, then the further
+  // delay coordinates of the last step.
+  const std::size_t history = steps + std::size_t(max_dimension - 1) * history_step;
+  const std::size_t reach_samples = (history - 1) * stride + 1;  // samples a history covers
+  if (x.size() < reach_samples + minimum_pairs_margin)
+    throw PointFailure(fmt::format("kantz_scan: {} samples are too few for {} steps of {} "
+                                   "samples in {} dimensions (need at least {})",
+                                   x.size(), steps, stride, max_dimension,
+                                   reach_samples + minimum_pairs_margin));
   // Vectors with `steps` of future in max_dimension: references and neighbours alike.
-  const std::size_t limit = x.size() - history + 1;
+  const std::size_t limit = x.size() - reach_samples + 1;
   references = references == 0 ? limit : std::min(references, limit);
   out.min_dimension = min_dimension;
   out.max_dimension = max_dimension;
   out.radii = radii;
   out.steps = steps;
+  out.stride = stride;
   out.references = references;
   const std::size_t dims = out.dimensions(), nr = radii.size();
   const std::size_t row_size = nr * dims * steps;  // one reference's (radius, dimension, k) table
@@ -516,6 +550,8 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
   shape.dims = dims;
   shape.radii = nr;
   shape.step = std::size_t(delay);
+  shape.history_stride = stride;
+  shape.history_step = history_step;
   shape.history = history;
   shape.padded = (history + 7) / 8 * 8;
   shape.theiler = theiler;
@@ -584,7 +620,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
     const std::size_t table = nr * dims * shape.padded;
     std::vector<NeighbourSums> group(reference_group);
     std::vector<double> bins(reference_group * table), bin_count(reference_group * nr * dims);
-    std::vector<double> running(shape.padded), mean_square(steps);
+    std::vector<double> mean_square(steps);
     std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
     for (NeighbourSums& sums : group) {
@@ -611,7 +647,7 @@ KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_di
         const std::size_t block = block_of(window.index[member_own[g]]);
         const bool extreme = multiply_mean_squares(
             shape, steps, bins.data() + g * table, bin_count.data() + g * nr * dims,
-            running.data(), mean_square.data(), product.data() + block * row_size,
+            mean_square.data(), product.data() + block * row_size,
             factors.data() + block * row_size);
         if (extreme || ++pending[block] == flush) log_products(block);
       }

@@ -10,6 +10,19 @@ namespace chatterlab {
 // Blocks of consecutive reference points whose sums are kept apart (block bootstrap).
 inline constexpr std::size_t kantz_blocks = 20;
 
+// A divergence curve S(k), k < steps, kept as sums per block of reference points:
+// sum[b * steps + k] of ln distance and count[b * steps + k] of the references contributing.
+struct BlockCurve {
+  std::size_t steps = 0;
+  std::vector<double> sum, count;
+  // The mean curve with block b weighted by weights[b] (a bootstrap replicate); NaN where no
+  // reference contributes.
+  std::vector<double> mean(const std::vector<double>& weights) const;
+  std::vector<double> mean() const { return mean(std::vector<double>(kantz_blocks, 1.0)); }
+  // References contributing at k = 0 (with a neighbour).
+  double references_at_start() const;
+};
+
 // Kantz's divergence the way TISEAN's lyap_k computes it, for a scan over embedding dimensions
 // [min_dimension, max_dimension] and several radii eps at once: for each reference vector i,
 // every neighbour j (|i - j| > theiler) with |X_i - X_j| <= eps (Euclidean, in that dimension;
@@ -23,19 +36,24 @@ inline constexpr std::size_t kantz_blocks = 20;
 // radius bins are decided in double precision; the separation histories are summed from
 // single-precision copies of the signal, which moves S(k) by at most about
 // sqrt(m) 2^-24 (max - min) / (rms separation) (see kantz_scan.cpp).
+// `stride` > 1 evaluates S only every `stride` samples (curve point k is S(k stride)), for flows
+// whose divergence takes hundreds of samples: the histories hold every stride-th sample, so the
+// delay must be a multiple of the stride.
 struct KantzScan {
   int min_dimension = 1, max_dimension = 1;
   std::vector<double> radii;  // ascending
-  std::size_t steps = 0, references = 0;
+  std::size_t steps = 0, stride = 1, references = 0;
   // Per block of references (kantz_blocks, for a bootstrap) b, radius r, dimension index d = m - min_dimension:
   // sum[((b * radii + r) * dims + d) * steps + k] of ln rms distance, count likewise.
   std::vector<double> sum, count;
   std::size_t dimensions() const { return std::size_t(max_dimension - min_dimension + 1); }
   // Mean curve S(k) for radius index r and dimension m (NaN where no reference had neighbours).
   std::vector<double> curve(std::size_t r, int m) const;
+  // The same with its sums per block.
+  BlockCurve block_curve(std::size_t r, int m) const;
 };
 KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_dimension, int delay,
                      std::size_t theiler, std::size_t steps, std::size_t references,
-                     std::vector<double> radii);
+                     std::vector<double> radii, std::size_t stride = 1);
 
 }  // namespace chatterlab

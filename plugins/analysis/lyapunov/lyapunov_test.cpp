@@ -35,11 +35,71 @@ TEST(LyapunovAccuracy, Henon) {
 }
 
 TEST(LyapunovAccuracy, Lorenz) {
+  // The interval (every admissible curve's bootstrap interval: dimensions, sizes, methods)
+  // covers 0.906 per time unit; the per-second value is the per-sample one over dt.
   const Json r = make_analysis("lyapunov")->analyse(
       series(test_signals::lorenz(100000), 0.01, "lorenz x"), Json::object());
-  const double per_s = r["lyapunov_max_per_s"]["value"].get<double>();
-  EXPECT_NEAR(per_s, 0.906, 0.05 * 0.906);
-  EXPECT_NEAR(per_s, per_sample(r) / 0.01, 1e-9);
+  const Json& e = r["lyapunov_max_per_s"];
+  EXPECT_EQ(e["quality"], "good") << e.dump();
+  EXPECT_LE(e["ci_low"].get<double>(), 0.906) << e.dump();
+  EXPECT_GE(e["ci_high"].get<double>(), 0.906) << e.dump();
+  EXPECT_NEAR(e["value"].get<double>(), 0.906, 0.1);
+  EXPECT_NEAR(e["value"].get<double>(), per_sample(r) / 0.01, 1e-9);
+}
+
+// Noise separates neighbours at once whatever their distance: the curves of different
+// neighbourhood sizes collapse onto one, so no exponent is reported.
+TEST(Lyapunov, WhiteNoiseIsNotDetermined) {
+  const Json r = make_analysis("lyapunov", Json{{"embedding_dimension", 3}, {"delay_samples", 1}})
+                     ->analyse(series(test_signals::white_noise(3000, 5), 1.0, "noise"),
+                               Json::object());
+  EXPECT_EQ(r["divergence"], "undetermined");
+  const Json& e = r["lyapunov_max_per_sample"];
+  EXPECT_TRUE(e["value"].is_null()) << e.dump();
+  EXPECT_EQ(e["quality"], "failed");
+  EXPECT_EQ(e["reason"].get<std::string>().rfind("not determined:", 0), 0u) << e.dump();
+}
+
+// Measurement noise (5 % of the standard deviation) biases the exponent low: never "good", and
+// the reason names the noise.
+TEST(Lyapunov, NoisyHenonIsNotGood) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::with_noise(test_signals::henon(8000), 0.05, 9), 1.0, "henon + noise"),
+      Json::object());
+  const Json& e = r["lyapunov_max_per_sample"];
+  EXPECT_EQ(e["quality"], "uncertain") << e.dump();
+  EXPECT_NE(e["reason"].get<std::string>().find("noise"), std::string::npos) << e.dump();
+}
+
+// 400 samples of a flow (about five orbits): an exponent may show, never a "good" one.
+TEST(Lyapunov, ShortFlowIsNotGood) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::lorenz(400), 0.01, "lorenz x"), Json::object());
+  EXPECT_NE(r["lyapunov_max_per_s"]["quality"], "good") << r["lyapunov_max_per_s"].dump();
+}
+
+// Without a time unit (a series counted in samples) there is only the per-sample exponent, and
+// its reason speaks of samples only.
+TEST(Lyapunov, PerSampleSeriesHasOnlyPerSampleRates) {
+  SampledSeries s = series(test_signals::henon(3000), 1.0, "henon x");
+  s.sample_unit = "sample";
+  const Json r = make_analysis("lyapunov")->analyse(s, Json::object());
+  EXPECT_TRUE(r.contains("lyapunov_max_per_sample"));
+  EXPECT_FALSE(r.contains("lyapunov_max_per_s"));
+  const std::string reason = r["lyapunov_max_per_sample"]["reason"].get<std::string>();
+  EXPECT_NE(reason.find("per sample"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find("per s "), std::string::npos) << reason;
+}
+
+// With a sample rate the per-second reason states every rate per second.
+TEST(Lyapunov, PerSecondReasonStatesRatesPerSecond) {
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::henon(3000), 0.001, "henon x"), Json::object());
+  const std::string reason = r["lyapunov_max_per_s"]["reason"].get<std::string>();
+  EXPECT_EQ(reason.find("per sample"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("per s"), std::string::npos) << reason;
+  EXPECT_NEAR(r["lyapunov_max_per_s"]["value"].get<double>(),
+              r["lyapunov_max_per_sample"]["value"].get<double>() / 0.001, 1e-6);
 }
 
 TEST(Lyapunov, SineDoesNotDiverge) {
@@ -65,10 +125,11 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
                                                   int delay, std::size_t theiler,
                                                   std::size_t steps,
                                                   const std::vector<double>& radii,
-                                                  bool exact = false) {
-  const auto scan = kantz_scan(x, m0, m1, delay, theiler, steps, 0, radii);
-  const std::size_t history = steps + std::size_t(m1 - 1) * std::size_t(delay);
-  const std::size_t limit = x.size() - history + 1;
+                                                  bool exact = false, std::size_t stride = 1) {
+  const auto scan = kantz_scan(x, m0, m1, delay, theiler, steps, 0, radii, stride);
+  // Curve point k is the separation after k stride samples.
+  const std::size_t reach = (steps - 1) * stride + std::size_t(m1 - 1) * std::size_t(delay) + 1;
+  const std::size_t limit = x.size() - reach + 1;
   ASSERT_EQ(scan.references, limit);
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double unit = std::ldexp(1.0, -24), range = *hi - *lo;
@@ -90,7 +151,7 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
           if ((j > i ? j - i : i - j) <= theiler || dist2(i, j, m, 0) > radii[r] * radii[r] ||
               dist2(i, j, m0, 0) <= coincident2)
             continue;
-          for (std::size_t k = 0; k < steps; ++k) mean[k] += dist2(i, j, m, k);
+          for (std::size_t k = 0; k < steps; ++k) mean[k] += dist2(i, j, m, k * stride);
           n += 1;
         }
         if (n == 0) continue;
@@ -139,6 +200,13 @@ TEST(Lyapunov, KantzScanMatchesDirectEvaluationWithNineRadii) {
                                               {0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.1, 0.11, 0.12});
 }
 
+TEST(Lyapunov, KantzScanMatchesDirectEvaluationWithAHistoryStride) {
+  // Every third sample of the histories (delay 6 = two history samples): the curve of a flow
+  // evaluated every few samples.
+  expect_kantz_scan_matches_direct_evaluation(test_signals::lorenz(1500, 0.02), 2, 4, 6, 10, 15,
+                                              {1.0, 2.5}, false, 3);
+}
+
 TEST(Lyapunov, KantzScanMatchesDirectEvaluationExactlyOnAnIntegerSignal) {
   // Henon x in units of 1/1000, rounded: the float histories are exact, so the scan must agree
   // with the double-precision definition to the order of the sums (radii between integers).
@@ -147,19 +215,20 @@ TEST(Lyapunov, KantzScanMatchesDirectEvaluationExactlyOnAnIntegerSignal) {
   expect_kantz_scan_matches_direct_evaluation(x, 2, 3, 1, 0, 4, {12.5, 20.5, 40.5}, true);
 }
 
-TEST(LyapunovAccuracy, KantzScanHenon) {
-  // TISEAN lyap_k's setting (m = 2, radii 1/1000..1/100 of the range): every curve's linear region
-  // has the slope lambda1 = 0.419.
-  const Json r = make_analysis("lyapunov", Json{{"embedding_dimension", 2}, {"delay_samples", 1},
-                                                {"radius_scan_count", 3}})
-                     ->analyse(series(test_signals::henon(10000), 1.0, "henon x"), Json::object());
-  const Json& scan = r["kantz_scan"];
-  ASSERT_EQ(scan["dimensions"].size(), 3u);
-  const Json& m2 = scan["slopes_per_sample"][1];
-  for (const auto& slope : m2) {
-    ASSERT_TRUE(slope.is_number());
-    EXPECT_NEAR(slope.get<double>(), 0.419, 0.03);
-  }
+TEST(LyapunovAccuracy, HenonCurvesAreParallelInEveryDimension) {
+  // Every Kantz curve the estimate uses (m = 2..4, the two smallest admissible sizes) has a
+  // slope near lambda1 = 0.419, and the curves of neighbouring sizes stay apart (admissible).
+  const Json r = make_analysis("lyapunov")->analyse(
+      series(test_signals::henon(20000), 1.0, "henon x"), Json::object());
+  EXPECT_EQ(r["divergence"], "exponential");
+  EXPECT_EQ(r["dimensions"], Json::array({2, 4}));
+  std::size_t selected = 0;
+  for (const Json& c : r["curves"])
+    if (c["selected"].get<bool>() && c["method"] == "Kantz") {
+      ++selected;
+      EXPECT_NEAR(c["slope_per_sample"].get<double>(), 0.419, 0.03) << c["radius"];
+    }
+  EXPECT_EQ(selected, 6u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "analysis/embedding/embedding.hpp"
 #include "analysis/nonlinear_common/nonlinear_common.hpp"
@@ -122,12 +123,29 @@ SpectrumEstimate lyapunov_spectrum(const std::vector<double>& x, int dimension, 
   return out;
 }
 
+namespace {
+// Exponents within this fraction of |lambda_1| of zero have no reliable sign (the zero exponent
+// of a flow); a genuine exponent reappears in one more embedding dimension within this fraction
+// of max(|lambda_1|, |lambda_i|) (local fits underestimate strongly negative exponents, which
+// therefore move more).
+constexpr double zero_band = 0.2;
+constexpr double dimension_tolerance = 0.2;
+// An exponent within this fraction of max(|lambda_i|, |lambda_1|) of the sum of two others (or
+// twice another) is a combination exponent: local linear fits of a map embedded in too many
+// dimensions produce 2 lambda_1, lambda_1 + lambda_2, ... (Sauer, Tempkin and Yorke 1998).
+constexpr double combination_tolerance = 0.06;
+// The spectrum's largest exponent and the divergence estimate of `lyapunov` agree when they are
+// within this fraction of each other (or the spectrum's value lies inside the other interval).
+constexpr double divergence_agreement = 0.25;
+}  // namespace
+
 PluginInfo LyapunovSpectrum::info() {
   PluginInfo info;
   info.name = "lyapunov_spectrum";
   info.description =
       "Lyapunov spectrum from local Jacobian least-squares fits with QR re-orthonormalisation; "
-      "spurious exponents rejected by time reversal";
+      "spurious exponents flagged by one more embedding dimension and by time reversal; "
+      "Kaplan-Yorke dimension and the sum of the exponents";
   info.models_md_ids = "N3";
   using nonlinear::numeric_spec;
   ParamSpec reversal = param_spec("time_reversal_check", ValueKind::boolean, "",
@@ -142,89 +160,323 @@ PluginInfo LyapunovSpectrum::info() {
       numeric_spec("neighbours", ValueKind::integer, "1",
                    "nearest neighbours per local fit (absent: max(20, 4 x dimension))", Json(), 2),
       numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "local fits along the trajectory at most", 20000, 20),
+                   "local fits along the trajectory at most", 10000, 20),
       reversal, nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_reference_points", 300}};
   return info;
 }
 
+namespace {
+
+// A rate per sample, or per unit of the series.
+struct RateText {
+  double dt = 1;
+  std::string unit;
+  std::string operator()(double v) const {
+    return unit == "sample" ? fmt::format("{:.4g} per sample", v)
+                            : fmt::format("{:.4g} per {}", v / dt, unit);
+  }
+};
+
+// The spectrum in the chosen embedding, in one more dimension (genuine exponents persist,
+// spurious ones from fitting the local maps in more dimensions than the attractor needs move or
+// appear; Parlitz 1992) and of the time-reversed series (empty when not computed).
+struct Spectra {
+  SpectrumEstimate forward;
+  std::vector<double> higher, reversed;
+};
+
+// The settings of the local fits.
+struct FitSettings {
+  int dimension = 2, delay = 1;
+  std::size_t theiler = 0, evolution_steps = 1, references = 0;
+  std::optional<std::int64_t> neighbours;
+  std::size_t neighbours_for(int d) const {
+    return std::size_t(neighbours.value_or(std::max(20, 4 * d)));
+  }
+};
+
+Spectra compute_spectra(const std::vector<double>& x, const FitSettings& s, bool reversal) {
+  Spectra out;
+  out.forward = lyapunov_spectrum(x, s.dimension, s.delay, s.theiler, s.evolution_steps,
+                                  s.neighbours_for(s.dimension), s.references);
+  if (x.size() >= nonlinear::minimum_samples(s.dimension + 1, s.delay) + s.evolution_steps + 20) {
+    try {
+      out.higher = lyapunov_spectrum(x, s.dimension + 1, s.delay, s.theiler, s.evolution_steps,
+                                     s.neighbours_for(s.dimension + 1), s.references)
+                       .exponents;
+    } catch (const PointFailure&) {
+      out.higher.clear();
+    }
+  }
+  if (reversal) {
+    const std::vector<double> reversed(x.rbegin(), x.rend());
+    out.reversed = lyapunov_spectrum(reversed, s.dimension, s.delay, s.theiler,
+                                     s.evolution_steps, s.neighbours_for(s.dimension),
+                                     s.references)
+                       .exponents;
+  }
+  return out;
+}
+
+// The 95 % block-bootstrap interval of exponent i: the i-th largest of the resampled block
+// averages.
+nonlinear::Interval exponent_interval(const SpectrumEstimate& forward, std::size_t i,
+                                      std::size_t replicates, std::uint64_t seed) {
+  const std::size_t dims = forward.exponents.size();
+  return nonlinear::block_bootstrap(spectrum_blocks, replicates, seed,
+                                    [&](const std::vector<double>& w) {
+                                      std::vector<double> total(dims, 0.0);
+                                      double steps = 0;
+                                      for (std::size_t b = 0; b < spectrum_blocks; ++b) {
+                                        for (std::size_t j = 0; j < dims; ++j)
+                                          total[j] += w[b] * forward.block_sums[b][j];
+                                        steps += w[b] * forward.block_steps[b];
+                                      }
+                                      for (double& v : total) v /= steps;
+                                      std::sort(total.begin(), total.end(), std::greater<>());
+                                      return total[i];
+                                    });
+}
+
+// The checks of one exponent: which it fails (spurious) and which it passes.
+struct Checks {
+  std::vector<std::string> failed, passed;
+};
+
+// Only clearly positive exponents are checked in one more dimension: local fits estimate the
+// contracting directions of a flow poorly, and differently in every dimension, and the zero
+// exponent of a flow has no reliable sign (time reversal checks those).
+void check_higher_dimension(double lambda, double lambda1, const Spectra& s, int dimension,
+                            const RateText& rate, Checks& c) {
+  if (s.higher.empty() || lambda < zero_band * lambda1) return;
+  double closest = s.higher.front();
+  for (double v : s.higher)
+    if (std::abs(v - lambda) < std::abs(closest - lambda)) closest = v;
+  const double tol = dimension_tolerance * std::max(lambda1, std::abs(lambda));
+  (std::abs(closest - lambda) <= tol ? c.passed : c.failed)
+      .push_back(fmt::format("in dimension {} the nearest exponent is {}", dimension + 1,
+                             rate(closest)));
+}
+
+// True exponents change sign under time reversal: lambda_i ~ -lambda^rev_{d+1-i}; spurious
+// ones keep their sign.
+void check_time_reversal(std::size_t i, double lambda1, const Spectra& s, const RateText& rate,
+                         Checks& c) {
+  if (s.reversed.empty()) return;
+  const double lambda = s.forward.exponents[i];
+  const bool near_zero_here = std::abs(lambda) < zero_band * lambda1;
+  const double partner = -s.reversed[s.forward.exponents.size() - 1 - i];
+  const bool confirmed = (lambda > 0) == (partner > 0) ||
+                         (near_zero_here && std::abs(partner) < zero_band * lambda1);
+  (confirmed ? c.passed : c.failed)
+      .push_back(fmt::format("the reversed series gives -lambda_rev = {}", rate(partner)));
+}
+
+// Combinations of two other exponents, neither of them near zero (a flow's zero exponent would
+// make every exponent a "combination").
+void check_combinations(std::size_t i, double lambda1, const std::vector<double>& exponents,
+                        const RateText& rate, Checks& c) {
+  const double lambda = exponents[i];
+  const std::size_t dims = exponents.size();
+  for (std::size_t j = 0; j < dims && c.failed.empty(); ++j)
+    for (std::size_t l = j; l < dims; ++l) {
+      const double a = exponents[j], b = exponents[l];
+      if (j == i || l == i || std::abs(a) < zero_band * lambda1 ||
+          std::abs(b) < zero_band * lambda1)
+        continue;
+      if (std::abs(lambda - (a + b)) <= combination_tolerance * std::max(std::abs(lambda), lambda1)) {
+        c.failed.push_back(fmt::format("it equals the sum of {} and {} (a combination exponent)",
+                                       rate(a), rate(b)));
+        break;
+      }
+    }
+}
+
+// The `lyapunov` result in the context, when it ran.
+const Json* lyapunov_result(const Json& context) {
+  if (!context.is_object() || !context.contains("lyapunov") || !context["lyapunov"].is_object())
+    return nullptr;
+  return &context["lyapunov"];
+}
+
+// The divergence curves of `lyapunov` (when they show exponential divergence) bound the spectrum
+// from above: no exponent can exceed the largest one.
+double divergence_upper_bound(const Json& context) {
+  const Json* l = lyapunov_result(context);
+  if (!l || l->value("divergence", "") != "exponential") return nan;
+  const Json& e = (*l)["lyapunov_max_per_sample"];
+  return e["ci_high"].is_number() ? e["ci_high"].get<double>() : nan;
+}
+
+// Exponent i with its interval (per sample and per unit), its checks and the spurious flag.
+Json exponent_json(std::size_t i, const Spectra& s, const nonlinear::Interval& ci,
+                   const Checks& c, const RateText& rate) {
+  const double lambda = s.forward.exponents[i];
+  const bool spurious = !c.failed.empty();
+  const std::string reason =
+      spurious ? fmt::format("spurious: {}", fmt::join(c.failed, "; "))
+               : (c.passed.empty() ? std::string("local Jacobian fits")
+                                   : fmt::format("confirmed: {}", fmt::join(c.passed, "; ")));
+  Json e = nonlinear::estimate(lambda, ci.low, ci.high, spurious ? "uncertain" : "good", reason);
+  e["value_per_" + rate.unit] = lambda / rate.dt;
+  e["ci_low_per_" + rate.unit] = std::isfinite(ci.low) ? Json(ci.low / rate.dt) : Json();
+  e["ci_high_per_" + rate.unit] = std::isfinite(ci.high) ? Json(ci.high / rate.dt) : Json();
+  e["spurious"] = spurious;
+  return e;
+}
+
+// Every exponent with its interval, its checks and the spurious flag; the genuine ones are
+// appended to `genuine` (largest first). An exponent above the upper end of the divergence
+// estimate (`divergence_high`, NaN when none) is spurious: none can exceed the largest.
+Json classify_exponents(const Spectra& spectra, int dimension, double divergence_high,
+                        std::size_t replicates, std::uint64_t seed, const RateText& rate,
+                        std::vector<double>& genuine) {
+  const auto& forward = spectra.forward.exponents;
+  const double lambda1 = std::max(std::abs(forward[0]), 1e-12);
+  Json exponents = Json::array();
+  for (std::size_t i = 0; i < forward.size(); ++i) {
+    const auto ci = exponent_interval(spectra.forward, i, replicates, seed + i);
+    Checks checks;
+    check_higher_dimension(forward[i], lambda1, spectra, dimension, rate, checks);
+    check_time_reversal(i, lambda1, spectra, rate, checks);
+    check_combinations(i, lambda1, forward, rate, checks);
+    if (std::isfinite(divergence_high) && forward[i] > divergence_high + zero_band * lambda1)
+      checks.failed.push_back(fmt::format("it exceeds the largest exponent of the divergence "
+                                          "curves (at most {})",
+                                          rate(divergence_high)));
+    if (checks.failed.empty()) genuine.push_back(forward[i]);
+    exponents.push_back(exponent_json(i, spectra, ci, checks, rate));
+  }
+  return exponents;
+}
+
+// Kaplan-Yorke dimension (defined here only with a positive genuine exponent: chaos) and the
+// sum of the genuine exponents.
+struct GenuineSpectrum {
+  std::vector<double> exponents;
+  double sum = 0, kaplan_yorke = nan;
+  bool dissipative = false;
+};
+
+GenuineSpectrum genuine_spectrum(std::vector<double> genuine, double lambda1) {
+  GenuineSpectrum g;
+  g.exponents = std::move(genuine);
+  for (double v : g.exponents) g.sum += v;
+  double partial = 0;
+  if (!g.exponents.empty() && g.exponents.front() > zero_band * lambda1)
+    for (std::size_t j = 0; j < g.exponents.size(); ++j) {
+      if (partial + g.exponents[j] < 0) {
+        g.kaplan_yorke = double(j) + partial / std::abs(g.exponents[j]);
+        break;
+      }
+      partial += g.exponents[j];
+    }
+  g.dissipative = !g.exponents.empty() && g.sum < 0;
+  return g;
+}
+
+// Cross-checks with the other methods' results in the study: D2 <= D1 <= D_KY (Kaplan-Yorke
+// conjecture: a D2 well above D_KY contradicts the spectrum), and the divergence estimate.
+// Returns the text of the checks; adds doubts.
+std::string cross_checks(const Json& context, const GenuineSpectrum& g, double largest,
+                         const RateText& rate, std::vector<std::string>& doubts) {
+  std::string checks;
+  const auto d2 = nonlinear::context_value(context, "correlation_dimension", "correlation_dimension");
+  if (d2 && std::isfinite(g.kaplan_yorke)) {
+    const bool consistent = *d2 <= g.kaplan_yorke + 0.2;
+    checks += fmt::format("; Kaplan-Yorke dimension {:.3g} {} D2 = {:.3g}", g.kaplan_yorke,
+                          consistent ? "is consistent with (D2 <= D_KY)" : "is below", *d2);
+    if (!consistent)
+      doubts.push_back(fmt::format("D2 = {:.3g} exceeds the Kaplan-Yorke dimension {:.3g}", *d2,
+                                   g.kaplan_yorke));
+  }
+  const Json* l = lyapunov_result(context);
+  if (!l) return checks;
+  const std::string divergence = l->value("divergence", "");
+  const Json& e = (*l)["lyapunov_max_per_sample"];
+  if (divergence == "exponential" && e["value"].is_number()) {
+    const double v = e["value"].get<double>();
+    const bool inside = largest >= e["ci_low"].get<double>() && largest <= e["ci_high"].get<double>();
+    const bool agrees = inside || std::abs(largest - v) <= divergence_agreement * std::abs(v);
+    checks += fmt::format("; the divergence estimate is {}{}", rate(v), agrees ? " (agrees)" : "");
+    if (!agrees) doubts.push_back(fmt::format("the divergence curves give {}", rate(v)));
+    // Agreement with a doubtful estimate confirms nothing: what makes the divergence estimate
+    // uncertain (noise, a short series) biases the local fits as much.
+    if (e.value("quality", "") != "good")
+      doubts.push_back("the divergence estimate it is checked against is not good");
+  } else if (divergence == "none" || divergence == "undetermined") {
+    doubts.push_back(divergence == "none"
+                         ? "the divergence curves show no exponential divergence"
+                         : "the divergence curves show no common exponential divergence");
+  }
+  return checks;
+}
+
+}  // namespace
+
 Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
-  const std::size_t m = std::size_t(
+  FitSettings fit;
+  fit.dimension = embedding.dimension;
+  fit.delay = embedding.delay;
+  fit.theiler = embedding.theiler;
+  fit.evolution_steps = std::size_t(
       nonlinear::given_integer(params_, "evolution_steps").value_or(embedding.delay));
-  const std::size_t k = std::size_t(nonlinear::given_integer(params_, "neighbours")
-                                        .value_or(std::max(20, 4 * embedding.dimension)));
-  const auto refs = std::size_t(params_.integer("max_reference_points"));
-  const auto forward = lyapunov_spectrum(series.values, embedding.dimension, embedding.delay,
-                                         embedding.theiler, m, k, refs);
-  std::vector<double> reversed_exponents;
-  if (params_.boolean("time_reversal_check")) {
-    std::vector<double> reversed(series.values.rbegin(), series.values.rend());
-    reversed_exponents = lyapunov_spectrum(reversed, embedding.dimension, embedding.delay,
-                                           embedding.theiler, m, k, refs)
-                             .exponents;
-  }
-  const double dt = series.sample_interval;
-  const std::size_t dims = forward.exponents.size();
-  Json exponents = Json::array();
-  for (std::size_t i = 0; i < dims; ++i) {
-    const auto ci = nonlinear::block_bootstrap(
-        spectrum_blocks, std::size_t(params_.integer("bootstrap_replicates")),
-        std::uint64_t(params_.integer("seed")) + i, [&](const std::vector<double>& w) {
-          // Exponent i as the i-th largest of the resampled block averages.
-          std::vector<double> total(dims, 0.0);
-          double steps = 0;
-          for (std::size_t b = 0; b < spectrum_blocks; ++b) {
-            for (std::size_t j = 0; j < dims; ++j) total[j] += w[b] * forward.block_sums[b][j];
-            steps += w[b] * forward.block_steps[b];
-          }
-          for (double& v : total) v /= steps;
-          std::sort(total.begin(), total.end(), std::greater<>());
-          return total[i];
-        });
-    const double lambda = forward.exponents[i];
-    std::string quality = "good", reason = "local Jacobian fits";
-    if (!reversed_exponents.empty()) {
-      // True exponents change sign under time reversal: lambda_i ~ -lambda^rev_{d+1-i}.
-      const double partner = -reversed_exponents[dims - 1 - i];
-      const double scale = std::max(std::abs(forward.exponents[0]), 1e-12);
-      // Spurious exponents keep their sign under reversal, so -lambda_rev has the opposite sign;
-      // exponents near zero (|.| < 10 % of lambda_1) have no reliable sign.
-      const double small = 0.1 * scale;
-      const bool confirmed = (lambda > 0) == (partner > 0) ||
-                             (std::abs(lambda) < small && std::abs(partner) < small);
-      quality = confirmed ? "good" : "uncertain";
-      reason = confirmed
-                   ? fmt::format("confirmed by the reversed series (-lambda_rev = {:.4g})", partner)
-                   : fmt::format("spurious: the reversed series gives -lambda_rev = {:.4g} (no "
-                                 "sign change under time reversal)",
-                                 partner);
-    }
-    Json e = nonlinear::estimate(lambda, ci.low, ci.high, quality, reason);
-    e["value_per_" + series.sample_unit] = lambda / dt;
-    e["ci_low_per_" + series.sample_unit] = std::isfinite(ci.low) ? Json(ci.low / dt) : Json();
-    e["ci_high_per_" + series.sample_unit] = std::isfinite(ci.high) ? Json(ci.high / dt) : Json();
-    e["spurious"] = quality != "good";
-    exponents.push_back(e);
-  }
+  fit.neighbours = nonlinear::given_integer(params_, "neighbours");
+  fit.references = std::size_t(params_.integer("max_reference_points"));
+  const Spectra spectra =
+      compute_spectra(series.values, fit, params_.boolean("time_reversal_check"));
+  const RateText rate{series.sample_interval, series.sample_unit};
+  const auto& forward = spectra.forward.exponents;
+  const std::size_t dims = forward.size();
+  const double lambda1 = std::max(std::abs(forward[0]), 1e-12);
+  std::vector<double> genuine;
+  const Json exponents = classify_exponents(
+      spectra, fit.dimension, divergence_upper_bound(context),
+      std::size_t(params_.integer("bootstrap_replicates")),
+      std::uint64_t(params_.integer("seed")), rate, genuine);
+  const GenuineSpectrum g = genuine_spectrum(std::move(genuine), lambda1);
+  // The spectrum's largest exponent: the first genuine one (else the first).
+  std::size_t head = 0;
+  while (head < dims && exponents[head]["spurious"].get<bool>()) ++head;
+  if (head == dims) head = 0;
+  std::vector<std::string> doubts;
+  if (g.exponents.empty())
+    doubts.push_back("every exponent is spurious");
+  else if (head > 0)
+    doubts.push_back(fmt::format("the {} largest exponents are spurious", head));
+  if (!g.dissipative)
+    doubts.push_back(fmt::format("the genuine exponents sum to {} (not negative: not the "
+                                 "spectrum of a dissipative attractor)",
+                                 rate(g.sum)));
+  const std::string checks = cross_checks(context, g, forward[head], rate, doubts);
+  const std::string quality = doubts.empty() ? "good" : "uncertain";
+  std::string reason = fmt::format("largest genuine exponent of the local-Jacobian spectrum ({} "
+                                   "of {} exponents genuine; their sum {}){}",
+                                   g.exponents.size(), dims, rate(g.sum), checks);
+  if (!doubts.empty()) reason += fmt::format("; uncertain: {}", fmt::join(doubts, "; "));
+  const Json& first = exponents[head];
+  auto largest = [&](double f) {
+    auto scaled = [&](const char* key) {
+      return first[key].is_number() ? first[key].get<double>() * f : nan;
+    };
+    return nonlinear::estimate(scaled("value"), scaled("ci_low"), scaled("ci_high"), quality,
+                               reason);
+  };
   Json out;
   out["exponents_per_sample"] = exponents;
-  out["reversed_exponents_per_sample"] = reversed_exponents;
-  out["lyapunov_max_per_" + series.sample_unit] =
-      nonlinear::estimate(exponents[0]["value_per_" + series.sample_unit].get<double>(),
-                          exponents[0]["ci_low_per_" + series.sample_unit].is_number()
-                              ? exponents[0]["ci_low_per_" + series.sample_unit].get<double>()
-                              : nan,
-                          exponents[0]["ci_high_per_" + series.sample_unit].is_number()
-                              ? exponents[0]["ci_high_per_" + series.sample_unit].get<double>()
-                              : nan,
-                          exponents[0]["quality"], exponents[0]["reason"]);
-  double sum = 0;
-  for (double v : forward.exponents) sum += v;
-  out["sum_per_sample"] = sum;  // < 0 for a dissipative system
-  out["evolution_steps"] = m;
-  out["neighbours"] = k;
+  out["reversed_exponents_per_sample"] = spectra.reversed;
+  out["higher_dimension_exponents_per_sample"] = spectra.higher;
+  out["lyapunov_max_per_sample"] = largest(1.0);
+  if (rate.unit != "sample") out["lyapunov_max_per_" + rate.unit] = largest(1.0 / rate.dt);
+  out["genuine_exponents"] = g.exponents.size();
+  out["sum_per_sample"] = g.sum;  // of the genuine exponents: < 0 for a dissipative system
+  out["dissipative"] = g.dissipative;
+  out["kaplan_yorke_dimension"] = std::isfinite(g.kaplan_yorke) ? Json(g.kaplan_yorke) : Json();
+  out["evolution_steps"] = fit.evolution_steps;
+  out["neighbours"] = fit.neighbours_for(fit.dimension);
   out["delay_samples"] = embedding.delay;
   out["embedding_dimension"] = embedding.dimension;
   out["theiler_window_samples"] = embedding.theiler;
@@ -235,24 +487,39 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
 void LyapunovSpectrum::plot(const Json& result, const SampledSeries& series,
                             const std::filesystem::path& out_dir) const {
   plot::Curves c;
-  c.title = fmt::format("{}: Lyapunov spectrum (forward and -reversed)",
+  c.title = fmt::format("{}: Lyapunov spectrum (forward, -reversed, one dimension more)",
                         series.name.empty() ? std::string("series") : series.name);
   c.x_label = "exponent index i";
   c.y_label = fmt::format("lambda_i [1/{}]", series.sample_unit);
-  plot::Series forward{"lambda_i", {}, {}, "linespoints"}, reversed{"-lambda_rev", {}, {}, "points"};
+  plot::Series forward{"lambda_i (dimension m)", {}, {}, "linespoints"},
+      spurious{"spurious", {}, {}, "points"},
+      reversed{"-lambda_rev (reversed series)", {}, {}, "points"},
+      higher{"lambda_i (dimension m + 1)", {}, {}, "points"};
   const auto& e = result["exponents_per_sample"];
   const auto rev = result["reversed_exponents_per_sample"].get<std::vector<double>>();
+  const auto up = result["higher_dimension_exponents_per_sample"].get<std::vector<double>>();
   const double dt = series.sample_interval;
   for (std::size_t i = 0; i < e.size(); ++i) {
+    const double v = e[i]["value"].get<double>() / dt;
     forward.x.push_back(double(i + 1));
-    forward.y.push_back(e[i]["value"].get<double>() / dt);
+    forward.y.push_back(v);
+    if (e[i]["spurious"].get<bool>()) {
+      spurious.x.push_back(double(i + 1));
+      spurious.y.push_back(v);
+    }
     if (!rev.empty()) {
       reversed.x.push_back(double(i + 1));
       reversed.y.push_back(-rev[e.size() - 1 - i] / dt);
     }
   }
+  for (std::size_t i = 0; i < up.size(); ++i) {
+    higher.x.push_back(double(i + 1));
+    higher.y.push_back(up[i] / dt);
+  }
   c.series.push_back(forward);
+  if (!spurious.x.empty()) c.series.push_back(spurious);
   if (!reversed.x.empty()) c.series.push_back(reversed);
+  if (!higher.x.empty()) c.series.push_back(higher);
   c.reference_y = 0.0;
   c.integer_x = true;
   plot::render(c, out_dir, "lyapunov_spectrum");

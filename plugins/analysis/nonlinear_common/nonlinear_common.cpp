@@ -263,7 +263,7 @@ std::vector<double> local_slopes(const std::vector<double>& x, const std::vector
 }
 
 Region find_plateau(const std::vector<double>& x, const std::vector<double>& slopes,
-                    double tolerance, double min_span) {
+                    double tolerance, double min_span, bool furthest) {
   Region best;
   double best_span = 0;
   std::vector<double> run;
@@ -288,7 +288,11 @@ Region find_plateau(const std::vector<double>& x, const std::vector<double>& slo
       ++e;
     }
     const double span = e > b ? x[e - 1] - x[b] : 0;
-    if (span >= min_span && span > best_span + 1e-12) {
+    if (span < min_span) continue;
+    const bool better = furthest ? !best.found || e > best.end ||
+                                       (e == best.end && span > best_span + 1e-12)
+                                 : span > best_span + 1e-12;
+    if (better) {
       best = {true, b, e, median};
       best_span = span;
     }

@@ -41,6 +41,13 @@ std::optional<double> context_value(const Json& context, const std::string& meth
 // ---------------------------------------------------------------- input checks
 // Vectors an analysis needs at least, beyond the embedding window (neighbour statistics).
 inline constexpr std::size_t minimum_vectors = 100;
+// Samples a series needs before any nonlinear analysis runs on it (a study rejects shorter ones
+// as bad input): FNN and Cao examine embedding dimensions up to 10 with minimum_vectors vectors
+// each, the D2 sweep goes to dimension 8 and needs 2000 pairs inside its scaling region, and
+// the divergence curves follow minimum_vectors references for at least 30 samples in three
+// dimensions. Below 300 samples these leave no statistics worth reporting; every automatic
+// choice (delay, dimensions, horizon) is bounded so that a series of this length runs.
+inline constexpr std::size_t minimum_series_samples = 300;
 // Samples needed to embed in `dimension` with `delay` and still have minimum_vectors vectors.
 std::size_t minimum_samples(int dimension, int delay);
 // Throws InputError when a sample is not finite, naming its index.
@@ -155,14 +162,16 @@ std::vector<double> local_slopes(const std::vector<double>& x, const std::vector
 
 // The longest run [begin, end) of usable points whose local slopes stay within
 // `tolerance` (absolute) of the run's median slope, spanning at least `min_span` in x.
-// found = false when no run qualifies. Ties go to the run starting at smaller x.
+// found = false when no run qualifies. Ties go to the run starting at smaller x. With
+// `furthest`, the qualifying run that reaches the largest x instead (the longest of those):
+// a scaling region above small-scale artefacts (noise, the strands of a finite trajectory).
 struct Region {
   bool found = false;
   std::size_t begin = 0, end = 0;
   double median_slope = 0;
 };
 Region find_plateau(const std::vector<double>& x, const std::vector<double>& slopes,
-                    double tolerance, double min_span);
+                    double tolerance, double min_span, bool furthest = false);
 
 // ---------------------------------------------------------------- bootstrap
 // Percentile interval (2.5 %, 97.5 %) of statistic(weights) over `replicates` resamplings of

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include "analysis/nonlinear_common/test_signals.hpp"
@@ -55,11 +56,27 @@ TEST_F(SignalAnalysisInput, IntegerColumnIsTheOneBasedIndex) {
   EXPECT_NE(m.find("t_s, displacement_m"), std::string::npos) << m;
 }
 
-TEST_F(SignalAnalysisInput, MissingSampleRateIsNamed) {
+TEST_F(SignalAnalysisInput, WithoutSampleRateEveryRateIsPerSample) {
+  // No sample rate and no WAV header: time is counted in samples, and the exponent's column (and
+  // every rate) says so: lyapunov_max_per_sample, not _per_s.
   write_signal(dir_, "s.csv", test_signals::henon(500));
-  const std::string m = load_error(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));
-  EXPECT_NE(m.find("missing key 'input.sample_rate_hz'"), std::string::npos) << m;
-  EXPECT_NE(m.find("not a WAV file"), std::string::npos) << m;
+  const Study s = testing::load_text(dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\""));
+  const auto columns = SignalAnalysis().output_columns(s.document);
+  EXPECT_NE(std::find(columns.begin(), columns.end(), "lyapunov_max_per_sample"), columns.end());
+  EXPECT_EQ(std::find(columns.begin(), columns.end(), "lyapunov_max_per_s"), columns.end());
+  const SampledSeries series = SignalAnalysis::load_series(s.document.at("input"));
+  EXPECT_EQ(series.sample_unit, "sample");
+  EXPECT_EQ(series.sample_interval, 1.0);
+}
+
+TEST_F(SignalAnalysisInput, ShorterThanTheMinimumIsBadInput) {
+  // 150 samples: exit 2 before anything runs (the minimum is named), not a failed point.
+  write_signal(dir_, "s.csv", test_signals::henon(150));
+  const std::string m = load_error(
+      dir_, study("file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000"));
+  EXPECT_NE(m.find("150 samples are too short"), std::string::npos) << m;
+  EXPECT_NE(m.find("at least 300 samples"), std::string::npos) << m;
+  EXPECT_NE(m.find("study.toml:"), std::string::npos) << m;
 }
 
 TEST_F(SignalAnalysisInput, ConstantSignal) {
@@ -88,6 +105,25 @@ TEST_F(SignalAnalysisInput, TooShortForTheRequestedDimensionSaysTheMinimum) {
             std::string::npos)
       << m;
   EXPECT_NE(m.find("at least 350 samples"), std::string::npos) << m;
+}
+
+TEST_F(SignalAnalysisInput, TheilerWindowLeavingTooFewNeighboursSaysTheLimit) {
+  // 400 samples in dimension 2, delay 1: 399 vectors; a window W leaves 399 - (2 W + 1)
+  // candidates, at least 100 wanted: W <= 149.
+  write_signal(dir_, "s.csv", test_signals::henon(400));
+  const std::string input = "file = \"s.csv\"\ncolumn = \"displacement_m\"\nsample_rate_hz = 1000";
+  auto analysis = [](int w) {
+    return fmt::format("[analysis]\nmethods = [\"embedding\", \"lyapunov\"]\n[analysis.lyapunov]\n"
+                       "theiler_window_samples = {}\n",
+                       w);
+  };
+  const std::string m = load_error(dir_, study(input, analysis(150)));
+  EXPECT_NE(m.find("analysis.lyapunov.theiler_window_samples = 150: too few neighbours"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("399 delay vectors"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 149 samples"), std::string::npos) << m;
+  EXPECT_NO_THROW(testing::load_text(dir_, study(input, analysis(149))));
 }
 
 TEST_F(SignalAnalysisInput, UnknownMethodAndStrayOverride) {
@@ -130,6 +166,56 @@ TEST_F(SignalAnalysisInput, HenonStudyWritesSummaryAndPlots) {
     EXPECT_TRUE(std::filesystem::exists(options.out_dir / (std::string(stem) + ".png"))) << stem;
 }
 
+
+// The verdict rules on synthetic method results: chaos needs all four pieces of evidence.
+Json chaotic_context() {
+  return Json{{"lyapunov",
+               {{"divergence", "exponential"},
+                {"lyapunov_max_per_sample", {{"value", 0.42}, {"ci_low", 0.40}, {"ci_high", 0.44}}}}},
+              {"correlation_dimension", {{"correlation_dimension", {{"value", 1.21}}}}},
+              {"surrogates",
+               {{"rejected_for_prediction", true},
+                {"rejected_for_exponent", true},
+                {"rejected_for_dimension", true}}}};
+}
+
+TEST(SignalAnalysisVerdict, ChaosNeedsEveryPieceOfEvidence) {
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(chaotic_context())["verdict"], "deterministic chaos");
+  // Each missing piece withdraws the claim, and the reason says which.
+  Json c = chaotic_context();
+  c["surrogates"]["rejected_for_dimension"] = false;
+  Json v = SignalAnalysis::chaos_verdict(c);
+  EXPECT_NE(v["verdict"], "deterministic chaos");
+  EXPECT_NE(v["reason"].get<std::string>().find("do not reject a linear stochastic process for the "
+                                                "dimension"),
+            std::string::npos)
+      << v.dump();
+  c = chaotic_context();
+  c["lyapunov"]["lyapunov_max_per_sample"]["ci_low"] = -0.01;
+  EXPECT_NE(SignalAnalysis::chaos_verdict(c)["verdict"], "deterministic chaos");
+  c = chaotic_context();
+  c["correlation_dimension"]["correlation_dimension"]["value"] = nullptr;
+  EXPECT_NE(SignalAnalysis::chaos_verdict(c)["verdict"], "deterministic chaos");
+  c = chaotic_context();
+  c.erase("surrogates");
+  v = SignalAnalysis::chaos_verdict(c);
+  EXPECT_EQ(v["verdict"], "not determined");
+  EXPECT_NE(v["reason"].get<std::string>().find("'surrogates' not run"), std::string::npos);
+}
+
+TEST(SignalAnalysisVerdict, StochasticPeriodicAndNoisySignals) {
+  Json c = chaotic_context();
+  c["surrogates"] = {{"rejected_for_prediction", false},
+                     {"rejected_for_exponent", false},
+                     {"rejected_for_dimension", false}};
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "linear stochastic");
+  c = chaotic_context();
+  c["lyapunov"]["divergence"] = "none";
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "periodic or quasi-periodic");
+  c = chaotic_context();
+  c["correlation_dimension"] = {{"correlation_dimension", {{"value", nullptr}}}, {"noise_level", 0.1}};
+  EXPECT_EQ(SignalAnalysis::chaos_verdict(c)["verdict"], "noise-dominated");
+}
 
 // `chatterlab describe <analysis>` shows how a signal_analysis study names the method and where its
 // parameters go, not a `type =` key that no study reads.

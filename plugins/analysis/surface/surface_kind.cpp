@@ -298,22 +298,34 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
     profile.y.push_back(rho * std::sin(th));
   }
   polar.series.push_back(std::move(profile));
-  // The least-squares circle last and dashed: it often lies almost on the minimum-zone circle,
-  // which would hide it.
-  for (const char* name : {"minimum_zone", "minimum_circumscribed", "maximum_inscribed",
-                           "least_squares"}) {
+  auto circle_points = [&](plot::Series& series, const Json& c, double offset_um) {
+    for (int k = 0; k <= 360; ++k) {
+      const double th = k * std::numbers::pi / 180.0;
+      const double rho = base + limacon(c, th) + offset_um - limacon(ls, th);
+      series.x.push_back(rho * std::cos(th));
+      series.y.push_back(rho * std::sin(th));
+    }
+  };
+  for (const char* name : {"minimum_circumscribed", "maximum_inscribed", "least_squares"}) {
     const Json& c = rd.at(name);
     const bool dashed = std::string_view(name) == "least_squares";
     plot::Series circle{fmt::format("{} (RONt {:.3g} um)", name, c.at("RONt_um").get<double>()),
                         {}, {}, dashed ? "dashes" : "lines"};
-    for (int k = 0; k <= 360; ++k) {
-      const double th = k * std::numbers::pi / 180.0;
-      const double rho = base + limacon(c, th) - limacon(ls, th);
-      circle.x.push_back(rho * std::cos(th));
-      circle.y.push_back(rho * std::sin(th));
-    }
+    circle_points(circle, c, 0.0);
     polar.series.push_back(std::move(circle));
   }
+  // The minimum zone is two concentric circles (its centre, radii R -+ RONt/2) holding the whole
+  // profile between them: one series (a NaN breaks the line between the two), drawn last and
+  // dashed because the circumscribed and inscribed circles often lie almost on them.
+  const Json& mz = rd.at("minimum_zone");
+  const double half = 0.5 * mz.at("RONt_um").get<double>();
+  plot::Series zone{fmt::format("minimum zone: two circles {:.3g} um apart (RONt)", 2 * half), {}, {},
+                    "dashes"};
+  circle_points(zone, mz, half);
+  zone.x.push_back(std::nan(""));
+  zone.y.push_back(std::nan(""));
+  circle_points(zone, mz, -half);
+  polar.series.push_back(std::move(zone));
   plot::render(polar, dir, stem);
 }
 
@@ -558,13 +570,64 @@ Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context
 
 void SurfaceAnalysis::plot(const Json& /*result*/, const SampledSeries& series,
                            const fs::path& out_dir) const {
+  plot_closed(series, settings(), out_dir);
+}
+
+void SurfaceAnalysis::plot_closed(const SampledSeries& series, const SurfaceSettings& settings,
+                                  const fs::path& out_dir) const {
   // The study kind's figures of a closed profile, drawn from a re-evaluation (the summary alone
   // does not hold the filtered profile): polar roundness and, with speeds, the Wz|f bands.
   if (!series.closed) return;
-  const SurfaceEvaluation e = evaluate_surface_profile(series, settings());
+  const SurfaceEvaluation e = evaluate_surface_profile(series, settings);
   const std::string title = series.name.empty() ? std::string("profile") : series.name;
   plot_polar(e, title, out_dir, "surface_profile_polar");
   if (e.summary.contains("Wz_f")) plot_bands(e, title, out_dir, "surface_profile_wz_f_bands");
+}
+
+std::vector<ParamSpec> SurfaceAnalysis::measurement_params() const {
+  std::vector<ParamSpec> specs = info().params;
+  std::erase_if(specs, [](const ParamSpec& spec) { return spec.key == unit_spec().key; });
+  return specs;
+}
+
+std::optional<ProfileQualityMeasurement::SettingProblem> SurfaceAnalysis::setting_problem(bool closed_profile) const {
+  const Json& cutoff_mm = params_.contains("cutoff_mm") ? params_.at("cutoff_mm") : Json();
+  if (closed_profile && cutoff_mm.is_number())
+    return SettingProblem{"cutoff_mm", cutoff_mm, "a closed profile takes its cut-off in undulations per revolution: "
+                                                  "give cutoff_upr"};
+  return std::nullopt;
+}
+
+SurfaceSettings SurfaceAnalysis::settings_in_metres(const ProfileSpeeds& speeds, bool& speeds_from_caller) const {
+  SurfaceSettings s = settings();
+  s.value_to_um = unit_to_um("m");
+  speeds_from_caller = !s.work_speed_rpm && speeds.work_speed_rpm > 0.0 && speeds.wheel_speed_rpm > 0.0;
+  if (speeds_from_caller) {
+    s.wheel_speed_rpm = speeds.wheel_speed_rpm;
+    s.work_speed_rpm = speeds.work_speed_rpm;
+  }
+  return s;
+}
+
+ProfileQuality SurfaceAnalysis::measure_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds) const {
+  ProfileQuality q;
+  const SurfaceSettings s = settings_in_metres(speeds, q.speeds_from_caller);
+  q.report = evaluate_surface(profile_m, s);
+  auto number = [&](const char* key) -> std::optional<double> {
+    const Json& v = q.report.contains(key) ? q.report.at(key) : Json();
+    return v.is_number() ? std::optional<double>(v.get<double>()) : std::nullopt;
+  };
+  q.waviness_wt_um = number("Wt_um");
+  q.waviness_wz_um = number("Wz_um");
+  q.roundness_ront_um = number("RONt_um");
+  if (s.work_speed_rpm && s.wheel_speed_rpm) q.speeds = ProfileSpeeds{*s.wheel_speed_rpm, *s.work_speed_rpm};
+  return q;
+}
+
+void SurfaceAnalysis::plot_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds,
+                                   const fs::path& out_dir) const {
+  bool from_caller = false;
+  plot_closed(profile_m, settings_in_metres(speeds, from_caller), out_dir);
 }
 
 void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& results,

@@ -256,3 +256,62 @@ TEST_F(SurfaceStudyInput, OpenProfileKeys) {
 
 }  // namespace
 }  // namespace chatterlab::surface
+
+namespace chatterlab::surface {
+namespace {
+
+// The polar roundness plot draws the minimum zone as its two circles (RONt apart, the zone's
+// centre), and the waviness lies between them, touching both (issue 20).
+TEST(SurfacePolarPlot, MinimumZoneDrawsBothCirclesAroundTheProfile) {
+  TempDir dir;
+  const Study study = load_study(std::filesystem::path(CHATTERLAB_SOURCE_DIR) / "studies" / "surface_roundness.toml");
+  SurfaceStudy kind;
+  PointContext context;
+  context.artifact_dir = dir.path() / "out";
+  context.plots = true;
+  kind.run_point(study.point_document(0), context);
+  std::ifstream summary_file(dir.path() / "out" / "summary.json");
+  const Json rd = Json::parse(summary_file).at("roundness");
+  std::ifstream dat(dir.path() / "out" / "polar.dat");
+  ASSERT_TRUE(dat) << "no polar.dat (gnuplot missing?)";
+  // Series blocks: "# series i: label", then x y lines ("NaN NaN" breaks a line).
+  std::vector<std::vector<std::pair<double, double>>> series;
+  std::vector<std::string> labels;
+  for (std::string line; std::getline(dat, line);) {
+    if (line.rfind("# series ", 0) == 0) {
+      series.emplace_back();
+      labels.push_back(line.substr(line.find(':') + 2));
+    } else if (!line.empty() && line[0] != '#' && !series.empty()) {
+      std::istringstream in(line);
+      std::string x, y;
+      in >> x >> y;
+      series.back().emplace_back(x == "NaN" ? std::nan("") : std::stod(x), y == "NaN" ? std::nan("") : std::stod(y));
+    }
+  }
+  ASSERT_EQ(labels.back().rfind("minimum zone: two circles", 0), 0u) << labels.back();
+  EXPECT_EQ(series.back().size(), 2u * 361 + 1);  // outer, break, inner
+  EXPECT_TRUE(std::isnan(series.back()[361].first));
+  // Radii in the plot about the least-squares centre: base + limacon(c) -+ RONt/2 - limacon(LS).
+  const Json& ls = rd.at("least_squares");
+  const Json& mz = rd.at("minimum_zone");
+  const double half = 0.5 * mz.at("RONt_um").get<double>();
+  const double base = 2.0 * ls.at("RONt_um").get<double>();
+  auto limacon = [](const Json& c, double th) {
+    return c.at("radius_offset_um").get<double>() + c.at("centre_x_um").get<double>() * std::cos(th) +
+           c.at("centre_y_um").get<double>() * std::sin(th);
+  };
+  double outer_gap = 1e300, inner_gap = 1e300;
+  for (const auto& [x, y] : series.front()) {  // the waviness
+    const double th = std::atan2(y, x), rho = std::hypot(x, y);
+    const double mid = base + limacon(mz, th) - limacon(ls, th);
+    EXPECT_LE(rho, mid + half + 1e-6);
+    EXPECT_GE(rho, mid - half - 1e-6);
+    outer_gap = std::min(outer_gap, mid + half - rho);
+    inner_gap = std::min(inner_gap, rho - (mid - half));
+  }
+  EXPECT_LT(outer_gap, 0.05 * half);  // the profile touches both circles (sampled every few points)
+  EXPECT_LT(inner_gap, 0.05 * half);
+}
+
+}  // namespace
+}  // namespace chatterlab::surface

@@ -3,30 +3,53 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
 
+namespace {
+
+struct ThreeTableParameters {
+  double pivot_to_nut_mm = 0.0, fixture_to_pivot_mm = 0.0, screw_pitch_mm = 0.0, gear_ratio = 0.0;
+  double step_angle_deg = 0.0, max_pulse_rate_hz = 0.0;
+};
+
+const ParamTable<ThreeTableParameters>& parameters_table() {
+  using P = ThreeTableParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::pivot_to_nut_mm, "pivot_to_nut_mm", "mm",
+          "R: distance from the upper table's vertical axis to the lead-screw nut")
+        .positive()
+        .required();
+    t.add(&P::fixture_to_pivot_mm, "fixture_to_pivot_mm", "mm",
+          "b: distance from the fixture reference plane (generatrix x = 0) to the vertical axis")
+        .positive()
+        .required();
+    t.add(&P::screw_pitch_mm, "screw_pitch_mm", "mm", "lead-screw pitch of every table").positive().required();
+    t.add(&P::gear_ratio, "gear_ratio", "1", "motor turns per screw turn (gearbox reduction, 10 for 10:1)")
+        .positive()
+        .required();
+    t.add(&P::step_angle_deg, "step_angle_deg", "deg", "motor step angle per pulse")
+        .positive()
+        .at_most(360.0)
+        .required();
+    t.add(&P::max_pulse_rate_hz, "max_pulse_rate_hz", "1/s", "largest pulse rate of every motor").positive().required();
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
 PluginInfo ThreeTableRevolution::info() {
-  using model_params::positive;
   PluginInfo info;
   info.name = "three_table_revolution";
   info.description =
       "three-table stepper machine for solids of revolution: lower, middle table and the nut "
       "turning the upper table (P4 inverse kinematics)";
   info.models_md_ids = "P1, P2, P4";
-  ParamSpec step = positive("step_angle_deg", "deg", "motor step angle per pulse");
-  step.max = 360.0;
-  info.params = {
-      positive("pivot_to_nut_mm", "mm",
-               "R: distance from the upper table's vertical axis to the lead-screw nut"),
-      positive("fixture_to_pivot_mm", "mm",
-               "b: distance from the fixture reference plane (generatrix x = 0) to the vertical axis"),
-      positive("screw_pitch_mm", "mm", "lead-screw pitch of every table"),
-      positive("gear_ratio", "1", "motor turns per screw turn (gearbox reduction, 10 for 10:1)"),
-      step,
-      positive("max_pulse_rate_hz", "1/s", "largest pulse rate of every motor"),
-  };
+  info.params = parameters_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"pivot_to_nut_mm", 300.0},  {"fixture_to_pivot_mm", 250.0},
                          {"screw_pitch_mm", 12.0},    {"gear_ratio", 10.0},
@@ -34,12 +57,13 @@ PluginInfo ThreeTableRevolution::info() {
   return info;
 }
 
-ThreeTableRevolution::ThreeTableRevolution(const ParamValues& params)
-    : pivot_to_nut_mm_(params.real("pivot_to_nut_mm")),
-      fixture_to_pivot_mm_(params.real("fixture_to_pivot_mm")),
-      mm_per_pulse_(params.real("screw_pitch_mm") * params.real("step_angle_deg") / 360.0 /
-                    params.real("gear_ratio")),
-      max_pulse_rate_hz_(params.real("max_pulse_rate_hz")) {}
+ThreeTableRevolution::ThreeTableRevolution(const ParamValues& params) {
+  const ThreeTableParameters p = parameters_table().read(params);
+  pivot_to_nut_mm_ = p.pivot_to_nut_mm;
+  fixture_to_pivot_mm_ = p.fixture_to_pivot_mm;
+  mm_per_pulse_ = p.screw_pitch_mm * p.step_angle_deg / 360.0 / p.gear_ratio;
+  max_pulse_rate_hz_ = p.max_pulse_rate_hz;
+}
 
 std::vector<MotorAxis> ThreeTableRevolution::motors() const {
   return {{"lower", mm_per_pulse_, max_pulse_rate_hz_, "lower"},

@@ -4,22 +4,39 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
 
+namespace {
+
+struct XcCamParameters {
+  double wheel_radius_mm = 0.0, c_deg_per_pulse = 0.0, x_mm_per_pulse = 0.0, max_pulse_rate_hz = 0.0;
+};
+
+const ParamTable<XcCamParameters>& parameters_table() {
+  using P = XcCamParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::wheel_radius_mm, "wheel_radius_mm", "mm", "grinding wheel radius R").positive().required();
+    t.add(&P::c_deg_per_pulse, "c_deg_per_pulse", "deg", "C axis rotation per pulse").positive().required();
+    t.add(&P::x_mm_per_pulse, "x_mm_per_pulse", "mm", "X slide travel per pulse").positive().required();
+    t.add(&P::max_pulse_rate_hz, "max_pulse_rate_hz", "1/s", "largest pulse rate of each motor").positive().required();
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
 PluginInfo XcCam::info() {
-  using model_params::positive;
   PluginInfo info;
   info.name = "xc_cam";
   info.description =
       "X-C cam grinder: C axis turns the cam so the wheel centre lies on the X slide (K2 tangent "
       "point tracking)";
   info.models_md_ids = "K2";
-  info.params = {positive("wheel_radius_mm", "mm", "grinding wheel radius R"),
-                 positive("c_deg_per_pulse", "deg", "C axis rotation per pulse"),
-                 positive("x_mm_per_pulse", "mm", "X slide travel per pulse"),
-                 positive("max_pulse_rate_hz", "1/s", "largest pulse rate of each motor")};
+  info.params = parameters_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"wheel_radius_mm", 200.0},
                          {"c_deg_per_pulse", 0.001},
@@ -28,11 +45,13 @@ PluginInfo XcCam::info() {
   return info;
 }
 
-XcCam::XcCam(const ParamValues& params)
-    : wheel_radius_mm_(params.real("wheel_radius_mm")),
-      c_deg_per_pulse_(params.real("c_deg_per_pulse")),
-      x_mm_per_pulse_(params.real("x_mm_per_pulse")),
-      max_pulse_rate_hz_(params.real("max_pulse_rate_hz")) {}
+XcCam::XcCam(const ParamValues& params) {
+  const XcCamParameters p = parameters_table().read(params);
+  wheel_radius_mm_ = p.wheel_radius_mm;
+  c_deg_per_pulse_ = p.c_deg_per_pulse;
+  x_mm_per_pulse_ = p.x_mm_per_pulse;
+  max_pulse_rate_hz_ = p.max_pulse_rate_hz;
+}
 
 std::vector<MotorAxis> XcCam::motors() const {
   // mm_per_pulse of the rotary C axis is in degrees (MotorAxis: axis units per pulse).

@@ -3,12 +3,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
-
-using model_params::fraction;
-using model_params::positive;
 
 AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalParameters& p) {
   const double omega = 2.0 * std::numbers::pi * p.frequency_hz;
@@ -71,43 +68,44 @@ void AmplitudeModulatedTimeDomain::derivatives(const ContactInput& in, const Con
 }
 
 namespace {
-AmplitudeModulatedModalParameters read(const ParamValues& v) {
-  AmplitudeModulatedModalParameters p;
-  p.frequency_hz = v.real("frequency_hz");
-  p.damping_ratio = v.real("damping_ratio");
-  p.stiffness_n_per_m = v.real("stiffness_n_per_m");
-  p.grinding_stiffness_n_per_m = v.real("grinding_stiffness_n_per_m");
-  p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
-  p.overlap_factor = v.real("overlap_factor");
-  p.modulation_depth = v.real("modulation_depth");
-  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
-  p.work_speed_rpm = v.real("work_speed_rpm");
-  return p;
+
+const ParamTable<AmplitudeModulatedModalParameters>& parameters_table() {
+  using P = AmplitudeModulatedModalParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::frequency_hz, "frequency_hz", "Hz", "structural natural frequency").positive().required();
+    t.add(&P::damping_ratio, "damping_ratio", "1", "structural damping ratio zeta").fraction(true).required();
+    t.add(&P::stiffness_n_per_m, "stiffness_n_per_m", "N/m", "structural stiffness k").positive().required();
+    t.add(&P::grinding_stiffness_n_per_m, "grinding_stiffness_n_per_m", "N/m", "grinding stiffness kg b (times width)")
+        .positive()
+        .required();
+    t.add(&P::contact_stiffness_n_per_m, "contact_stiffness_n_per_m", "N/m", "contact stiffness kc b (times width)")
+        .positive()
+        .required();
+    t.add(&P::overlap_factor, "overlap_factor", "1",
+          "overlap factor mu: share of the previous wheel surface seen again")
+        .fraction();
+    t.add(&P::modulation_depth, "modulation_depth", "1",
+          "modulation depth Q of the grinding stiffness per wheel revolution")
+        .fraction(true)
+        .required();
+    t.add(&P::wheel_speed_rpm, "wheel_speed_rpm", "rpm", "wheel speed n_g; w0 = 2 pi n_g / 60").positive().required();
+    t.add(&P::work_speed_rpm, "work_speed_rpm", "rpm", "workpiece speed (reported; not regenerated here)").positive();
+    return t;
+  }();
+  return table;
 }
+
 }  // namespace
 
-AmplitudeModulated::AmplitudeModulated(const ParamValues& values) : p_(read(values)) {}
+AmplitudeModulated::AmplitudeModulated(const ParamValues& values) : p_(parameters_table().read(values)) {}
 
 PluginInfo AmplitudeModulated::info() {
-  ParamSpec damping = fraction("damping_ratio", "structural damping ratio zeta", true);
-  ParamSpec overlap = fraction("overlap_factor", "overlap factor mu: share of the previous wheel surface seen again", false);
-  overlap.default_value = 1.0;
-  ParamSpec depth = fraction("modulation_depth", "modulation depth Q of the grinding stiffness per wheel revolution", true);
-  ParamSpec work = positive("work_speed_rpm", "rpm", "workpiece speed (reported; not regenerated here)");
-  work.default_value = 55.0;
   PluginInfo info;
   info.name = "amplitude_modulated";
   info.description = "wheel-regenerative chatter with the grinding stiffness modulated once per "
                      "wheel revolution (G7, eqs 3-9..3-20): beats, sidebands at +/- k n_g/60";
-  info.params = {positive("frequency_hz", "Hz", "structural natural frequency"),
-                 damping,
-                 positive("stiffness_n_per_m", "N/m", "structural stiffness k"),
-                 positive("grinding_stiffness_n_per_m", "N/m", "grinding stiffness kg b (times width)"),
-                 positive("contact_stiffness_n_per_m", "N/m", "contact stiffness kc b (times width)"),
-                 overlap,
-                 depth,
-                 positive("wheel_speed_rpm", "rpm", "wheel speed n_g; w0 = 2 pi n_g / 60"),
-                 work};
+  info.params = parameters_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.models_md_ids = "G7";
   info.example_params = Json::parse(R"({

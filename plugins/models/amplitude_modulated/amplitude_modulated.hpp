@@ -32,7 +32,7 @@ struct AmplitudeModulatedModalParameters {
   double overlap_factor = 1.0;                // mu
   double modulation_depth = 0.0;              // Q
   double wheel_speed_rpm = 0.0;               // n_g, w0 = 2 pi n_g / 60
-  double work_speed_rpm = 0.0;                // n_w (reported; the model regenerates the wheel)
+  double work_speed_rpm = 55.0;               // n_w (reported; the model regenerates the wheel)
 };
 
 // The same model for floquet_growth(): m = k/w^2, c = 2 zeta sqrt(k m).

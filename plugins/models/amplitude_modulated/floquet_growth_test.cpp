@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "chatterlab/roots.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
 
 namespace chatterlab {
 namespace {

@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
 
@@ -367,39 +367,36 @@ void check_sizes(const LinearDdeParameters& p) {
   }
 }
 
-LinearDdeParameters read_parameters(const ParamValues& v) {
-  LinearDdeParameters p;
-  p.a0 = v.matrix("a0");
-  if (v.has("delayed"))
-    for (const ParamValues& term : v.tables("delayed"))
-      p.delayed.push_back({term.real("delay_s"), term.matrix("matrix")});
-  return p;
+const ParamTable<LinearDdeParameters>& parameters_table() {
+  static const ParamTable<LinearDdeParameters> table = [] {
+    ParamTable<DelayedTerm> term;
+    term.add(&DelayedTerm::delay_s, "delay_s", "s", "delay tau_k").positive().required();
+    term.add(&DelayedTerm::matrix, "matrix", "1/s", "delayed matrix A_k (n x n, the size of a0)")
+        .min_items(1)
+        .required();
+    ParamTable<LinearDdeParameters> t;
+    t.add(&LinearDdeParameters::a0, "a0", "1/s", "state matrix A0 (n x n) of x' = A0 x + sum_k A_k x(t - tau_k)")
+        .min_items(1)
+        .required();
+    t.add_tables(&LinearDdeParameters::delayed, "delayed", "delayed terms A_k x(t - tau_k); empty: an ODE", term);
+    return t;
+  }();
+  return table;
 }
 
 }  // namespace
 
-LinearDde::LinearDde(const ParamValues& values) : LinearDde(read_parameters(values)) {}
+LinearDde::LinearDde(const ParamValues& values) : LinearDde(parameters_table().read(values)) {}
 
 LinearDde::LinearDde(LinearDdeParameters parameters) : parameters_(std::move(parameters)) {
   check_sizes(parameters_);
 }
 
 PluginInfo LinearDde::info() {
-    ParamSpec delay = model_params::positive("delay_s", "s", "delay tau_k");
-  ParamSpec matrix = param_spec("matrix", ValueKind::real_matrix, "1/s",
-                               "delayed matrix A_k (n x n, the size of a0)");
-  matrix.min_items = 1;
-  ParamSpec delayed = param_spec("delayed", ValueKind::table_list, "",
-                                "delayed terms A_k x(t - tau_k); empty: an ODE");
-  delayed.default_value = Json::array();
-  delayed.fields = {delay, matrix};
-  ParamSpec a0 = param_spec("a0", ValueKind::real_matrix, "1/s",
-                           "state matrix A0 (n x n) of x' = A0 x + sum_k A_k x(t - tau_k)");
-  a0.min_items = 1;
   return PluginInfo{
       .name = "linear_dde",
       .description = "Any linear delay system x' = A0 x + sum_k A_k x(t - tau_k), given as matrices",
-      .params = {a0, delayed},
+      .params = parameters_table().specs(),
       .thread_safety = ThreadSafety::shareable,  // immutable after construction
       .models_md_ids = "general linear DDE (solver testbed for G1)",
       // x'' + 2 zeta x' + x = -K (x - x(t - tau)), zeta = 0.05, K = 0.3, tau = 10: the tests'

@@ -1,276 +1,38 @@
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <numbers>
-
-#include "models/model_params.hpp"
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
+#include "shared/plunge_dynamics/process_scaling.hpp"
 
 namespace chatterlab {
 
-using model_params::positive;
-
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
-
-// Value and derivative carried together (forward-mode differentiation of the factored E).
-struct Dual {
-  Complex value;
-  Complex derivative;
-};
-Dual operator*(const Dual& a, const Dual& b) {
-  return {a.value * b.value, a.derivative * b.value + a.value * b.derivative};
-}
-Dual operator+(const Dual& a, const Dual& b) { return {a.value + b.value, a.derivative + b.derivative}; }
-Dual scaled(double k, const Dual& a) { return {k * a.value, k * a.derivative}; }
-
-// 1 - e^{-T s} and its derivative T e^{-T s}: the regeneration factor of one delay chain.
-Dual regeneration_factor(double period_s, Complex s) {
-  double magnitude = std::exp(-period_s * s.real());
-  double phase = period_s * s.imag();
-  Complex delayed(magnitude * std::cos(phase), -magnitude * std::sin(phase));
-  return {1.0 - delayed, period_s * delayed};
+// The parameters of a table, keys it lacks at their declared defaults (validation writes them; a
+// kind or test that builds the model from a partial table gets the same).
+PlungeRegenerativeParameters read_parameters(const ParamValues& values) {
+  const auto& table = plunge_dynamics::plunge_parameters_table();
+  Json complete = table.write(PlungeRegenerativeParameters{});
+  complete.update(values.json());
+  return table.read(complete);
 }
 
 }  // namespace
 
-// ------------------------------------------------------------------ characteristic function
-
-PlungeCharacteristic::PlungeCharacteristic(const PlungeRegenerativeParameters& p)
-    : wheel_period_s_(60.0 / p.wheel_speed_rpm),
-      work_period_s_(60.0 / p.work_speed_rpm),
-      wheel_on_(p.wheel_regeneration),
-      work_on_(p.work_regeneration),
-      contact_stiffness_(p.contact_stiffness_n_per_m),
-      alpha_(p.wheel_regeneration ? p.contact_stiffness_n_per_m / p.wheel_wear_stiffness_n_per_m : 0.0),
-      beta_(p.work_regeneration ? p.contact_stiffness_n_per_m / p.work_removal_stiffness_n_per_m : 0.0) {
-  for (const StructuralMode& m : p.modes) {
-    double omega = kTwoPi * m.frequency_hz;
-    double ratio = p.contact_stiffness_n_per_m / m.stiffness_n_per_m;
-    // Two modes with the same w and zeta share the denominator P: multiplying E by P twice would
-    // add a spurious zero at the structural pole, so their compliances are merged first.
-    auto same = std::find_if(modes_.begin(), modes_.end(), [&](const Mode& q) {
-      return q.omega == omega && q.zeta == m.damping_ratio;
-    });
-    if (same != modes_.end()) {
-      same->contact_ratio += ratio;
-      continue;
-    }
-    modes_.push_back({1.0 / (omega * omega), 2.0 * m.damping_ratio / omega, ratio, omega,
-                      m.damping_ratio});
-  }
-}
-
-CharacteristicValue PlungeCharacteristic::evaluate(Complex s) const {
-  // Modal product Pi = prod P_i and Q = sum_i (kc/k_i) prod_{j != i} P_j, built incrementally
-  // (Q_new = Q P + (kc/k) Pi_old), so a zero of one P_i never has to be divided by.
-  Dual product{1.0, 0.0}, coupled{0.0, 0.0};
-  for (const Mode& m : modes_) {
-    Dual denominator{s * s * m.inverse_omega_squared + s * m.two_zeta_over_omega + 1.0,
-                     2.0 * s * m.inverse_omega_squared + m.two_zeta_over_omega};
-    coupled = coupled * denominator + scaled(m.contact_ratio, product);
-    product = product * denominator;
-  }
-  const Dual one{1.0, 0.0};
-  Dual wheel = wheel_on_ ? regeneration_factor(wheel_period_s_, s) : one;
-  Dual work = work_on_ ? regeneration_factor(work_period_s_, s) : one;
-  Dual both = wheel * work;
-  // E = Pi (A B + alpha B + beta A) + A B Q
-  Dual e = product * (both + scaled(alpha_, work) + scaled(beta_, wheel)) + both * coupled;
-  return {e.value, e.derivative};
-}
-
-Complex PlungeCharacteristic::structural_compliance(Complex s) const {
-  Complex h = 0.0;
-  for (const Mode& m : modes_)
-    h += m.contact_ratio / (s * s * m.inverse_omega_squared + s * m.two_zeta_over_omega + 1.0);
-  return h / contact_stiffness_;
-}
-
-std::vector<Complex> PlungeCharacteristic::neutral_roots(double max_angular_frequency) const {
-  std::vector<Complex> roots;
-  if (!(wheel_on_ && work_on_)) return roots;  // one chain alone has no zero at s = 0
-  // s = 0: A = B = 0 makes every term of E vanish (a uniform change of wheel wear against work
-  // removal leaves the force unchanged: cumulative removal, MODELS.md G1 note).
-  roots.push_back(0.0);
-  // The same holds at every common point of the two lattices 2 pi n/Tg = 2 pi m/Tw, which exist
-  // when the speed ratio is rational (e.g. 1450/55 = 290/11: every 265.8 Hz). A wave pattern
-  // periodic in both revolutions, worn into the wheel and ground into the work with opposite
-  // signs, leaves the force unchanged for ever: the same neutral exchange as s = 0, not chatter.
-  // Lattice points that only nearly coincide give genuine roots at Re s ~ -C |delta|^2 < 0 (or > 0
-  // where the structure crosses the process line of eq 2-21), which are reported.
-  const double ratio = work_period_s_ / wheel_period_s_;
-  for (long n = 1; kTwoPi * static_cast<double>(n) / wheel_period_s_ <= max_angular_frequency; ++n) {
-    double m_exact = static_cast<double>(n) * ratio;
-    double m = std::round(m_exact);
-    if (m < 1.0 || std::abs(m_exact - m) > 1e-9 * m_exact) continue;
-    double wheel_point = kTwoPi * static_cast<double>(n) / wheel_period_s_;
-    double work_point = kTwoPi * m / work_period_s_;
-    // Rounding-level offset: the zero of E sits at the alpha/beta-weighted mean (local linear
-    // balance alpha Tw (u - delta) + beta Tg u = 0).
-    double weight = alpha_ * work_period_s_ / (alpha_ * work_period_s_ + beta_ * wheel_period_s_);
-    roots.emplace_back(0.0, wheel_point + weight * (work_point - wheel_point));
-  }
-  return roots;
-}
-
-void PlungeCharacteristic::initial_guesses(double max_angular_frequency,
-                                           std::vector<Complex>& guesses) const {
-  // One root per lattice point of each active delay chain (the quasi-polynomial is of neutral
-  // type: every root lies in a vertical strip and the chains fill it at the lattice density),
-  // plus the structural roots. Newton's first step from a lattice point 2 pi n j/T is the
-  // chain's first-order shift, so the raw lattice point is a good guess, except where a wheel
-  // and a work lattice point nearly coincide: there two roots share a neighbourhood and the
-  // local quadratic below separates them.
-  const double tg = wheel_period_s_, tw = work_period_s_;
-  const long wheel_points = wheel_on_ ? static_cast<long>(max_angular_frequency * tg / kTwoPi) + 2 : 0;
-  const long work_points = work_on_ ? static_cast<long>(max_angular_frequency * tw / kTwoPi) + 2 : 0;
-  std::vector<bool> work_point_paired(static_cast<std::size_t>(std::max(work_points, 0L)), false);
-  guesses.reserve(guesses.size() + static_cast<std::size_t>(wheel_points + work_points) + 2 * modes_.size() + 2);
-
-  for (long n = 0; n < wheel_points; ++n) {
-    const Complex wheel_point(0.0, kTwoPi * static_cast<double>(n) / tg);
-    long m = std::lround(static_cast<double>(n) * tw / tg);
-    Complex delta = Complex(0.0, kTwoPi * static_cast<double>(m) / tw) - wheel_point;
-    if (!work_on_ || m >= work_points || std::abs(delta) * tw > 0.5) {
-      guesses.push_back(wheel_point);
-      continue;
-    }
-    // A ~ Tg u, B ~ Tw (u - delta) near the pair (u = s - wheel_point); E/Pi = K A B + alpha B +
-    // beta A = 0 with K = 1 + kc H becomes a quadratic in u.
-    work_point_paired[static_cast<std::size_t>(m)] = true;
-    Complex k = 1.0 + contact_stiffness_ * structural_compliance(wheel_point);
-    Complex a2 = k * tg * tw;
-    Complex a1 = alpha_ * tw + beta_ * tg - a2 * delta;
-    Complex a0 = -alpha_ * tw * delta;
-    Complex root_disc = std::sqrt(a1 * a1 - 4.0 * a2 * a0);
-    if ((std::conj(a1) * root_disc).real() < 0.0) root_disc = -root_disc;
-    Complex q = -0.5 * (a1 + root_disc);  // the larger-magnitude root without cancellation
-    if (std::abs(a2) > 0.0) guesses.push_back(wheel_point + q / a2);
-    if (std::abs(q) > 0.0) guesses.push_back(wheel_point + a0 / q);
-  }
-  for (long m = 0; m < work_points; ++m) {
-    if (work_point_paired[static_cast<std::size_t>(m)]) continue;
-    if (m == 0 && wheel_on_) continue;  // s = 0 is neutral; the n = 0 pair covers its neighbour
-    guesses.emplace_back(0.0, kTwoPi * static_cast<double>(m) / tw);
-  }
-  // Structural roots: the open-loop pole and the pole stiffened by the contact and the averaged
-  // regeneration terms (the mean of 1/(1 - e^{-Ts}) over a lattice period is 1).
-  const double mean_process = 1.0 + alpha_ + beta_;
-  for (const Mode& m : modes_) {
-    double z = std::min(m.zeta, 0.999);
-    guesses.emplace_back(-z * m.omega, m.omega * std::sqrt(1.0 - z * z));
-    double stiffened = 1.0 + m.contact_ratio / mean_process;
-    guesses.emplace_back(-z * m.omega, m.omega * std::sqrt(std::max(stiffened - z * z, 0.0)));
-  }
-}
-
-double PlungeCharacteristic::real_part_bound() const {
-  // For Re s = sigma > 0: Re 1/(1 - e^{-Ts}) > 1/2 (the map 1/(1 - z) sends |z| < 1 into
-  // Re > 1/2), so Re D > nu - kc |H| with nu = 1 + alpha/2 + beta/2; and |P_i(s)| >= sigma^2/w_i^2
-  // (both poles have Re <= 0), so kc |H| <= sum (kc/k_i) w_i^2 / sigma^2. Hence D != 0 (and E =
-  // D A B Pi != 0: A, B, Pi have no zeros with Re s > 0) once sigma^2 >= sum (kc/k_i) w_i^2 / nu.
-  const double nu = 1.0 + 0.5 * alpha_ + 0.5 * beta_;
-  double sum = 0.0;
-  for (const Mode& m : modes_) sum += m.contact_ratio * m.omega * m.omega;
-  return 1.001 * std::sqrt(sum / nu) + 1e-9;
-}
-
-double PlungeCharacteristic::natural_frequency_scale_hz() const {
-  double highest = 0.0;
-  for (const Mode& m : modes_) highest = std::max(highest, m.omega / kTwoPi);
-  return highest;
-}
-
-// ------------------------------------------------------------------ model plugin
-
-namespace {
-
-PlungeRegenerativeParameters read_parameters(const ParamValues& v) {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
-  p.work_speed_rpm = v.real("work_speed_rpm");
-  p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
-  p.wheel_wear_stiffness_n_per_m = v.real("wheel_wear_stiffness_n_per_m");
-  p.work_removal_stiffness_n_per_m = v.real("work_removal_stiffness_n_per_m");
-  for (const ParamValues& mode : v.tables("modes"))
-    p.modes.push_back({mode.real("frequency_hz"), mode.real("damping_ratio"),
-                       mode.real("stiffness_n_per_m")});
-  if (v.has("wheel_regeneration")) p.wheel_regeneration = v.boolean("wheel_regeneration");
-  if (v.has("work_regeneration")) p.work_regeneration = v.boolean("work_regeneration");
-  return p;
-}
-
-ParamSpec switch_spec(std::string key, std::string description) {
-  ParamSpec spec = param_spec(std::move(key), ValueKind::boolean, "1", std::move(description));
-  spec.default_value = true;
-  return spec;
-}
-
-}  // namespace
-
-PlungeRegenerative::PlungeRegenerative(const ParamValues& values)
-    : PlungeRegenerative(read_parameters(values)) {}
+PlungeRegenerative::PlungeRegenerative(const ParamValues& values) : PlungeRegenerative(read_parameters(values)) {}
 
 PlungeRegenerative::PlungeRegenerative(PlungeRegenerativeParameters parameters)
-    : parameters_(std::move(parameters)) {}
+    : parameters_(std::move(parameters)), characteristic_(parameters_) {}
 
 PluginInfo PlungeRegenerative::info() {
-  ParamSpec damping = model_params::fraction("damping_ratio", "modal damping ratio zeta", true);
-  ParamSpec modes = param_spec(
-      "modes", ValueKind::table_list, "",
-      "machine structural modes; their compliances (1/k)/(s^2/w^2 + 2 zeta s/w + 1) are summed");
-  modes.fields = {positive("frequency_hz", "Hz", "modal natural frequency f = w/(2 pi)"), damping,
-                  positive("stiffness_n_per_m", "N/m", "modal stiffness k (static compliance 1/k)")};
-  modes.min_items = 1;
-
   return PluginInfo{
       .name = "plunge_regenerative",
       .description =
           "Plunge grinding, wheel and work regeneration with summed structural modes (G1 eq 2-16)",
-      .params =
-          {
-              positive("wheel_speed_rpm", "rpm", "wheel speed n_g; wheel period Tg = 60/n_g"),
-              positive("work_speed_rpm", "rpm", "workpiece speed n_w; work period Tw = 60/n_w"),
-              positive("contact_stiffness_n_per_m", "N/m", "wheel-work contact stiffness kc"),
-              positive("wheel_wear_stiffness_n_per_m", "N/m",
-                       "wheel wear stiffness kg (normal force per wheel wear depth)"),
-              positive("work_removal_stiffness_n_per_m", "N/m",
-                       "workpiece removal (grinding) stiffness kw"),
-              modes,
-              switch_spec("wheel_regeneration",
-                          "wheel surface regeneration on (false: kg -> infinity, term absent)"),
-              switch_spec("work_regeneration",
-                          "workpiece regeneration on (false: kw -> infinity, term absent; G3)"),
-          },
+      .params = plunge_dynamics::plunge_parameters_table().specs(),
       .thread_safety = ThreadSafety::shareable,  // immutable after construction
       .models_md_ids = "G1, G3",
-      // The G8 experiment's speeds and its 184 Hz and 306 Hz modes; the stiffnesses are
-      // assumptions of the right order for an external cylindrical grinder (see
-      // docs/models/plunge_regenerative.md).
-      .example_params = Json::parse(R"({
-          "wheel_speed_rpm": 1450, "work_speed_rpm": 55,
-          "contact_stiffness_n_per_m": 1.0e8, "wheel_wear_stiffness_n_per_m": 5.0e9,
-          "work_removal_stiffness_n_per_m": 5.0e7,
-          "modes": [ { "frequency_hz": 184.08, "damping_ratio": 0.05, "stiffness_n_per_m": 5.0e7 },
-                     { "frequency_hz": 305.6, "damping_ratio": 0.04, "stiffness_n_per_m": 8.0e7 } ]
-      })"),
+      .example_params = plunge_dynamics::example_g1_parameters(),
   };
-}
-
-// A regeneration switched off has an infinite stiffness (its term vanishes from eq 2-16).
-std::optional<StiffnessChain> PlungeRegenerative::stiffness_chain() const {
-  constexpr double off = std::numeric_limits<double>::infinity();
-  const PlungeRegenerativeParameters& p = parameters_;
-  StiffnessChain chain;
-  chain.contact_stiffness_n_per_m = p.contact_stiffness_n_per_m;
-  chain.wheel_wear_stiffness_n_per_m = p.wheel_regeneration ? p.wheel_wear_stiffness_n_per_m : off;
-  chain.work_removal_stiffness_n_per_m = p.work_regeneration ? p.work_removal_stiffness_n_per_m : off;
-  for (const StructuralMode& m : p.modes) chain.modes.push_back({m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
-  return chain;
 }
 
 std::unique_ptr<CharacteristicFunction> PlungeRegenerative::characteristic() const {
@@ -285,25 +47,22 @@ std::unique_ptr<TimeDomainModel> PlungeRegenerative::time_domain() const {
   return std::make_unique<PlungeTimeDomain>(parameters_);
 }
 
-// G1 process conditions (process_conditions.hpp) for kinds that vary them (suppression_map).
-ProcessConditions PlungeRegenerative::nominal_conditions() const {
-  ProcessConditions c;
-  c.wheel_speed_rpm = parameters_.wheel_speed_rpm;
-  c.work_speed_rpm = parameters_.work_speed_rpm;
-  return c;
+std::optional<StiffnessChain> PlungeRegenerative::stiffness_chain() const {
+  return plunge_dynamics::stiffness_chain(parameters_);
 }
-Json PlungeRegenerative::parameters_at(const ProcessConditions&, const ProcessConditions& c,
+
+Complex PlungeRegenerative::compliance_m_per_n(Complex s) const {
+  return characteristic_.structural_compliance(s);
+}
+
+ProcessConditions PlungeRegenerative::nominal_conditions() const {
+  return plunge_dynamics::nominal_conditions(parameters_);
+}
+
+Json PlungeRegenerative::parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                                        const ProcessScaling& scaling) const {
-  const auto& p = parameters_;
-  const double s = 1.0 - 0.5 * scaling.thickness_exponent * (c.depth_of_cut_ratio - 1.0);
-  Json modes = Json::array();
-  for (const auto& m : p.modes)
-    modes.push_back({{"frequency_hz", m.frequency_hz}, {"damping_ratio", m.damping_ratio}, {"stiffness_n_per_m", m.stiffness_n_per_m}});
-  return {{"wheel_speed_rpm", c.wheel_speed_rpm}, {"work_speed_rpm", c.work_speed_rpm},
-          {"contact_stiffness_n_per_m", s * p.contact_stiffness_n_per_m},
-          {"wheel_wear_stiffness_n_per_m", s * p.wheel_wear_stiffness_n_per_m},
-          {"work_removal_stiffness_n_per_m", p.work_removal_stiffness_n_per_m},
-          {"modes", modes}, {"wheel_regeneration", p.wheel_regeneration}, {"work_regeneration", p.work_regeneration}};
+  return plunge_dynamics::plunge_parameters_table().write(
+      plunge_dynamics::parameters_at(parameters_, reference, conditions, scaling));
 }
 
 CHATTERLAB_REGISTER_MODEL(PlungeRegenerative);

@@ -1,78 +1,24 @@
 #pragma once
 // MODELS.md G1: basic plunge-grinding model (Snoeys type), characteristic equation eq 2-16
-//
-//   D(s) = 1 + kc [ H(s) + 1/(kg (1 - e^{-Tg s})) + 1/(kw (1 - e^{-Tw s})) ],
-//   H(s) = sum_i (1/k_i) / (s^2/w_i^2 + 2 zeta_i s/w_i + 1)     (modal compliances summed),
-//
-// with Tg = 60/n_wheel, Tw = 60/n_work. Either regeneration chain can be switched off (its term is
-// then absent, the limit kg -> inf or kw -> inf of eq 2-16; with the work chain off this is the
-// wheel-regenerative model of G3, eq 2-66). Docs: docs/models/plunge_regenerative.md.
+// (shared/plunge_dynamics/plunge_characteristic.hpp), its time domain (plunge_time_domain.hpp),
+// and its capabilities: the stiffness chain and structural compliance (closed forms, the
+// compliance chart) and process conditions (feed_risk, suppression_map: the parameters at other
+// speeds, widths and depths of cut, shared/plunge_dynamics/process_scaling.hpp).
+// Docs: docs/models/plunge_regenerative.md.
+#include <memory>
 #include <optional>
-#include <vector>
 
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/process_conditions.hpp"
 #include "chatterlab/registry.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 namespace chatterlab {
 
-struct StructuralMode {
-  double frequency_hz = 0.0;
-  double damping_ratio = 0.0;
-  double stiffness_n_per_m = 0.0;
-};
-
-struct PlungeRegenerativeParameters {
-  double wheel_speed_rpm = 0.0;
-  double work_speed_rpm = 0.0;
-  double contact_stiffness_n_per_m = 0.0;       // kc
-  double wheel_wear_stiffness_n_per_m = 0.0;    // kg
-  double work_removal_stiffness_n_per_m = 0.0;  // kw
-  std::vector<StructuralMode> modes;
-  bool wheel_regeneration = true;
-  bool work_regeneration = true;
-};
-
-// E(s) = D(s) * A(s) B(s) * prod_i P_i(s), A = 1 - e^{-Tg s}, B = 1 - e^{-Tw s},
-// P_i = s^2/w_i^2 + 2 zeta_i s/w_i + 1, evaluated in the factored form
-//   E = Pi * (A B + alpha B + beta A) + A B * sum_i kc/k_i prod_{j != i} P_j,
-//   alpha = kc/kg, beta = kc/kw
-// (A = 1, alpha = 0 when the wheel chain is off; B = 1, beta = 0 when the work chain is off). Every
-// term is O(1) times the modal product, so E is accurate to rounding right next to the roots that
-// hug Re s = 0, which the certificate contour passes at ~1e-6 /s.
-class PlungeCharacteristic final : public CharacteristicFunction {
- public:
-  explicit PlungeCharacteristic(const PlungeRegenerativeParameters& parameters);
-
-  CharacteristicValue evaluate(Complex s) const override;
-  std::vector<Complex> neutral_roots(double max_angular_frequency_rad_s) const override;
-  void initial_guesses(double max_angular_frequency_rad_s,
-                       std::vector<Complex>& guesses) const override;
-  double real_part_bound() const override;
-  double natural_frequency_scale_hz() const override;
-
-  // Machine compliance H(s) = sum_i (1/k_i)/P_i(s) [m/N] (G1), used by the guesses and by tests of
-  // the closed-form criteria (G1 eq 2-21, G3 eq 2-68).
-  Complex structural_compliance(Complex s) const;
-
- private:
-  struct Mode {
-    double inverse_omega_squared;  // 1/w^2 [s^2]
-    double two_zeta_over_omega;    // 2 zeta / w [s]
-    double contact_ratio;          // kc / k_i (sum over modes merged for identical w, zeta)
-    double omega;                  // w [rad/s]
-    double zeta;
-  };
-  double wheel_period_s_, work_period_s_;
-  bool wheel_on_, work_on_;
-  double contact_stiffness_;
-  double alpha_, beta_;  // kc/kg, kc/kw (0 when that chain is off)
-  std::vector<Mode> modes_;
-};
-
-class PlungeRegenerative final : public Model, public ProcessConditionsModel {
+class PlungeRegenerative final : public Model, public StructuralCompliance, public ProcessConditionsModel {
  public:
   explicit PlungeRegenerative(const ParamValues& values);
   explicit PlungeRegenerative(PlungeRegenerativeParameters parameters);
@@ -82,8 +28,11 @@ class PlungeRegenerative final : public Model, public ProcessConditionsModel {
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
   std::unique_ptr<TimeDomainModel> time_domain() const override;  // G1 time domain
-  std::optional<StiffnessChain> stiffness_chain() const override;
   const PlungeRegenerativeParameters& parameters() const { return parameters_; }
+
+  std::optional<StiffnessChain> stiffness_chain() const override;
+  const StructuralCompliance* structural_compliance() const override { return this; }
+  Complex compliance_m_per_n(Complex s) const override;
   const ProcessConditionsModel* process_conditions() const override { return this; }
   ProcessConditions nominal_conditions() const override;
   Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
@@ -91,6 +40,7 @@ class PlungeRegenerative final : public Model, public ProcessConditionsModel {
 
  private:
   PlungeRegenerativeParameters parameters_;
+  PlungeCharacteristic characteristic_;  // H(s) of the compliance capability
 };
 
 }  // namespace chatterlab

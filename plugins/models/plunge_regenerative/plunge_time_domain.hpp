@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "chatterlab/dynamics.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 namespace chatterlab {
 

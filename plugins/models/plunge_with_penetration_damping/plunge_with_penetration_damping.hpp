@@ -9,16 +9,21 @@
 //
 // kd = 0 is plunge_regenerative. G1's entire function is affine in B = 1 - e^{-Tw s}, and kd only
 // replaces B by B + (kd/kw) s, so E(s) = E_G1(s) + (kd/kw) s E_G1,work off(s): the characteristic
-// function is built from two plunge_regenerative ones. kd = ks sqrt(de u0)/vw
-// (grinding_process.hpp). Docs: docs/models/plunge_with_penetration_damping.md.
+// function is built from two G1 ones (shared/plunge_dynamics). kd = ks sqrt(de u0)/vw
+// (shared/plunge_dynamics/grinding_process.hpp): with the process geometry given, the model reports
+// G4's closed forms beside its roots, and kd follows the process conditions with that law.
+// Docs: docs/models/plunge_with_penetration_damping.md.
 #include <memory>
 #include <optional>
 
 #include "chatterlab/characteristic.hpp"
+#include "chatterlab/closed_form.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/process_conditions.hpp"
 #include "chatterlab/registry.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 namespace chatterlab {
 
@@ -40,18 +45,46 @@ class PenetrationDampingCharacteristic final : public CharacteristicFunction {
   double delay_ratio_;  // kd/kw [s] (0 when the work chain is off)
 };
 
-class PlungeWithPenetrationDamping final : public Model {
+struct PenetrationDampingParameters {
+  PlungeRegenerativeParameters plunge;        // G1's, declared by the G1 table
+  double penetration_damping_n_s_per_m = 0.0;  // kd
+  // Process geometry for the G4 indicators (absent: those indicators are null).
+  std::optional<double> work_diameter_mm, wheel_diameter_mm, depth_of_cut_mm;
+};
+
+class PlungeWithPenetrationDamping final : public Model,
+                                           public ClosedFormIndicators,
+                                           public StructuralCompliance,
+                                           public ProcessConditionsModel {
  public:
   explicit PlungeWithPenetrationDamping(const ParamValues& values);
+  explicit PlungeWithPenetrationDamping(PenetrationDampingParameters parameters);
 
   static PluginInfo info();
 
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
+  const PenetrationDampingParameters& parameters() const { return parameters_; }
+
+  // G4 closed forms at the model's speeds and geometry.
+  const ClosedFormIndicators* closed_forms() const override { return this; }
+  std::vector<ClosedFormIndicatorSpec> indicator_specs() const override;
+  std::vector<Json> indicator_values() const override;
+
+  // The G1 chain with kd beside kw (the compliance chart refuses it: StiffnessChain).
+  std::optional<StiffnessChain> stiffness_chain() const override;
+  const StructuralCompliance* structural_compliance() const override { return this; }
+  Complex compliance_m_per_n(Complex s) const override;
+
+  // G1's rules (shared/plunge_dynamics/process_scaling.hpp) and kd ~ ks sqrt(de u0)/vw.
+  const ProcessConditionsModel* process_conditions() const override { return this; }
+  ProcessConditions nominal_conditions() const override;
+  Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                     const ProcessScaling& scaling) const override;
 
  private:
-  PlungeRegenerativeParameters parameters_;
-  double penetration_damping_n_s_per_m_;
+  PenetrationDampingParameters parameters_;
+  PlungeCharacteristic g1_;  // H(s) of the compliance capability
 };
 
 }  // namespace chatterlab

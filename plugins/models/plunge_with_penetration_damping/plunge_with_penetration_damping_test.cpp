@@ -11,12 +11,12 @@
 
 #include "chatterlab/registry.hpp"
 #include "chatterlab/roots.hpp"
-#include "models/grinding_process/grinding_process.hpp"
+#include "shared/plunge_dynamics/grinding_process.hpp"
 
 namespace chatterlab {
 namespace {
 
-// plunge_regenerative's example: work-regenerative chatter at 376.5 Hz (docs/models/plunge_regenerative.md).
+// the G1 example: work-regenerative chatter at 376.5 Hz (docs/models/plunge_regenerative.md).
 PlungeRegenerativeParameters example() {
   PlungeRegenerativeParameters p;
   p.wheel_speed_rpm = 1450.0;
@@ -89,9 +89,56 @@ TEST(PlungeWithPenetrationDamping, RootsSolveTheRawEquationAndKdRemovesTheWorkCh
 TEST(PlungeWithPenetrationDamping, RegisteredAndBuildsFromItsExample) {
   const auto& entry = model_registry().at("plunge_with_penetration_damping");
   EXPECT_EQ(entry.info.models_md_ids, "G1, G4");
-  auto model = entry.create(ParamValues(entry.info.example_params));
+  struct Here final : SourceMap {
+    SourceLocation locate(std::string_view) const override { return {"example", 0}; }
+  };
+  auto model = entry.create(ParamValues(validate_params(entry.info.example_params, entry.info.params, "model", Here())));
   ASSERT_NE(model->characteristic(), nullptr);
   EXPECT_DOUBLE_EQ(model->wheel_period_s().value(), 60.0 / 1450.0);
+}
+
+TEST(PlungeWithPenetrationDamping, G4IndicatorsFromTheProcessGeometry) {
+  // The example's process: work 100 mm at 55 rpm, wheel 400 mm, u0 = 5 um, kw = 5e7 N/m.
+  // v_w = pi 0.1 55/60 = 0.288 m/s; de = 0.1 0.4/0.5 = 0.08 m; l_c = sqrt(de u0) = 0.632 mm;
+  // kd = kw l_c/v_w = 1.098e5 N s/m (the example's kd); v_c = 2 pi f sqrt(u0 Re) at the most
+  // compliant mode (184.08 Hz: zeta k = 2.5e6 < 3.2e6 N/m), Re = 0.05 0.2/0.25 = 0.04 m.
+  const auto& entry = model_registry().at("plunge_with_penetration_damping");
+  Json table = entry.info.example_params;
+  table["wheel_regeneration"] = true;
+  table["work_regeneration"] = true;
+  const PlungeWithPenetrationDamping model{ParamValues(table)};
+  const ClosedFormIndicators* indicators = model.closed_forms();
+  ASSERT_NE(indicators, nullptr);
+  const std::vector<Json> v = indicators->indicator_values();
+  ASSERT_EQ(v.size(), indicators->indicator_specs().size());
+  const double vw = std::numbers::pi * 0.1 * 55.0 / 60.0;
+  EXPECT_NEAR(v[0].get<double>(), vw, 1e-15);
+  EXPECT_NEAR(v[1].get<double>(), 1e3 * std::sqrt(0.08 * 5e-6), 1e-14);
+  EXPECT_NEAR(v[2].get<double>(), 5e7 * std::sqrt(0.08 * 5e-6) / vw, 1e-9);
+  EXPECT_NEAR(v[2].get<double>(), 1.09e5, 0.01e5);
+  EXPECT_NEAR(v[3].get<double>(), 2.0 * std::numbers::pi * 184.08 * std::sqrt(5e-6 * 0.04), 1e-12);
+  // Without the geometry the indicators do not apply.
+  table.erase("wheel_diameter_mm");
+  table["wheel_diameter_mm"] = nullptr;
+  const std::vector<Json> partial = PlungeWithPenetrationDamping{ParamValues(table)}.indicator_values();
+  EXPECT_NEAR(partial[0].get<double>(), vw, 1e-15);
+  for (std::size_t i = 1; i < partial.size(); ++i) EXPECT_TRUE(partial[i].is_null()) << i;
+}
+
+TEST(PlungeWithPenetrationDamping, StiffnessChainCarriesKdInTheWorkChain) {
+  PenetrationDampingParameters p;
+  p.plunge = example();
+  p.penetration_damping_n_s_per_m = 1.09e5;
+  StiffnessChain chain = PlungeWithPenetrationDamping(p).stiffness_chain().value();
+  EXPECT_EQ(chain.work_removal_stiffness_n_per_m, 5e7);
+  EXPECT_EQ(chain.penetration_damping_n_s_per_m, 1.09e5);
+  // The structural compliance is G1's.
+  const Complex s(0.0, 1500.0);
+  EXPECT_EQ(PlungeWithPenetrationDamping(p).compliance_m_per_n(s), PlungeCharacteristic(example()).structural_compliance(s));
+  // With the work chain off kd has no effect, and the chain says so.
+  p.plunge.work_regeneration = false;
+  chain = PlungeWithPenetrationDamping(p).stiffness_chain().value();
+  EXPECT_EQ(chain.penetration_damping_n_s_per_m, 0.0);
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 #include <limits>
 #include <numbers>
 
-#include "models/model_params.hpp"
 
 namespace chatterlab {
 
@@ -180,48 +179,58 @@ SpeedCriterion speed_criterion(const ThompsonParameters& p) {
 
 // ------------------------------------------------------------------ model plugin
 
-using model_params::positive;
-
 namespace {
 
-ThompsonParameters read_parameters(const ParamValues& v) {
-  ThompsonParameters p;
-  p.mass_kg = v.real("mass_kg");
-  p.damping_n_s_per_m = v.real("damping_n_s_per_m");
-  p.stiffness_n_per_m = v.real("stiffness_n_per_m");
-  p.wheel_wear_compliance_m_per_n = v.real("wheel_wear_compliance_m_per_n");
-  p.work_removal_compliance_m_per_n = v.real("work_removal_compliance_m_per_n");
-  p.contact_compliance_m_per_n = v.real("contact_compliance_m_per_n");
-  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
-  p.work_speed_rpm = v.real("work_speed_rpm");
-  return p;
+const ParamTable<ThompsonParameters>& parameters_table() {
+  using P = ThompsonParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::mass_kg, "mass_kg", "kg", "equivalent mass m of the wheel spindle")
+        .positive()
+        .required();
+    t.add(&P::damping_n_s_per_m, "damping_n_s_per_m", "N s/m", "measured damping c0 of the spindle")
+        .positive()
+        .required();
+    t.add(&P::stiffness_n_per_m, "stiffness_n_per_m", "N/m", "spindle stiffness k")
+        .positive()
+        .required();
+    t.add(&P::wheel_wear_compliance_m_per_n, "wheel_wear_compliance_m_per_n", "m/N",
+          "wheel wear compliance Kg = 1/kg")
+        .positive()
+        .required();
+    t.add(&P::work_removal_compliance_m_per_n, "work_removal_compliance_m_per_n", "m/N",
+          "workpiece grinding (removal) compliance Kw = 1/kw")
+        .positive()
+        .required();
+    t.add(&P::contact_compliance_m_per_n, "contact_compliance_m_per_n", "m/N",
+          "wheel-work contact compliance Kc = 1/kc (rigid contact: a small value)")
+        .positive()
+        .required();
+    t.add(&P::wheel_speed_rpm, "wheel_speed_rpm", "rpm", "wheel speed n_g; Tg = 60/n_g")
+        .positive()
+        .required();
+    t.add(&P::work_speed_rpm, "work_speed_rpm", "rpm", "workpiece speed n_w; Tw = 60/n_w")
+        .positive()
+        .required();
+    return t;
+  }();
+  return table;
 }
 
 Json number_or_null(std::optional<double> value) { return value ? Json(*value) : Json(); }
 
 }  // namespace
 
-Thompson::Thompson(const ParamValues& values) : Thompson(read_parameters(values)) {}
-Thompson::Thompson(ThompsonParameters parameters) : parameters_(parameters) {}
+Thompson::Thompson(const ParamValues& values) : Thompson(parameters_table().read(values)) {}
+Thompson::Thompson(ThompsonParameters parameters)
+    : parameters_(parameters), equivalent_(thompson::equivalent_g1(parameters)) {}
 
 PluginInfo Thompson::info() {
   return PluginInfo{
       .name = "thompson",
       .description = "Thompson's doubly regenerative grinding model with its closed-form "
                      "unconditional/conditional stability criteria (G2 eqs 2-22..2-65)",
-      .params =
-          {
-              positive("mass_kg", "kg", "equivalent mass m of the wheel spindle"),
-              positive("damping_n_s_per_m", "N s/m", "measured damping c0 of the spindle"),
-              positive("stiffness_n_per_m", "N/m", "spindle stiffness k"),
-              positive("wheel_wear_compliance_m_per_n", "m/N", "wheel wear compliance Kg = 1/kg"),
-              positive("work_removal_compliance_m_per_n", "m/N",
-                       "workpiece grinding (removal) compliance Kw = 1/kw"),
-              positive("contact_compliance_m_per_n", "m/N",
-                       "wheel-work contact compliance Kc = 1/kc (rigid contact: a small value)"),
-              positive("wheel_speed_rpm", "rpm", "wheel speed n_g; Tg = 60/n_g"),
-              positive("work_speed_rpm", "rpm", "workpiece speed n_w; Tw = 60/n_w"),
-          },
+      .params = parameters_table().specs(),
       .thread_safety = ThreadSafety::shareable,
       .models_md_ids = "G2 (G1 eq 2-16 with one mode)",
       // One 251.6 Hz mode, zeta 0.05 (c = 2 zeta sqrt(k m)), kc 1e8, kg 1e9, kw 2e8 N/m, the G8
@@ -235,7 +244,7 @@ PluginInfo Thompson::info() {
 }
 
 std::unique_ptr<CharacteristicFunction> Thompson::characteristic() const {
-  return std::make_unique<PlungeCharacteristic>(thompson::equivalent_g1(parameters_));
+  return std::make_unique<PlungeCharacteristic>(equivalent_);
 }
 
 std::optional<double> Thompson::wheel_period_s() const { return 60.0 / parameters_.wheel_speed_rpm; }
@@ -276,6 +285,12 @@ std::vector<Json> Thompson::indicator_values() const {
       speeds.chatter_margin,
   };
 }
+
+std::optional<StiffnessChain> Thompson::stiffness_chain() const {
+  return plunge_dynamics::stiffness_chain(thompson::equivalent_g1(parameters_));
+}
+
+Complex Thompson::compliance_m_per_n(Complex s) const { return equivalent_.structural_compliance(s); }
 
 CHATTERLAB_REGISTER_MODEL(Thompson);
 

@@ -7,7 +7,7 @@
 //
 // In the Laplace domain: 1/(m s^2 + c s + k) + Kc + Kg/(1 - e^{-Tg s}) + Kw/(1 - e^{-Tw s}) = 0,
 // which is G1's eq 2-16 for one mode with kc = 1/Kc, kg = 1/Kg, kw = 1/Kw (the characteristic
-// function is plunge_regenerative's). The printed contact relation 2-28 also adds x3 = Kg Fd; with
+// function is the G1 family's, shared/plunge_dynamics). The printed contact relation 2-28 also adds x3 = Kg Fd; with
 // it the sin-balance would read (Kg - Kw)/2 instead of the book's own eq 2-41 (-(Kg + Kw)/2), so
 // x2 already contains this revolution's wear and x3 must not be added again (docs/models/thompson.md).
 //
@@ -21,9 +21,11 @@
 #include "chatterlab/characteristic.hpp"
 #include "chatterlab/closed_form.hpp"
 #include "chatterlab/model.hpp"
+#include "chatterlab/param_table.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/registry.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 namespace chatterlab {
 
@@ -112,14 +114,14 @@ SpeedCriterion speed_criterion(const ThompsonParameters& p);
 
 }  // namespace thompson
 
-class Thompson final : public Model, public ClosedFormIndicators {
+class Thompson final : public Model, public ClosedFormIndicators, public StructuralCompliance {
  public:
   explicit Thompson(const ParamValues& values);
   explicit Thompson(ThompsonParameters parameters);
 
   static PluginInfo info();
 
-  // G1 eq 2-16 with one mode and kc = 1/Kc, kg = 1/Kg, kw = 1/Kw (plunge_regenerative's E(s)).
+  // G1 eq 2-16 with one mode and kc = 1/Kc, kg = 1/Kg, kw = 1/Kw (the G1 family's E(s)).
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
 
@@ -127,10 +129,16 @@ class Thompson final : public Model, public ClosedFormIndicators {
   std::vector<ClosedFormIndicatorSpec> indicator_specs() const override;
   std::vector<Json> indicator_values() const override;
 
+  // The equivalent G1 system's chain and compliance (one mode: 1/(m s^2 + c s + k)).
+  std::optional<StiffnessChain> stiffness_chain() const override;
+  const StructuralCompliance* structural_compliance() const override { return this; }
+  Complex compliance_m_per_n(Complex s) const override;
+
   const ThompsonParameters& parameters() const { return parameters_; }
 
  private:
   ThompsonParameters parameters_;
+  PlungeCharacteristic equivalent_;  // of thompson::equivalent_g1(parameters_)
 };
 
 }  // namespace chatterlab

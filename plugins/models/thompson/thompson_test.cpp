@@ -234,5 +234,35 @@ TEST(Thompson, PluginReportsIndicatorsAndRejectsBadParameters) {
   }
 }
 
+TEST(Thompson, StiffnessChainAndComplianceAreTheEquivalentG1System) {
+  // kc = 1/Kc, kg = 1/Kg, kw = 1/Kw, one mode f = sqrt(k/m)/2 pi, zeta = c/(2 sqrt(k m)); H(s) =
+  // 1/(m s^2 + c s + k). Fig 2-4: the process line -(Kc + (Kg + Kw)/2) meets the circle's
+  // leftmost point -1/(4 zeta (1 + zeta) k) exactly when c0 < c_m (2-48/2-65).
+  for (const double c0 : {3162.3, 1.5e4, 2.0e4}) {
+    ThompsonParameters p = example();
+    p.damping_n_s_per_m = c0;
+    const Thompson model(p);
+    const StiffnessChain chain = model.stiffness_chain().value();
+    EXPECT_EQ(chain.contact_stiffness_n_per_m, 1.0 / 1e-8);
+    EXPECT_EQ(chain.wheel_wear_stiffness_n_per_m, 1.0 / 1e-9);
+    EXPECT_EQ(chain.work_removal_stiffness_n_per_m, 1.0 / 5e-9);
+    ASSERT_EQ(chain.modes.size(), 1u);
+    const double zeta = c0 / (2.0 * std::sqrt(5e7 * 20.0));
+    EXPECT_NEAR(chain.modes[0].frequency_hz, std::sqrt(5e7 / 20.0) / kTwoPi, 1e-12);
+    EXPECT_NEAR(chain.modes[0].damping_ratio, zeta, 1e-15);
+    const StructuralCompliance* h = model.structural_compliance();
+    ASSERT_NE(h, nullptr);
+    for (const double w : {0.0, 900.0, 1580.8, 3000.0}) {
+      const std::complex<double> expected = compliance(p, w);
+      EXPECT_NEAR(std::abs(h->compliance_m_per_n({0.0, w}) - expected), 0.0, 1e-12 * std::abs(expected)) << w;
+    }
+    const double line = -(1.0 / chain.contact_stiffness_n_per_m +
+                          0.5 / chain.wheel_wear_stiffness_n_per_m + 0.5 / chain.work_removal_stiffness_n_per_m);
+    EXPECT_NEAR(line, -process_line_m_per_n(p), 1e-24);
+    const double leftmost = -1.0 / (4.0 * zeta * (1.0 + zeta) * 5e7);
+    EXPECT_EQ(leftmost < line, c0 < unconditional_damping_n_s_per_m(p)) << c0;
+  }
+}
+
 }  // namespace
 }  // namespace chatterlab

@@ -6,11 +6,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
-
-using model_params::positive;
 
 namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
@@ -116,58 +114,77 @@ std::vector<std::string> TorsionalCouplingTimeDomain::diagnostics() const {
 }
 
 namespace {
-TorsionalCouplingParameters read(const ParamValues& v) {
-  TorsionalCouplingParameters p;
-  p.mass_kg = v.real("mass_kg");
-  p.damping_n_s_per_m = v.real("damping_n_s_per_m");
-  p.stiffness_n_per_m = v.real("stiffness_n_per_m");
-  p.work_inertia_kg_m2 = v.real("work_inertia_kg_m2");
-  p.work_torsional_damping_n_m_s = v.real("work_torsional_damping_n_m_s");
-  p.work_torsional_stiffness_n_m = v.real("work_torsional_stiffness_n_m");
-  p.wheel_inertia_kg_m2 = v.real("wheel_inertia_kg_m2");
-  p.wheel_torsional_damping_n_m_s = v.real("wheel_torsional_damping_n_m_s");
-  p.wheel_torsional_stiffness_n_m = v.real("wheel_torsional_stiffness_n_m");
-  p.work_radius_m = v.real("work_radius_m");
-  p.wheel_radius_m = v.real("wheel_radius_m");
-  p.work_speed_rpm = v.real("work_speed_rpm");
-  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
-  p.grinding_width_m = v.real("grinding_width_m");
-  p.removal_coefficient_n_per_m2 = v.real("removal_coefficient_n_per_m2");
-  p.grinding_ratio = v.real("grinding_ratio");
-  p.force_angle_deg = v.real("force_angle_deg");
-  return p;
+
+const ParamTable<TorsionalCouplingParameters>& parameters_table() {
+  using P = TorsionalCouplingParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::mass_kg, "mass_kg", "kg", "transverse (wheel-head) mass m").positive().required();
+    t.add(&P::damping_n_s_per_m, "damping_n_s_per_m", "N s/m", "transverse damping c")
+        .positive()
+        .required();
+    t.add(&P::stiffness_n_per_m, "stiffness_n_per_m", "N/m", "transverse stiffness k")
+        .positive()
+        .required();
+    t.add(&P::work_inertia_kg_m2, "work_inertia_kg_m2", "kg m^2", "workpiece + drive inertia Iw")
+        .positive()
+        .required();
+    t.add(&P::work_torsional_damping_n_m_s, "work_torsional_damping_n_m_s", "N m s/rad",
+          "workpiece torsional damping cw")
+        .positive()
+        .required();
+    t.add(&P::work_torsional_stiffness_n_m, "work_torsional_stiffness_n_m", "N m/rad",
+          "workpiece drive torsional stiffness kw")
+        .positive()
+        .required();
+    t.add(&P::wheel_inertia_kg_m2, "wheel_inertia_kg_m2", "kg m^2", "wheel + spindle inertia Ig")
+        .positive()
+        .required();
+    t.add(&P::wheel_torsional_damping_n_m_s, "wheel_torsional_damping_n_m_s", "N m s/rad",
+          "wheel torsional damping cg")
+        .positive()
+        .required();
+    t.add(&P::wheel_torsional_stiffness_n_m, "wheel_torsional_stiffness_n_m", "N m/rad",
+          "wheel spindle torsional stiffness kg")
+        .positive()
+        .required();
+    t.add(&P::work_radius_m, "work_radius_m", "m", "workpiece radius Rw0").positive().required();
+    t.add(&P::wheel_radius_m, "wheel_radius_m", "m", "wheel radius Rg0").positive().required();
+    t.add(&P::work_speed_rpm, "work_speed_rpm", "rpm", "nominal workpiece speed n_w")
+        .positive()
+        .required();
+    t.add(&P::wheel_speed_rpm, "wheel_speed_rpm", "rpm", "nominal wheel speed n_g")
+        .positive()
+        .required();
+    t.add(&P::grinding_width_m, "grinding_width_m", "m", "grinding width b").positive().required();
+    t.add(&P::removal_coefficient_n_per_m2, "removal_coefficient_n_per_m2", "N/m^2",
+          "lambda_w: force per width per work depth of cut")
+        .positive()
+        .required();
+    t.add(&P::grinding_ratio, "grinding_ratio", "1",
+          "grinding ratio Gr (work volume / wheel volume removed)")
+        .positive()
+        .required();
+    t.add(&P::force_angle_deg, "force_angle_deg", "deg",
+          "angle alpha of the grinding force from the normal (torque arm: sin alpha)")
+        .non_negative()
+        .below(90.0)
+        .required();
+    return t;
+  }();
+  return table;
 }
+
 }  // namespace
 
-TorsionalCoupling::TorsionalCoupling(const ParamValues& values) : p_(read(values)) {}
+TorsionalCoupling::TorsionalCoupling(const ParamValues& values) : p_(parameters_table().read(values)) {}
 
 PluginInfo TorsionalCoupling::info() {
-  ParamSpec angle = param_spec("force_angle_deg", ValueKind::real, "deg",
-                               "angle alpha of the grinding force from the normal (torque arm: sin alpha)");
-  angle.min = 0.0;
-  angle.max = 90.0;
-  angle.max_exclusive = true;
   PluginInfo info;
   info.name = "torsional_coupling";
   info.description = "transverse, workpiece-torsion and wheel-torsion modes coupled by a "
                      "speed-dependent grinding force (G5, eqs 2-79..2-87)";
-  info.params = {positive("mass_kg", "kg", "transverse (wheel-head) mass m"),
-                 positive("damping_n_s_per_m", "N s/m", "transverse damping c"),
-                 positive("stiffness_n_per_m", "N/m", "transverse stiffness k"),
-                 positive("work_inertia_kg_m2", "kg m^2", "workpiece + drive inertia Iw"),
-                 positive("work_torsional_damping_n_m_s", "N m s/rad", "workpiece torsional damping cw"),
-                 positive("work_torsional_stiffness_n_m", "N m/rad", "workpiece drive torsional stiffness kw"),
-                 positive("wheel_inertia_kg_m2", "kg m^2", "wheel + spindle inertia Ig"),
-                 positive("wheel_torsional_damping_n_m_s", "N m s/rad", "wheel torsional damping cg"),
-                 positive("wheel_torsional_stiffness_n_m", "N m/rad", "wheel spindle torsional stiffness kg"),
-                 positive("work_radius_m", "m", "workpiece radius Rw0"),
-                 positive("wheel_radius_m", "m", "wheel radius Rg0"),
-                 positive("work_speed_rpm", "rpm", "nominal workpiece speed n_w"),
-                 positive("wheel_speed_rpm", "rpm", "nominal wheel speed n_g"),
-                 positive("grinding_width_m", "m", "grinding width b"),
-                 positive("removal_coefficient_n_per_m2", "N/m^2", "lambda_w: force per width per work depth of cut"),
-                 positive("grinding_ratio", "1", "grinding ratio Gr (work volume / wheel volume removed)"),
-                 angle};
+  info.params = parameters_table().specs();
   info.thread_safety = ThreadSafety::shareable;  // time-domain instances are per simulation
   info.models_md_ids = "G5";
   info.example_params = Json::parse(R"({

@@ -14,7 +14,7 @@
 #include "chatterlab/params.hpp"
 #include "chatterlab/roots.hpp"
 #include "chatterlab/spectrum.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "shared/plunge_dynamics/plunge_characteristic.hpp"
 #include "models/torsional_coupling/torsional_coupling.hpp"
 
 namespace chatterlab {

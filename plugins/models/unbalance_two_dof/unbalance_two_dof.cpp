@@ -4,12 +4,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "models/model_params.hpp"
+#include "chatterlab/param_table.hpp"
 
 namespace chatterlab {
-
-using model_params::non_negative;
-using model_params::positive;
 
 void UnbalanceTwoDofTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
   x[0] = d.displacement_m;
@@ -82,41 +79,54 @@ void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const Contac
 }
 
 namespace {
-UnbalanceTwoDofParameters read(const ParamValues& v) {
-  UnbalanceTwoDofParameters p;
-  p.wheel_mass_kg = v.real("mass_1_kg");
-  p.wheel_damping_n_s_per_m = v.real("damping_1_n_s_per_m");
-  p.wheel_support_stiffness_n_per_m = v.real("stiffness_1_n_per_m");
-  p.work_mass_kg = v.real("mass_2_kg");
-  p.work_damping_n_s_per_m = v.real("damping_2_n_s_per_m");
-  p.work_support_stiffness_n_per_m = v.real("stiffness_2_n_per_m");
-  p.contact_stiffness_n_per_m = v.real("contact_stiffness_n_per_m");
-  p.grinding_stiffness_n_per_m = v.real("wheel_wear_stiffness_n_per_m");
-  p.unbalance_kg_m = v.real("unbalance_kg_m");
-  p.wheel_speed_rpm = v.real("wheel_speed_rpm");
-  p.work_speed_rpm = v.real("work_speed_rpm");
-  return p;
+
+const ParamTable<UnbalanceTwoDofParameters>& parameters_table() {
+  using P = UnbalanceTwoDofParameters;
+  static const ParamTable<P> table = [] {
+    ParamTable<P> t;
+    t.add(&P::wheel_mass_kg, "mass_1_kg", "kg", "wheel-side mass m1").positive().required();
+    t.add(&P::wheel_damping_n_s_per_m, "damping_1_n_s_per_m", "N s/m", "wheel-side damping c1")
+        .non_negative()
+        .required();
+    t.add(&P::wheel_support_stiffness_n_per_m, "stiffness_1_n_per_m", "N/m", "wheel-side support stiffness k1")
+        .positive()
+        .required();
+    t.add(&P::work_mass_kg, "mass_2_kg", "kg", "work-side mass m2").positive().required();
+    t.add(&P::work_damping_n_s_per_m, "damping_2_n_s_per_m", "N s/m", "work-side damping c2")
+        .non_negative()
+        .required();
+    t.add(&P::work_support_stiffness_n_per_m, "stiffness_2_n_per_m", "N/m", "work-side support stiffness k2")
+        .positive()
+        .required();
+    t.add(&P::contact_stiffness_n_per_m, "contact_stiffness_n_per_m", "N/m", "contact stiffness kc")
+        .positive()
+        .required();
+    t.add(&P::grinding_stiffness_n_per_m, "wheel_wear_stiffness_n_per_m", "N/m",
+          "wheel stiffness kg; k = kc kg/(kc + kg)")
+        .positive()
+        .required();
+    t.add(&P::unbalance_kg_m, "unbalance_kg_m", "kg m", "wheel unbalance U (mass times eccentricity)")
+        .non_negative()
+        .required();
+    t.add(&P::wheel_speed_rpm, "wheel_speed_rpm", "rpm", "wheel speed n_g (forcing frequency w = 2 pi n_g/60)")
+        .positive()
+        .required();
+    t.add(&P::work_speed_rpm, "work_speed_rpm", "rpm", "work speed n_w (lobes Z = n_g/n_w)").positive().required();
+    return t;
+  }();
+  return table;
 }
+
 }  // namespace
 
-UnbalanceTwoDof::UnbalanceTwoDof(const ParamValues& values) : p_(read(values)) {}
+UnbalanceTwoDof::UnbalanceTwoDof(const ParamValues& values) : p_(parameters_table().read(values)) {}
 
 PluginInfo UnbalanceTwoDof::info() {
   PluginInfo info;
   info.name = "unbalance_two_dof";
   info.description = "two-DOF wheel/work system forced by wheel unbalance U w^2 cos wt (G6, eqs "
                      "3-1..3-6): forced response, Z = n_g/n_w lobes on the work";
-  info.params = {positive("mass_1_kg", "kg", "wheel-side mass m1"),
-                 non_negative("damping_1_n_s_per_m", "N s/m", "wheel-side damping c1"),
-                 positive("stiffness_1_n_per_m", "N/m", "wheel-side support stiffness k1"),
-                 positive("mass_2_kg", "kg", "work-side mass m2"),
-                 non_negative("damping_2_n_s_per_m", "N s/m", "work-side damping c2"),
-                 positive("stiffness_2_n_per_m", "N/m", "work-side support stiffness k2"),
-                 positive("contact_stiffness_n_per_m", "N/m", "contact stiffness kc"),
-                 positive("wheel_wear_stiffness_n_per_m", "N/m", "wheel stiffness kg; k = kc kg/(kc + kg)"),
-                 non_negative("unbalance_kg_m", "kg m", "wheel unbalance U (mass times eccentricity)"),
-                 positive("wheel_speed_rpm", "rpm", "wheel speed n_g (forcing frequency w = 2 pi n_g/60)"),
-                 positive("work_speed_rpm", "rpm", "work speed n_w (lobes Z = n_g/n_w)")};
+  info.params = parameters_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.models_md_ids = "G6";
   info.example_params = Json::parse(R"({

@@ -76,7 +76,9 @@ const ParamTable<Settings>& settings_table() {
         .non_negative();
     t.add(&Settings::one_sided_contact, "one_sided_contact", "1",
           "the wheel may leave the work (false: bilateral, linear contact, the setting 5-37 describes)");
-    t.add(&Settings::relative_tolerance, "relative_tolerance", "1", "integrator relative tolerance")
+    t.add(&Settings::relative_tolerance, "relative_tolerance", "1",
+          "relative tolerance of the adaptive ARKODE route only (the simulations run the fixed-step "
+          "engine, which has none)")
         .positive()
         .at_most(1e-3);
     t.add(&Settings::divergence_limit_m, "divergence_limit_m", "m",

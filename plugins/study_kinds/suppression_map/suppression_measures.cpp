@@ -6,7 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "models/plunge_regenerative/wheel_growth_rate.hpp"
+#include "shared/plunge_dynamics/wheel_growth_rate.hpp"
 
 namespace chatterlab::suppression_measures {
 

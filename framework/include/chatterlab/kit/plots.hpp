@@ -15,6 +15,10 @@
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
 
+namespace chatterlab {
+class MeasuredMachine;  // chatterlab/modal_fit.hpp
+}
+
 namespace chatterlab::kit {
 
 // Draws every figure even when one fails (gnuplot rejects a title, ...), then reports all
@@ -84,6 +88,13 @@ struct ColumnFigure {
 void plot_column(const std::vector<PlotAxis>& axes, const ResultTable& results,
                  const ColumnFigure& figure, const std::filesystem::path& out_dir,
                  const std::string& stem, Figures& figures);
+
+// The plots of a machine given by a measured FRF (Model::measured_machine()), for any kind whose
+// model has one: frf_fit (|H| measured and synthesised from the fit, log scale), frf_fit_parts
+// (real and imaginary parts) and, when the model uses a modal fit, stabilisation_diagram (every
+// pole of every order by its label, the selected modes, |H| scaled behind).
+void plot_measured_machine(const MeasuredMachine& machine, const std::string& title,
+                           const std::filesystem::path& out_dir, Figures& figures);
 
 // At most ~2 x buckets points of a long series, for a plot: the minimum and maximum of each
 // bucket in time order, so the envelope of a fast oscillation stays visible.

@@ -1,0 +1,32 @@
+#pragma once
+// --resume: which points an earlier run into the same directory finished (docs/studies.md,
+// "--resume"), and why a resume is refused when they belong to another computation.
+#include <cstddef>
+#include <filesystem>
+#include <utility>
+#include <vector>
+
+#include "chatterlab/study.hpp"
+#include "runner/results_io.hpp"
+
+namespace chatterlab::runner {
+
+struct ResumedPoints {
+  std::vector<std::pair<std::size_t, PointResult>> records;  // one per point taken over
+  std::size_t truncated_lines = 0;
+  std::size_t invalid_lines = 0;
+};
+
+// Reads every journal in `out_dir`. Per point, an ok record wins over a failed one, else the
+// latest session's; with `retry_failed`, failed and timed-out points are not taken over (they are
+// computed again). Throws InputError naming the journal and what changed (an input file and its
+// hashes, or the first study value that differs from the earlier run's meta.json) when a journal
+// was written for another computation.
+ResumedPoints read_journals(const std::filesystem::path& out_dir, const JournalHeader& expected,
+                            const Study& study, bool retry_failed);
+
+// The first place where two JSON values differ, as "model.work_speed_rpm: 55 then, 60 now"
+// ("" when equal). Keys are compared in sorted order.
+std::string first_difference(const Json& then, const Json& now, const std::string& path = "");
+
+}  // namespace chatterlab::runner

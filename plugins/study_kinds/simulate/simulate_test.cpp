@@ -1,0 +1,102 @@
+// The `simulate` study kind on the kit: its [simulation] table (the user-visible keys), the
+// validated document (defaults written back, idempotent), the engine settings it runs with, the
+// profile-quality analysis chosen by capability, and a short G1 run against its certified root.
+#include "study_kinds/simulate/simulate.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "chatterlab/kit/capabilities.hpp"
+#include "chatterlab/study.hpp"
+#include "study_kinds/simulate/simulate_point.hpp"
+#include "unit/study_test_support.hpp"
+
+namespace chatterlab {
+namespace {
+
+using testing::TempDir;
+
+constexpr const char* g1_study = R"([study]
+kind = "simulate"
+[model]
+type = "plunge_regenerative"
+wheel_speed_rpm = 1450
+work_speed_rpm = 55
+contact_stiffness_n_per_m = 1.0e8
+wheel_wear_stiffness_n_per_m = 1.0e9
+work_removal_stiffness_n_per_m = 2.0e8
+modes = [ { frequency_hz = 250.0, damping_ratio = 0.05, stiffness_n_per_m = 5.0e7 } ]
+[simulation]
+duration_s = 2.5
+sample_rate_hz = 10000
+one_sided_contact = false
+initial_waviness_m = 1e-9
+)";
+
+TEST(Simulate, TheSimulationTableKeepsTheUserVisibleKeys) {
+  std::vector<std::string> keys;
+  for (const ParamSpec& spec : Simulate::info().params) keys.push_back(spec.key);
+  for (const char* key : {"duration_s", "sample_rate_hz", "initial_displacement_m", "initial_velocity_m_per_s",
+                          "initial_waviness_m", "seed", "infeed_rate_m_per_s", "one_sided_contact",
+                          "wheel_contact_arc_deg", "work_contact_arc_deg", "snapshot_times_s", "fit_start_s",
+                          "fit_end_s", "relative_tolerance", "integrator", "fixed_steps_per_wave", "min_frequency_hz",
+                          "divergence_limit_m", "timeseries_format", "timeseries_decimation",
+                          "measurement_noise_m", "write_point_files", "wheel_speed_modulation",
+                          "wheel_speed_amplitude_ratio", "wheel_speed_frequency_hz", "wheel_speed_schedule",
+                          "work_speed_modulation", "work_speed_amplitude_ratio", "work_speed_frequency_hz",
+                          "work_speed_schedule"})
+    EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
+  EXPECT_EQ(keys.size(), 30u);
+}
+
+TEST(Simulate, ValidationWritesTheDefaultsAndIsIdempotent) {
+  TempDir dir;
+  const Study study = load_study(dir.write("g1.toml", g1_study));
+  const Json& sim = study.document.at("simulation");
+  EXPECT_EQ(sim.at("snapshot_times_s"), Json::array({2.5}));  // the end
+  EXPECT_EQ(sim.at("relative_tolerance"), Json(1e-6));
+  EXPECT_EQ(sim.at("divergence_limit_m"), Json(0.01));
+  EXPECT_EQ(sim.at("integrator"), Json("fixed_step"));
+  EXPECT_EQ(sim.at("fixed_steps_per_wave"), Json(0.0));
+  EXPECT_EQ(sim.at("timeseries_format"), Json("csv"));
+  EXPECT_EQ(sim.at("timeseries_decimation"), Json(1));
+  Json again = study.document;
+  auto kind = study_kind_registry().at("simulate").create(ParamValues{});
+  struct Nowhere final : SourceMap {
+    SourceLocation locate(std::string_view) const override { return {}; }
+  };
+  kind->validate(again, Nowhere());
+  EXPECT_EQ(again, study.document);
+}
+
+TEST(Simulate, ThePartQualityComesFromTheAnalysisWithTheCapability) {
+  const auto found = kit::plugins_with(analysis_registry(), &Analysis::profile_quality);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found.front()->info.name, "surface_profile");
+  EXPECT_EQ(simulate_point::profile_quality_analysis(), found.front());
+}
+
+TEST(Simulate, ALinearG1RunGrowsAtTheCertifiedRoot) {
+  // docs/models/plunge_regenerative.md: the certified rightmost root of this machine is
+  // 4.790137 /s at 361.7148 Hz; bilateral contact keeps the run linear (the default fixed-step
+  // engine propagates G1's linear form exactly, docs/dynamics.md). 2.5 s: the default fit window
+  // [1.25, 2.5] s spans more than one work revolution (1.09 s), as a valid fit needs.
+  TempDir dir;
+  const Study study = load_study(dir.write("g1.toml", g1_study));
+  auto kind = study_kind_registry().at("simulate").create(ParamValues{});
+  const std::vector<Json> row = kind->run_point(study.point_document(0), PointContext{});
+  ASSERT_EQ(row.size(), 11u);
+  EXPECT_NEAR(row[0].get<double>(), 4.790137, 0.01 * 4.790137);  // fitted growth rate
+  EXPECT_EQ(row[1], Json(true)) << row[3];                        // ... and the fit is valid
+  EXPECT_NEAR(row[4].get<double>(), 361.7148, 2.0);               // dominant frequency (spectral resolution)
+  EXPECT_EQ(row[6].get<double>(), 0.0);                           // never out of contact
+  EXPECT_EQ(row[7], Json("completed"));
+  EXPECT_TRUE(row[8].is_number());  // the work surface's Wt was measured  // the work surface's Wt was measured
+}
+
+}  // namespace
+}  // namespace chatterlab

@@ -1,0 +1,164 @@
+// The ProcessConditionsModel capability of the plunge models (chatterlab/process_conditions.hpp)
+// reproduces, bit for bit, the two process models that study kinds wrote by G1's parameter names
+// before it existed: feed_risk's segment -> G1 mapping (map_segment + segment_model_table,
+// docs/feed_risk.md) and suppression_map's frozen conditions of a modulation level (wheel or work
+// speed times the level; feed: kc and kg times 1 - eps/2 (level - 1)). A study kind switched to
+// the capability therefore leaves the shipped studies' results where they are.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "chatterlab/kit/model.hpp"
+#include "chatterlab/model.hpp"
+#include "chatterlab/process_conditions.hpp"
+#include "chatterlab/study.hpp"
+#include "feed_risk/feed_risk.hpp"
+#include "unit/study_test_support.hpp"
+
+namespace chatterlab {
+namespace {
+
+// feed_risk's test model (one mode, wheel chain off) with both regenerations on.
+Json model_table(const std::string& type, const std::string& extra = "") {
+  testing::TempDir dir;
+  const std::string text = "[study]\nkind = \"stability_map\"\n[model]\ntype = \"" + type + R"("
+wheel_speed_rpm = 1450
+work_speed_rpm = 300
+contact_stiffness_n_per_m = 2.0e7
+wheel_wear_stiffness_n_per_m = 2.0e9
+work_removal_stiffness_n_per_m = 1.6e6
+modes = [ { frequency_hz = 150.0, damping_ratio = 0.03, stiffness_n_per_m = 2.0e7 } ]
+)" + extra;
+  return load_study(dir.write("m.toml", text)).document["model"];
+}
+
+// The [model] table the capability gives: parameters_at plus the type.
+Json model_at(const Json& table, const ProcessConditions& reference, const ProcessConditions& conditions,
+              const ProcessScaling& scaling) {
+  auto model = kit::build_model(table);
+  const ProcessConditionsModel* process = model->process_conditions();
+  EXPECT_NE(process, nullptr);
+  Json out = Json{{"type", table.at("type")}};
+  const Json parameters = process->parameters_at(reference, conditions, scaling);  // named: items() would dangle
+  for (const auto& [key, value] : parameters.items()) out[key] = value;
+  return out;
+}
+
+feed_risk::ProcessSettings process_settings(const Json& model, bool speed_scaling, double wheel_rpm) {
+  feed_risk::ProcessSettings p;
+  p.reference_contact_width_mm = 10.0;
+  p.reference_work_radius_mm = 100.0;
+  p.reference_work_speed_rpm = model.at("work_speed_rpm").get<double>();
+  p.reference_wheel_speed_rpm = model.at("wheel_speed_rpm").get<double>();
+  p.reference_contact_stiffness_n_per_m = model.at("contact_stiffness_n_per_m").get<double>();
+  p.reference_wheel_wear_stiffness_n_per_m = model.at("wheel_wear_stiffness_n_per_m").get<double>();
+  p.reference_work_removal_stiffness_n_per_m = model.at("work_removal_stiffness_n_per_m").get<double>();
+  p.wheel_speed_rpm = wheel_rpm;
+  p.wheel_diameter_mm = 400.0;
+  p.wheel_thickness_mm = 10.0;
+  p.depth_of_cut_mm = 0.01;
+  p.speed_scaling = speed_scaling;
+  return p;
+}
+
+TEST(ProcessConditions, PlungeModelReproducesFeedRiskSegmentsBitForBit) {
+  // A tapered, curved part (radius and curvature change along x, so the width changes too) under
+  // a plan whose spindle speed changes: every segment's G1 table must equal feed_risk's exactly.
+  const Json model = model_table("plunge_regenerative");
+  auto part = planner::expression_generatrix("100 - 0.05 * x + 3 * sin(x / 40)", 0.0, 600.0);
+  for (const bool speed_scaling : {true, false}) {
+    for (const double wheel_rpm : {1450.0, 1610.0}) {
+      const feed_risk::ProcessSettings p = process_settings(model, speed_scaling, wheel_rpm);
+      ProcessConditions reference{p.reference_wheel_speed_rpm, p.reference_work_speed_rpm,
+                                  p.reference_contact_width_mm, p.reference_work_radius_mm, p.wheel_diameter_mm};
+      ProcessScaling scaling;
+      scaling.speed_dependent_stiffness = speed_scaling;
+      for (int k = 0; k < 40; ++k) {
+        planner::SegmentConditions c;
+        c.x_start_mm = 15.0 * k;
+        c.x_end_mm = c.x_start_mm + 15.0;
+        c.radius_mm = part->evaluate(0.5 * (c.x_start_mm + c.x_end_mm)).f;
+        c.duration_s = 2.0;
+        c.axial_speed_mm_per_s = 7.5;
+        c.spindle_speed_rpm = 180.0 + 9.7 * k;
+        const feed_risk::SegmentProcess s = feed_risk::map_segment(p, c, *part);
+        const Json expected = feed_risk::segment_model_table(model, p, s);
+        const ProcessConditions at{wheel_rpm, c.spindle_speed_rpm, s.contact_width_mm, c.radius_mm, p.wheel_diameter_mm};
+        const Json got = model_at(model, reference, at, scaling);
+        for (const char* key : {"wheel_speed_rpm", "work_speed_rpm", "contact_stiffness_n_per_m",
+                                "wheel_wear_stiffness_n_per_m", "work_removal_stiffness_n_per_m"})
+          ASSERT_EQ(got.at(key).get<double>(), expected.at(key).get<double>())
+              << key << " at segment " << k << " (speed scaling " << speed_scaling << ", wheel " << wheel_rpm << ")";
+        ASSERT_EQ(got, expected) << "segment " << k;  // modes and switches unchanged
+      }
+    }
+  }
+}
+
+TEST(ProcessConditions, PlungeModelReproducesSuppressionFrozenConditions) {
+  // suppression_map's GrowthTable::conditions(level): wheel speed target m[wheel] = level * n_g;
+  // work speed target m[work] = level * n_w; feed target kc, kg = (1 - eps/2 (level - 1)) * k.
+  const Json model = model_table("plunge_regenerative");
+  auto built = kit::build_model(model);
+  const ProcessConditions nominal = built->process_conditions()->nominal_conditions();
+  EXPECT_EQ(nominal.wheel_speed_rpm, 1450.0);
+  EXPECT_EQ(nominal.work_speed_rpm, 300.0);
+  ProcessScaling frozen;
+  frozen.speed_dependent_stiffness = false;
+  for (const double level : {0.7, 0.93, 1.0, 1.001, 1.25}) {
+    ProcessConditions wheel = nominal, work = nominal, feed = nominal;
+    wheel.wheel_speed_rpm = level * 1450.0;
+    work.work_speed_rpm = level * 300.0;
+    feed.depth_of_cut_ratio = level;
+    Json expected = model;
+    expected["wheel_speed_rpm"] = level * 1450.0;
+    EXPECT_EQ(model_at(model, nominal, wheel, frozen), expected) << level;
+    expected = model;
+    expected["work_speed_rpm"] = level * 300.0;
+    EXPECT_EQ(model_at(model, nominal, work, frozen), expected) << level;
+    for (const double eps : {0.0, 0.6, 1.3}) {
+      frozen.thickness_exponent = eps;
+      const double s = 1.0 - 0.5 * eps * (level - 1.0);
+      expected = model;
+      expected["contact_stiffness_n_per_m"] = s * 2.0e7;
+      expected["wheel_wear_stiffness_n_per_m"] = s * 2.0e9;
+      EXPECT_EQ(model_at(model, nominal, feed, frozen), expected) << level << " " << eps;
+    }
+    frozen.thickness_exponent = 0.0;
+  }
+}
+
+TEST(ProcessConditions, PenetrationDampingModelFollowsG1AndScalesKdByG4) {
+  // The G1 part as plunge_regenerative's; kd = ks sqrt(de u0)/v_w (G4 2-77/2-78) follows the
+  // removal stiffness kw, the contact length and 1/v_w.
+  const Json g1 = model_table("plunge_regenerative");
+  const Json pd = model_table("plunge_with_penetration_damping",
+                              "penetration_damping_n_s_per_m = 1.0e4\nwork_diameter_mm = 200.0\n"
+                              "wheel_diameter_mm = 400.0\ndepth_of_cut_mm = 0.01\n");
+  const ProcessConditions reference{1450.0, 300.0, 10.0, 100.0, 400.0};
+  const ProcessConditions at{1450.0, 420.0, 14.0, 60.0, 400.0, 1.5};
+  const ProcessScaling scaling;
+  const Json a = model_at(g1, reference, at, scaling), b = model_at(pd, reference, at, scaling);
+  for (const char* key : {"wheel_speed_rpm", "work_speed_rpm", "contact_stiffness_n_per_m",
+                          "wheel_wear_stiffness_n_per_m", "work_removal_stiffness_n_per_m", "modes"})
+    EXPECT_EQ(b.at(key), a.at(key)) << key;
+  // By hand: de = dw ds/(dw + ds) [mm], v_w = pi dw n_w/60, u0 ~ depth_of_cut_ratio.
+  const double de_ref = 200.0 * 400.0 / 600.0, de = 120.0 * 400.0 / 520.0;
+  const double vw_ref = std::numbers::pi * 0.2 * 300.0 / 60.0, vw = std::numbers::pi * 0.12 * 420.0 / 60.0;
+  const double kw_ratio = a.at("work_removal_stiffness_n_per_m").get<double>() / 1.6e6;
+  const double expected_kd = 1.0e4 * kw_ratio * std::sqrt(de / de_ref * 1.5) * vw_ref / vw;
+  EXPECT_NEAR(b.at("penetration_damping_n_s_per_m").get<double>(), expected_kd, 1e-12 * expected_kd);
+  // The geometry of the indicators follows: work diameter 2 r, depth u0 times the ratio.
+  EXPECT_EQ(b.at("work_diameter_mm").get<double>(), 120.0);
+  EXPECT_EQ(b.at("wheel_diameter_mm").get<double>(), 400.0);
+  EXPECT_NEAR(b.at("depth_of_cut_mm").get<double>(), 0.015, 1e-17);
+  // The table builds a model (what a study kind does with it).
+  Json built = b;
+  EXPECT_NE(kit::build_model(built)->characteristic(), nullptr);
+}
+
+}  // namespace
+}  // namespace chatterlab
