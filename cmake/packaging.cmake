@@ -16,19 +16,28 @@ set_target_properties(chatterlab PROPERTIES INSTALL_RPATH "$ORIGIN/${chatterlab_
 # against: install it beside libchatterlab, privately, so the installed chatterlab is as fast as
 # the build tree's (Debian's own SUNDIALS is compiled at -O0 and has the same sonames). Their
 # build-time RUNPATH (an absolute path into the source tree) is replaced by $ORIGIN.
+# chatterlab_install_private_sundials(DIR [install options]) installs them into DIR (relative to
+# the prefix): libchatterlab's directory + "/chatterlab". python/CMakeLists.txt uses it for the
+# Python package, with "COMPONENT python EXCLUDE_FROM_ALL".
+function(chatterlab_install_private_sundials dir)
+  if(NOT SUNDIALS_DIR STREQUAL CHATTERLAB_OPTIMISED_SUNDIALS)
+    return()
+  endif()
+  foreach(library IN ITEMS cvode arkode nvecserial)
+    get_target_property(location SUNDIALS::${library}_shared IMPORTED_LOCATION_RELEASE)
+    get_target_property(soname SUNDIALS::${library}_shared IMPORTED_SONAME_RELEASE)
+    get_filename_component(real_name ${location} NAME)
+    install(FILES ${location} DESTINATION ${dir} ${ARGN})
+    install(CODE "
+      set(installed \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${dir}\")
+      file(RPATH_SET FILE \"\${installed}/${real_name}\" NEW_RPATH \"\\\$ORIGIN\")
+      file(CREATE_LINK ${real_name} \"\${installed}/${soname}\" SYMBOLIC)" ${ARGN})
+  endforeach()
+endfunction()
 if(SUNDIALS_DIR STREQUAL CHATTERLAB_OPTIMISED_SUNDIALS)
   set_target_properties(libchatterlab PROPERTIES INSTALL_RPATH "$ORIGIN/chatterlab")
-  foreach(component IN ITEMS cvode arkode nvecserial)
-    get_target_property(location SUNDIALS::${component}_shared IMPORTED_LOCATION_RELEASE)
-    get_target_property(soname SUNDIALS::${component}_shared IMPORTED_SONAME_RELEASE)
-    get_filename_component(real_name ${location} NAME)
-    install(FILES ${location} DESTINATION ${chatterlab_private_libdir})
-    install(CODE "
-      set(installed \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${chatterlab_private_libdir}\")
-      file(RPATH_SET FILE \"\${installed}/${real_name}\" NEW_RPATH \"\\\$ORIGIN\")
-      file(CREATE_LINK ${real_name} \"\${installed}/${soname}\" SYMBOLIC)")
-  endforeach()
 endif()
+chatterlab_install_private_sundials(${chatterlab_private_libdir})
 
 install(TARGETS libchatterlab chatterlab EXPORT chatterlabTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}

@@ -176,6 +176,7 @@ int init_study(const SdkArguments& args) {
   for (const auto& library : args.plugin_libraries) load_plugin_library(fs::absolute(library).string());
   StudyTemplateOptions options;
   options.name = args.study_name;
+  options.example = args.example;
   if (!args.model.empty()) options.components["model"] = args.model;
   if (!args.machine.empty()) options.components["machine"] = args.machine;
   if (!args.suppression.empty()) options.components["suppression"] = args.suppression;
@@ -187,8 +188,10 @@ int init_study(const SdkArguments& args) {
     if (fs::exists(args.output, ec) && !args.force)
       throw InputError(fmt::format("init: '{}' exists; give --force to replace it", args.output.string()));
     write_file_atomically(args.output, study.toml);
-    std::cerr << fmt::format("wrote {} (a {} study); check it with: chatterlab validate {}\n", args.output.string(),
-                             args.study_kind, args.output.string());
+    std::cerr << fmt::format("wrote {} (a {} study{}); check it with: chatterlab validate {}\n",
+                             args.output.string(), args.study_kind,
+                             study.based_on ? " started from " + study.based_on->filename().string() : "",
+                             args.output.string());
   }
   if (!study.validated)
     std::cerr << "chatterlab: warning: the study is not valid yet: " << study.error << '\n';
@@ -218,6 +221,8 @@ void add_sdk_commands(CLI::App& app, SdkArguments& args) {
   init->add_option("--model", args.model, "Model plugin for [model]");
   init->add_option("--machine", args.machine, "Kinematics plugin for [machine]");
   init->add_option("--suppression", args.suppression, "Suppression plugin for [suppression]");
+  init->add_option("--example", args.example,
+                   "Start from this shipped study of the kind (its file name; the study's header lists them)");
   init->add_option("--plugin", args.plugin_libraries, "Also load this out-of-tree plugin library (repeatable)");
 
   auto* completion = app.add_subcommand("completion", "Print the shell completion script (bash or zsh)");

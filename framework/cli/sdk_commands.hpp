@@ -2,7 +2,7 @@
 // The SDK subcommands of `chatterlab` (docs/plugins.md):
 //   new-plugin --kind model|study|analysis|kinematics|suppression NAME DIR   a plugin project
 //   check-plugin LIB                     the conformance suite on a plugin library
-//   init KIND [-o FILE]                  a complete, commented study file for a study kind
+//   init KIND [-o FILE] [--example NAME]  a complete, commented study file for a study kind
 //   completion bash|zsh                  the shell completion script (also installed)
 // main.cpp registers them and hands over when one of them was given.
 #include <filesystem>
@@ -24,7 +24,7 @@ struct SdkArguments {
   int threads = 4;
   std::string study_kind;  // init
   std::filesystem::path output;
-  std::string model, machine, suppression, study_name;
+  std::string model, machine, suppression, study_name, example;
   bool force = false;
   std::vector<std::string> plugin_libraries;
   std::string shell;  // completion

@@ -18,6 +18,8 @@ packages=(
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libmuparser-dev libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   file  # cpack's Debian generator (the sdk test packages chatterlab) inspects binaries with it
+  # The Python module (docs/python.md), built for Debian's /usr/bin/python3, and its tests
+  python3-dev pybind11-dev python3-numpy python3-pandas python3-matplotlib python3-pytest
 )
 
 missing=()
@@ -56,6 +58,13 @@ if [ "$mode" = run ]; then
   cmake --build --preset release -j "$jobs"
   ./build/release/framework/chatterlab run studies/default.toml --out out/default
   echo "chatterlab: default study written to $root/out/default (results.csv, summary.json, lobe_diagram.png/.svg)"
+  # The Python module, self-contained (its own libchatterlab), into /usr/bin/python3's user
+  # site-packages: `/usr/bin/python3 -c "import chatterlab"` works from any directory.
+  if [ -d build/release/python/chatterlab ]; then
+    user_site="$(/usr/bin/python3 -m site --user-site)"
+    cmake --install build/release --component python --prefix "$user_site" >/dev/null
+    echo "chatterlab: Python module installed in $user_site/chatterlab (docs/python.md)"
+  fi
 else
   for preset in ci asan; do
     echo "chatterlab: === test preset '$preset' ===" >&2
@@ -64,8 +73,10 @@ else
     # Tests labelled `accuracy` (long known-answer suites) and `regression` (every shipped study
     # against its references) run once, optimised; under the sanitizers they would take most of
     # CI's time without exercising code the shorter tests of the same routines do not reach.
+    # The Python tests (`python`) run once too: the interpreter itself is not instrumented, and
+    # the C++ they call is the code the sanitized C++ tests cover.
     if [ "$preset" = asan ]; then
-      ctest --preset "$preset" -j "$jobs" -LE "accuracy|regression"
+      ctest --preset "$preset" -j "$jobs" -LE "accuracy|regression|python"
     else
       ctest --preset "$preset" -j "$jobs"
     fi

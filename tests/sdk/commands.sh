@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The SDK commands of the built `chatterlab` (CTest sdk.commands): check-plugin on a conforming
-# and on a broken library, init for every study kind (validate accepts what it writes), --plugin
-# on validate and run, and new-plugin's refusals.
+# and on a broken library, init for every study kind (validate accepts what it writes, wherever
+# the file is), --plugin on validate and run, and new-plugin's refusals.
 # Usage: commands.sh CHATTERLAB SOURCE_DIR EXAMPLE_PLUGIN BROKEN_PLUGIN WORK_DIR
 source "$(dirname "${BASH_SOURCE[0]}")/../cli/lib.sh"
 chatterlab=$1 source_dir=$2 example=$3 broken=$4 work=$5
@@ -27,23 +27,32 @@ expect_exit 2 "$work/check_text" "$chatterlab" check-plugin "$source_dir/README.
 grep -q "chatterlab: error: cannot load plugin library '$source_dir/README.md'" "$work/check_text.err" ||
   fail "check-plugin on a text file: $(cat "$work/check_text.err")"
 
-# ---- init: every study kind; what init calls valid, validate accepts
+# ---- init: every registered study kind gets a study that validates, written anywhere: a kind
+# that needs a data file starts from a shipped study and names its files by absolute path.
 "$chatterlab" list | awk -F '  +' '$1 == "study kind" { print $2 }' > "$work/kinds"
 [ "$(wc -l < "$work/kinds")" -ge 5 ] || fail "fewer than 5 study kinds listed"
-validated=0
+mkdir -p "$work/elsewhere"
 while read -r kind; do
   expect_exit 0 "$work/init_$kind" "$chatterlab" init "$kind" -o "$work/$kind.toml"
   grep -q "^kind = \"$kind\"" "$work/$kind.toml" || fail "init $kind: no [study] kind line"
-  if ! grep -q "not valid yet" "$work/init_$kind.err"; then
-    expect_exit 0 "$work/validate_$kind" "$chatterlab" validate "$work/$kind.toml"
-    validated=$((validated + 1))
-  fi
+  ! grep -q "not valid yet" "$work/init_$kind.err" || fail "init $kind: $(cat "$work/init_$kind.err")"
+  ! grep -q "NOT YET VALID" "$work/$kind.toml" || fail "init $kind wrote a study marked NOT YET VALID"
+  cp "$work/$kind.toml" "$work/elsewhere/$kind.toml"
+  expect_exit 0 "$work/validate_$kind" "$chatterlab" validate "$work/elsewhere/$kind.toml"
 done < "$work/kinds"
-echo "init: $validated of $(wc -l < "$work/kinds") study kinds valid as written"
+echo "init: all $(wc -l < "$work/kinds") study kinds valid as written"
 grep -q "^# .*\[Hz\]" "$work/stability_map.toml" || fail "init stability_map: keys are not commented with units"
-for kind in stability_map compliance_chart suppression_map simulate; do
-  [ -f "$work/validate_$kind.out" ] || fail "init $kind did not write a valid study"
-done
+grep -q "started from signal_analysis_" "$work/init_signal_analysis.err" || fail "init signal_analysis: no shipped study named"
+data_file=$(sed -n 's/^file = "\(.*\)"$/\1/p' "$work/signal_analysis.toml" | head -1)
+case "$data_file" in /*) [ -f "$data_file" ] || fail "init signal_analysis: $data_file does not exist" ;;
+  *) fail "init signal_analysis: data file '$data_file' is not an absolute path" ;; esac
+grep -q "^# Its data files are named by absolute path" "$work/signal_analysis.toml" || fail "init: no note on data files"
+expect_exit 0 "$work/init_example_study" "$chatterlab" init feed_plan --example feed_plan_problem2 -o "$work/problem2.toml"
+grep -q "^# Started from the shipped study .*feed_plan_problem2.toml" "$work/problem2.toml" || fail "init --example: not based on it"
+expect_exit 0 "$work/validate_problem2" "$chatterlab" validate "$work/problem2.toml"
+expect_exit 2 "$work/init_bad_example" "$chatterlab" init feed_plan --example nothing_like_it
+grep -q "no shipped study of kind 'feed_plan' has that name; shipped: feed_plan_problem1, feed_plan_problem2" \
+  "$work/init_bad_example.err" || fail "init --example with an unknown name: $(cat "$work/init_bad_example.err")"
 expect_exit 2 "$work/init_again" "$chatterlab" init stability_map -o "$work/stability_map.toml"
 grep -q "exists; give --force" "$work/init_again.err" || fail "init overwrote a file without --force"
 

@@ -30,6 +30,12 @@ leaks=$(grep -rl --binary-files=text -F "$source_dir" "$prefix" || true)
 [ -z "$leaks" ] || fail "installed files name the source tree $source_dir: $leaks"
 expect_exit 0 "$work/version" "$chatterlab" --version
 grep -q "^chatterlab " "$work/version.out" || fail "installed chatterlab --version: $(cat "$work/version.out")"
+# The installed command finds the installed shipped studies: init of a kind that reads a data
+# file starts from one and names the installed copy of its data.
+expect_exit 0 "$work/init_surface" "$chatterlab" init surface -o "$work/surface.toml"
+grep -q "^file = \"$(readlink -f "$prefix")/share/chatterlab/studies/data/" "$work/surface.toml" ||
+  fail "installed init surface does not name the installed data: $(grep '^file' "$work/surface.toml")"
+expect_exit 0 "$work/validate_surface" "$chatterlab" validate "$work/surface.toml"
 
 # Skeleton builds use ccache when there is one (CI's second run of this test is then quick).
 launcher=()

@@ -29,7 +29,7 @@ _chatterlab() {
     --model) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names model)" -- "$cur"); return ;;
     --machine) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names kinematics)" -- "$cur"); return ;;
     --suppression) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names suppression)" -- "$cur"); return ;;
-    --threads | --name | --point-timeout) return ;;
+    --threads | --name | --example | --point-timeout) return ;;
   esac
   local options
   case "${COMP_WORDS[1]}" in
@@ -39,7 +39,7 @@ _chatterlab() {
     run) options="--plugin --allow-large --out --threads --resume --retry-failed --isolate --point-timeout --progress --no-progress --help" ;;
     new-plugin) options="--kind --help" ;;
     check-plugin) options="--quick --threads --help" ;;
-    init) options="--output --force --name --model --machine --suppression --plugin --help $(_chatterlab_names 'study kind')" ;;
+    init) options="--output --force --name --example --model --machine --suppression --plugin --help $(_chatterlab_names 'study kind')" ;;
     completion) options="bash zsh" ;;
   esac
   if [[ $cur == -* || ${COMP_WORDS[1]} =~ ^(list|describe|init|completion)$ ]]; then

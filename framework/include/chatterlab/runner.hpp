@@ -6,6 +6,7 @@
 // exit codes) is in docs/studies.md, "Running a study".
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,10 @@ struct RunOptions {
   // The executable started as a worker process (`<it> __worker ...`, which must call
   // run_point_worker). Default: this process's own executable.
   std::filesystem::path worker_executable = "/proc/self/exe";
+  // Called after each point this process computes, from whichever thread computed it (so it must
+  // be thread-safe and quick), with the points done so far and the points this process computes;
+  // once with (0, total) before the first. The Python API's progress display polls it.
+  std::function<void(std::size_t points_done, std::size_t points_total)> on_point_done;
 };
 
 struct RunSummary {

@@ -81,6 +81,11 @@ struct Study {
 // "<file>:<line>: ..." messages; touches nothing on disk.
 Study load_study(const std::filesystem::path& file, const LoadOptions& options = {});
 
+// The same for a study built in memory (the Python API's run_study(dict)), read as if it were
+// the file `origin`: messages start "<origin>: " (no line numbers) and relative paths (plugins,
+// data files) resolve against origin's directory, the working directory for a bare name.
+Study load_study_document(Json document, const std::filesystem::path& origin, const LoadOptions& options = {});
+
 // Sets a value at a dotted path inside a JSON document ("model.modes.0.damping_ratio").
 // Throws InputError when the path does not exist in the document.
 void set_at_path(Json& document, const std::string& dotted_path, const Json& value);

@@ -391,6 +391,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
                                todo.size());
   std::vector<PointResult> mine(todo.size());
   double compute_s = 0.0;
+  std::atomic<std::size_t> points_done{0};
+  if (options.on_point_done) options.on_point_done(0, todo.size());
   std::atomic<std::size_t> output_failures{0};
   runner::InputWatch watch(study.inputs);
   auto keep = [&](std::size_t k, ComputedPoint&& computed) {
@@ -398,6 +400,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     if (computed.output_failed) ++output_failures;
     mine[k] = std::move(computed.result);
     progress.point_done();
+    if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   };
   if (pool) {
     pool->run(todo, [&](std::size_t k, ComputedPoint&& computed) {

@@ -3,8 +3,12 @@
 // down, and `chatterlab validate` accepts the file by construction.
 #include "chatterlab/study_template.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 #include <string>
@@ -16,6 +20,8 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kinematics.hpp"
 #include "chatterlab/model.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
 #include "chatterlab/suppression.hpp"
 #include "chatterlab/version.hpp"
@@ -24,6 +30,8 @@
 
 namespace chatterlab {
 namespace {
+
+namespace fs = std::filesystem;
 
 // A component table of a study ([model] type = ...) and the plugins that can fill it.
 struct Component {
@@ -110,42 +118,27 @@ std::string grid_suggestion(const Json& document) {
   return text + "# [grid]\n# \"<table>.<key>\" = [value1, value2, value3]\n";
 }
 
-}  // namespace
-
-StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOptions& options) {
-  const auto& entry = study_kind_registry().at(kind_name);
-  const auto kind = entry.create(ParamValues{});
-  const PluginInfo& info = entry.info;
-
-  // The kind's own settings table: the one table it reads that is not a component.
-  std::vector<Component> components;
-  std::vector<std::string> settings_tables;
-  for (const std::string& table : kind->tables()) {
-    if (auto c = component_of(table, entry.origin)) components.push_back(std::move(*c));
-    else settings_tables.push_back(table);
-  }
-  for (const auto& [table, plugin] : options.components) {
-    auto it = std::find_if(components.begin(), components.end(), [&](const Component& c) { return c.table == table; });
-    if (it == components.end())
-      throw InputError(fmt::format("study kind '{}' has no component table [{}]", kind_name, table));
-    if (!find_plugin(*it, plugin))
-      throw InputError(fmt::format("unknown {} '{}' for [{}]", it->registry_kind, plugin, table));
-  }
-
+// The kind's own example: [study], each component with the plugin whose example the kind accepts
+// (the kind's own library first, then the most capable), the kind's example_params in the
+// settings table that takes them. `accepted` and `example_table` are filled for the comments.
+Json generated_document(const StudyKind& kind, const PluginInfo& info, const std::string& origin,
+                        const std::vector<Component>& components, const std::vector<std::string>& settings_tables,
+                        const StudyTemplateOptions& options, std::vector<std::vector<std::string>>& accepted,
+                        std::string& example_table, const std::string& kind_name) {
   Json document = Json::object();
   document["study"] = {{"kind", kind_name}, {"name", options.name.empty() ? kind_name + " study" : options.name},
                        {"description", ""}};
-  for (const std::string& table : kind->tables()) document[table] = Json::object();  // the kind's order
+  for (const std::string& table : kind.tables()) document[table] = Json::object();  // the kind's order
   // The kind's example_params belong to one of its settings tables: the only one, or the one
   // where the kind accepts them (placed in another table they are unknown keys).
-  std::string example_table = settings_tables.size() == 1 ? settings_tables.front() : std::string();
+  example_table = settings_tables.size() == 1 ? settings_tables.front() : std::string();
   if (example_table.empty() && !info.example_params.empty()) {
     for (const Component& c : components)
       if (!c.plugins.empty()) document[c.table] = component_table(*c.plugins.front());
     for (const std::string& table : settings_tables) {
       Json trial = document;
       trial[table] = info.example_params;
-      const std::string why = refusal(*kind, trial, kind_name);
+      const std::string why = refusal(kind, trial, kind_name);
       if (why.find("unknown key") == std::string::npos) {
         example_table = table;
         break;
@@ -153,8 +146,6 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
     }
   }
   if (!example_table.empty()) document[example_table] = info.example_params;
-  // Each component: the chosen plugin, or the first whose example the kind accepts.
-  std::vector<std::vector<std::string>> accepted(components.size());
   for (const Component& c : components)
     if (!c.plugins.empty()) document[c.table] = component_table(*c.plugins.front());
   for (std::size_t i = 0; i < components.size(); ++i) {
@@ -163,7 +154,6 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
       document[c.table] = component_table(*find_plugin(c, chosen->second));
       continue;
     }
-    // The kind's own library first (c.plugins is in that order), then the most capable.
     const PluginInfo* best = nullptr;
     int best_score = -2;
     bool best_own = false;
@@ -171,9 +161,9 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
       const PluginInfo* plugin = c.plugins[p];
       Json trial = document;
       trial[c.table] = component_table(*plugin);
-      if (!refusal(*kind, trial, kind_name).empty()) continue;
+      if (!refusal(kind, trial, kind_name).empty()) continue;
       accepted[i].push_back(plugin->name);
-      const bool own = c.origins[p] == entry.origin && entry.origin != "built-in";
+      const bool own = c.origins[p] == origin && origin != "built-in";
       const int score = capability_score(c.registry_kind, *plugin);
       if (best == nullptr || (own && !best_own) || (own == best_own && score > best_score)) {
         best = plugin;
@@ -183,32 +173,37 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
     }
     if (best) document[c.table] = component_table(*best);
   }
+  return document;
+}
 
-  StudyTemplate out;
-  Json validated = document;
-  LineSourceMap sources("`chatterlab init " + kind_name + "`");
-  try {
-    kind->validate(validated, sources);
-    out.validated = true;
-  } catch (const std::exception& e) {
-    out.error = e.what();
-    validated = document;
-  }
+// What the text is made of: the validated document and where its keys' comments come from.
+struct TemplateParts {
+  const std::string& kind_name;
+  const PluginInfo& info;
+  const std::string& origin;  // the kind's library, or "built-in"
+  const std::vector<Component>& components;
+  std::vector<std::vector<std::string>> accepted;  // per component: the plugins the kind accepts
+  std::string example_table;                       // the table info.params describe ("" none)
+  Json document;                                   // without [grid]
+  std::optional<Json> grid;                        // a shipped study's [grid], as written
+  std::string preamble;                            // comment lines after the generic header
+};
 
-  // ---- the text
-  std::string& t = out.toml;
-  t += fmt::format("# A {} study: {}\n", kind_name, info.description);
+std::string render(const TemplateParts& parts, const StudyTemplate& out) {
+  const Json& validated = parts.document;
+  std::string t;
+  t += fmt::format("# A {} study: {}\n", parts.kind_name, parts.info.description);
   t += fmt::format("# Written by `chatterlab init {}` (chatterlab {}). Every key the kind reads is set to its\n"
                    "# default or an example value; the comment above a key gives its meaning, unit, limits\n"
                    "# and default. `chatterlab describe <name>` documents any kind or plugin.\n",
-                   kind_name, CHATTERLAB_VERSION);
+                   parts.kind_name, CHATTERLAB_VERSION);
   t += "#   chatterlab validate <this file>\n#   chatterlab run <this file> --out out/<name>\n";
+  t += parts.preamble;
   if (!out.validated)
     t += "#\n# NOT YET VALID: " + out.error + "\n# Fill in what it names, then validate.\n";
   std::vector<std::string> libraries;
-  if (entry.origin != "built-in") libraries.push_back(entry.origin);
-  for (std::size_t i = 0; i < components.size(); ++i) {
-    const Component& c = components[i];
+  if (parts.origin != "built-in") libraries.push_back(parts.origin);
+  for (const Component& c : parts.components) {
     const std::string type = validated.contains(c.table) ? validated[c.table].value("type", "") : "";
     for (std::size_t p = 0; p < c.plugins.size(); ++p)
       if (c.plugins[p]->name == type && c.origins[p] != "built-in" &&
@@ -227,22 +222,191 @@ StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOp
     if (table == "study" || table == "plugins" || !value.is_object()) continue;
     t += fmt::format("\n[{}]\n", toml_key(table));
     std::vector<ParamSpec> specs;
-    auto c = std::find_if(components.begin(), components.end(), [&](const Component& x) { return x.table == table; });
-    if (c != components.end()) {
+    auto c = std::find_if(parts.components.begin(), parts.components.end(),
+                          [&](const Component& x) { return x.table == table; });
+    if (c != parts.components.end()) {
       const PluginInfo* plugin = find_plugin(*c, value.value("type", ""));
       if (plugin) {
         t += fmt::format("# {} ({}): `chatterlab describe {}`\n", plugin->name, plugin->description, plugin->name);
         specs = plugin->params;
       }
-      const auto& others = accepted[static_cast<std::size_t>(c - components.begin())];
+      const auto& others = parts.accepted[static_cast<std::size_t>(c - parts.components.begin())];
       if (others.size() > 1)
         t += fmt::format("# {} plugins this kind accepts: {}\n", c->registry_kind, fmt::join(others, ", "));
-    } else if (table == example_table) {
-      specs = info.params;  // the kind's own settings
+    } else if (table == parts.example_table) {
+      specs = parts.info.params;  // the kind's own settings
     }
     append_toml_table(t, value, toml_key(table), specs, true);
   }
-  t += grid_suggestion(validated);
+  if (parts.grid && !parts.grid->empty()) {
+    t += "\n# The shipped study's grid (a bare key is a [model] parameter; dotted paths reach any table).\n[grid]\n";
+    for (const auto& [key, value] : parts.grid->items())
+      t += fmt::format("{} = {}\n", toml_key(key), toml_value(value, false));
+  } else {
+    t += grid_suggestion(validated);
+  }
+  return t;
+}
+
+// The rendered text read back the way `chatterlab validate` reads it: written to a private
+// temporary file, loaded (plugins, tables, grid), removed. "" when it loads.
+std::string round_trip_refusal(const std::string& toml) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("chatterlab-init-{}", ::getpid());
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const fs::path file = dir / "study.toml";
+  std::string why;
+  try {
+    write_file_atomically(file, toml);
+    load_study(file);
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  fs::remove_all(dir, ec);
+  return why;
+}
+
+// The leading comment block of a shipped study (its sources and assumptions), as comment lines.
+std::string leading_comments(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, out;
+  while (std::getline(in, line) && (line.empty() || line.front() == '#'))
+    if (!line.empty()) out += line + '\n';
+  return out;
+}
+
+// True when a string anywhere in `value` is a path below `dir` (a data file the kind resolved).
+bool names_file_in(const Json& value, const std::string& dir) {
+  if (value.is_string()) return value.get_ref<const std::string&>().rfind(dir, 0) == 0;
+  if (value.is_structured())
+    for (const auto& item : value)
+      if (names_file_in(item, dir)) return true;
+  return false;
+}
+
+std::vector<ShippedStudy> shipped_studies_of(const std::string& kind_name) {
+  std::vector<ShippedStudy> out;
+  for (auto& study : shipped_studies())
+    if (study.kind == kind_name) out.push_back(std::move(study));
+  return out;
+}
+
+std::string stems(const std::vector<ShippedStudy>& studies) {
+  std::vector<std::string> names;
+  for (const auto& s : studies) names.push_back(s.file.stem().string());
+  return fmt::format("{}", fmt::join(names, ", "));
+}
+
+const ShippedStudy& chosen_example(const std::vector<ShippedStudy>& examples, const std::string& kind_name,
+                                   const std::string& name) {
+  const std::string stem = fs::path(name).stem().string();
+  for (const auto& s : examples)
+    if (s.file.stem() == stem) return s;
+  if (examples.empty())
+    throw InputError(fmt::format("init --example {}: no study of kind '{}' is shipped{}", name, kind_name,
+                                 shipped_studies_dir() ? "" : " (no shipped studies found beside libchatterlab)"));
+  throw InputError(fmt::format("init --example {}: no shipped study of kind '{}' has that name; shipped: {}",
+                               name, kind_name, stems(examples)));
+}
+
+// The first of the kind's settings tables that accepts the kind's example_params merged in:
+// the table info.params describes (for the comments).
+std::string settings_table_of(const StudyKind& kind, const PluginInfo& info, const Json& document,
+                              const std::vector<std::string>& settings_tables, const std::string& kind_name) {
+  if (settings_tables.size() == 1) return settings_tables.front();
+  if (info.example_params.empty()) return {};
+  for (const std::string& table : settings_tables) {
+    Json trial = document;
+    if (!trial[table].is_object()) trial[table] = Json::object();
+    trial[table].update(info.example_params);
+    if (refusal(kind, trial, kind_name).empty()) return table;
+  }
+  return {};
+}
+
+}  // namespace
+
+StudyTemplate study_template(const std::string& kind_name, const StudyTemplateOptions& options) {
+  const auto& entry = study_kind_registry().at(kind_name);
+  const auto kind = entry.create(ParamValues{});
+  const PluginInfo& info = entry.info;
+  const std::vector<ShippedStudy> examples = shipped_studies_of(kind_name);
+  const ShippedStudy* example =
+      options.example.empty() ? nullptr : &chosen_example(examples, kind_name, options.example);
+
+  // The kind's own settings table: the one table it reads that is not a component.
+  std::vector<Component> components;
+  std::vector<std::string> settings_tables;
+  for (const std::string& table : kind->tables()) {
+    if (auto c = component_of(table, entry.origin)) components.push_back(std::move(*c));
+    else settings_tables.push_back(table);
+  }
+  for (const auto& [table, plugin] : options.components) {
+    auto it = std::find_if(components.begin(), components.end(), [&](const Component& c) { return c.table == table; });
+    if (it == components.end())
+      throw InputError(fmt::format("study kind '{}' has no component table [{}]", kind_name, table));
+    if (!find_plugin(*it, plugin))
+      throw InputError(fmt::format("unknown {} '{}' for [{}]", it->registry_kind, plugin, table));
+  }
+
+  TemplateParts parts{kind_name, info, entry.origin, components, std::vector<std::vector<std::string>>(components.size()),
+                      {}, Json::object(), std::nullopt, {}};
+  StudyTemplate out;
+  if (!example) {
+    parts.document = generated_document(*kind, info, entry.origin, components, settings_tables, options,
+                                        parts.accepted, parts.example_table, kind_name);
+    out.error = refusal(*kind, parts.document, kind_name);
+    // A kind that needs what no default supplies starts from its first shipped study instead.
+    if (!out.error.empty() && !examples.empty()) example = &examples.front();
+  }
+  if (example) {
+    out.based_on = example->file;
+    Study study = load_study(example->file);  // a shipped study that does not load is a packaging bug
+    Json document = study.document;
+    if (document.contains("grid")) {
+      parts.grid = document["grid"];
+      document.erase("grid");
+    }
+    if (!options.name.empty()) document["study"]["name"] = options.name;
+    for (const auto& [table, plugin] : options.components) {
+      const auto& c = *std::find_if(components.begin(), components.end(), [&](const Component& x) { return x.table == table; });
+      document[table] = component_table(*find_plugin(c, plugin));
+    }
+    for (std::size_t i = 0; i < components.size(); ++i)
+      for (const PluginInfo* plugin : components[i].plugins) {
+        Json trial = document;
+        trial[components[i].table] = component_table(*plugin);
+        if (refusal(*kind, trial, kind_name).empty()) parts.accepted[i].push_back(plugin->name);
+      }
+    parts.example_table = settings_table_of(*kind, info, document, settings_tables, kind_name);
+    parts.document = std::move(document);
+    out.error = refusal(*kind, parts.document, kind_name);
+    parts.preamble = fmt::format("#\n# Started from the shipped study {}{}; its notes:\n", example->file.string(),
+                                 examples.size() > 1 ? fmt::format(" (shipped studies of this kind: {}; "
+                                                                   "`chatterlab init {} --example NAME` starts from another)",
+                                                                   stems(examples), kind_name)
+                                                     : "");
+    parts.preamble += leading_comments(example->file);
+    if (names_file_in(parts.document, example->file.parent_path().string() + "/"))
+      parts.preamble += "# Its data files are named by absolute path: point them at your own measurements.\n";
+  } else if (!examples.empty()) {
+    parts.preamble = fmt::format("#\n# Shipped studies of this kind (`chatterlab init {} --example NAME`): {}\n",
+                                 kind_name, stems(examples));
+  }
+  if (out.error.empty()) {
+    LineSourceMap sources("`chatterlab init " + kind_name + "`");
+    kind->validate(parts.document, sources);  // defaults filled in: every key is written
+  }
+  out.validated = out.error.empty();
+  out.toml = render(parts, out);
+  if (out.validated) {
+    // What init calls valid must load as `chatterlab validate` loads it (grid and all).
+    out.error = round_trip_refusal(out.toml);
+    if (!out.error.empty()) {
+      out.validated = false;
+      out.toml = render(parts, out);
+    }
+  }
   return out;
 }
 

@@ -173,19 +173,18 @@ void with_plugin_errors_as_input_errors(const Json& document, const SourceMap& s
 
 }  // namespace
 
-Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
-  // Every file read from here on (the study, its plugin libraries, its data files) is recorded
-  // with its hash, and its bytes are what the run's points will see.
-  auto snapshot = std::make_shared<InputSnapshot>();
-  InputScope reads_through(snapshot);
-  TomlDocument toml = read_toml_study(file);
-  Json& document = toml.document;
-  const SourceMap& sources = *toml.sources;
+namespace {
 
+// The caller has an InputScope of `snapshot` open: every file read while the study is checked
+// (its plugin libraries, its data files) is recorded with its hash, and its bytes are what the
+// run's points will see.
+Study load_parsed(Json document, const std::filesystem::path& file, std::shared_ptr<const SourceMap> source_map,
+                  std::shared_ptr<InputSnapshot> snapshot, const LoadOptions& options) {
+  const SourceMap& sources = *source_map;
   Study study;
   study.file = file;
-  study.sources = toml.sources;
-  study.inputs = snapshot;
+  study.sources = std::move(source_map);
+  study.inputs = std::move(snapshot);
   study.plugin_libraries = load_plugins(document, file, sources);
   study.kind = validate_study_table(document, file, sources);
   std::unique_ptr<StudyKind> kind;  // from a library, its constructor is plugin code too
@@ -212,6 +211,25 @@ Study load_study(const std::filesystem::path& file, const LoadOptions& options) 
   for (const auto& [key, value] : validated.items())  // tables the kind added (defaults)
     if (!study.document.contains(key)) study.document[key] = value;
   return study;
+}
+
+}  // namespace
+
+Study load_study(const std::filesystem::path& file, const LoadOptions& options) {
+  auto snapshot = std::make_shared<InputSnapshot>();
+  InputScope reads_through(snapshot);  // the study file itself is an input too
+  TomlDocument toml = read_toml_study(file);
+  return load_parsed(std::move(toml.document), file, std::move(toml.sources), std::move(snapshot), options);
+}
+
+Study load_study_document(Json document, const std::filesystem::path& origin, const LoadOptions& options) {
+  if (!document.is_object())
+    throw InputError(fmt::format("{}: a study is a table of tables ([study], [model], ...), not {}",
+                                 origin.string(), messages::show(document)));
+  auto snapshot = std::make_shared<InputSnapshot>();
+  InputScope reads_through(snapshot);
+  return load_parsed(std::move(document), origin, std::make_shared<LineSourceMap>(origin.string()),
+                     std::move(snapshot), options);
 }
 
 std::size_t Study::point_count() const {
