@@ -63,6 +63,13 @@ for motor in lower_pulses middle_pulses upper_pulses; do
   [ "$a" = "$b" ] || fail "optimised $motor sum $a vs baseline $b"
 done
 expect_plots "$o" optimisation before_after
+# A stable choice (over the +-0.5 % speed band) is written, with the stable window around it.
+[ "$(csv_column "$o/results.csv" replan_verdict)" = "stable" ] || fail "constant: replan verdict"
+grep -q '"plan_written": true' "$o/summary.json" || fail "constant: plan_written"
+chosen=$(csv_column "$o/results.csv" optimised_spindle_speed_rpm)
+sed -n '/"stable_window_rpm"/,/}/p' "$o/summary.json" | tr -d ' ,' |
+  awk -F: -v n="$chosen" '/"from"/ { f = $2 } /"to"/ { t = $2 } END { exit !(f != "" && f <= n && n <= t) }' ||
+  fail "constant: stable window does not hold the chosen $chosen rpm"
 
 # ---- the simulation reaching the depth of cut: recorded, root results kept, prediction capped
 shallow="$work/shallow.toml"
@@ -74,18 +81,29 @@ close_to "$(csv_column "$work/shallow_out/results.csv" max_predicted_waviness_um
 grep -q '"diverged": true' "$work/shallow_out/summary.json" || fail "shallow: summary lacks diverged"
 
 # ---- P3 problem 2 (roots and re-planning; the simulations are left to the shipped study, 75 s):
-# chatter at the planner's 300 rpm, the chatter-aware plan at 290 rpm is stable, 3103 s.
+# chatter at the planner's 300 rpm. Rated over the +-0.5 % spindle-speed band (issue 19), no
+# speed in 250..300 rpm is stable: 290 rpm (1450/290 = 5 exactly) is at -0.32 /s only at the
+# exact ratio, its band reaches ~0 /s. The re-plan says so on the terminal and in results.csv,
+# writes no optimised plan, and lists the levers with the growth rate each change actually gives.
 p2="$work/p2.toml"
 { cat "$src/studies/feed_risk_problem2.toml"; printf '[feed_risk.simulation]\nenabled = false\n'; } |
   sed 's/^modulation_amplitude_ratios = .*/modulation_amplitude_ratios = [0.0]/' >"$p2"
 expect_exit 0 "$work/p2" "$bin" run "$p2" --out "$work/p2_out"
 r="$work/p2_out/results.csv"
+s="$work/p2_out/summary.json"
 [ "$(csv_column "$r" worst_risk)" = "chatter" ] || fail "problem 2: not chatter at 300 rpm"
 awk -v g="$(csv_column "$r" max_growth_rate_per_s)" 'BEGIN { exit !(g > 0.1 && g < 0.2) }' || fail "problem 2: max growth"
-close_to "$(csv_column "$r" optimised_spindle_speed_rpm)" 290 1e-9 || fail "problem 2: chosen speed"
-close_to "$(csv_column "$r" optimised_total_time_s)" 3103.448 0.01 || fail "problem 2: chosen time"
-[ "$(sed -n '/"optimised"/,$p' "$work/p2_out/summary.json" | grep -m1 '"worst_risk"' | tr -d ' ,')" = '"worst_risk":"stable"' ] ||
-  fail "problem 2: chosen plan not stable"
+[ "$(csv_column "$r" replan_verdict)" = "no stable candidate" ] || fail "problem 2: verdict $(csv_column "$r" replan_verdict)"
+[ -z "$(csv_column "$r" optimised_spindle_speed_rpm)" ] || fail "problem 2: an optimised speed without a stable plan"
+[ ! -e "$work/p2_out/optimised_pulses.csv" ] && [ ! -e "$work/p2_out/optimised_segments.csv" ] ||
+  fail "problem 2: an optimised plan was written"
+grep -q '^notice: no stable candidate: every spindle speed in \[250, 300\] rpm' "$work/p2.out" ||
+  fail "problem 2: no notice on the terminal: $(cat "$work/p2.out")"
+grep -q '"exact_speed_ratio": "5/1"' "$s" || fail "problem 2: 290 rpm's exact ratio not reported"
+grep -q '"plan_written": false' "$s" || fail "problem 2: plan_written"
+[ "$(grep -c '"lever":' "$s")" = 5 ] || fail "problem 2: not five levers"
+grep -q 'Levers at the worst segment: width of cut' "$work/p2.out" || fail "problem 2: levers not on the terminal"
+grep -q '"speed_tolerance": 0.005' "$s" || fail "problem 2: speed tolerance not reported"
 expect_plots "$work/p2_out" growth_along_x waviness_along_x amplification_over_time optimisation before_after
 
 # ---- bad input: exit 2, reason in the message, nothing written

@@ -36,8 +36,8 @@ def example_plugin() -> Path:
 
 @pytest.fixture(scope="session")
 def default_model(source_dir) -> dict:
-    """The [model] table of studies/default.toml: the G8 grinder with the G1 model."""
-    with open(source_dir / "studies" / "default.toml", "rb") as f:
+    """The [model] table of studies/g8_speed_map.toml: the G8 grinder with the G1 model."""
+    with open(source_dir / "studies" / "g8_speed_map.toml", "rb") as f:
         return tomllib.load(f)["model"]
 
 

@@ -25,7 +25,7 @@ def assert_matches_row(root: chatterlab.RootResult, row: dict) -> None:
 
 
 def test_rightmost_root_of_g1_equals_the_command_line(cli, default_model, tmp_path):
-    # One point: the G8 grinder of studies/default.toml (MODELS.md G1), through `chatterlab run`.
+    # One point: the G8 grinder of studies/g8_speed_map.toml (MODELS.md G1), through `chatterlab run`.
     study = tmp_path / "g1.toml"
     study.write_text(toml_text({"study": {"kind": "stability_map"}, "model": default_model}))
     run = run_cli(cli, "run", study, "--out", tmp_path / "out")
@@ -38,10 +38,10 @@ def test_rightmost_root_of_g1_equals_the_command_line(cli, default_model, tmp_pa
 
 
 def test_rightmost_root_over_the_default_grid_equals_the_command_line(cli, source_dir, tmp_path):
-    run = run_cli(cli, "run", source_dir / "studies" / "default.toml", "--out", tmp_path / "out", "--threads", "2")
+    run = run_cli(cli, "run", source_dir / "studies" / "g8_speed_map.toml", "--out", tmp_path / "out", "--threads", "2")
     assert run.returncode == 0, run.stderr
     rows = read_csv_rows(tmp_path / "out" / "results.csv")
-    study = chatterlab.load_study(source_dir / "studies" / "default.toml")
+    study = chatterlab.load_study(source_dir / "studies" / "g8_speed_map.toml")
     stability = study.document["stability"]
     for point in (0, 100, len(rows) - 1):
         document = study.point_document(point)

@@ -51,7 +51,7 @@ expect_exit 0 "$work/init_example_study" "$chatterlab" init feed_plan --example 
 grep -q "^# Started from the shipped study .*feed_plan_problem2.toml" "$work/problem2.toml" || fail "init --example: not based on it"
 expect_exit 0 "$work/validate_problem2" "$chatterlab" validate "$work/problem2.toml"
 expect_exit 2 "$work/init_bad_example" "$chatterlab" init feed_plan --example nothing_like_it
-grep -q "no shipped study of kind 'feed_plan' has that name; shipped: feed_plan_problem1, feed_plan_problem2" \
+grep -q "no shipped study of kind 'feed_plan' has that name; shipped: feed_plan_fillet, feed_plan_measured, feed_plan_problem1" \
   "$work/init_bad_example.err" || fail "init --example with an unknown name: $(cat "$work/init_bad_example.err")"
 expect_exit 2 "$work/init_again" "$chatterlab" init stability_map -o "$work/stability_map.toml"
 grep -q "exists; give --force" "$work/init_again.err" || fail "init overwrote a file without --force"

@@ -434,7 +434,7 @@ TEST(Plot, BadFiguresAreRejectedWithTheReason) {
   curves.series.push_back(series("a", {1, 2}, {1, 2}, "lines; !rm"));
   EXPECT_EQ(plot_error(curves, dir, "c"),
             "series 'a': unknown style 'lines; !rm' (valid: lines, points, linespoints, "
-            "impulses, steps, dashes)");
+            "impulses, steps, dashes, area, area_above)");
   EXPECT_FALSE(fs::exists(dir / "c.gp"));  // rejected before anything is written
 }
 

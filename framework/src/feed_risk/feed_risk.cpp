@@ -588,24 +588,36 @@ const LeverDefinition lever_definitions[] = {
     {"wheel speed", "wheel_speed_rpm", [](Json& t, double f) { scale_key(t, "wheel_speed_rpm", f); }},
 };
 
-double growth_at(const Json& table, const RootSettings& roots) {
-  auto model = kit::build_model(table);
-  return kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real();
+// The worst growth rate over the work-speed tolerance band, as the candidates are rated: a lever
+// evaluated at an exact speed ratio alone would start from the ratio's artefact.
+double growth_at(const Json& table, const RootSettings& roots, double speed_tolerance) {
+  double worst = -std::numeric_limits<double>::infinity();
+  for (double factor : {1.0 - speed_tolerance, 1.0, 1.0 + speed_tolerance}) {
+    Json at = table;
+    at["work_speed_rpm"] = table["work_speed_rpm"].get<double>() * factor;
+    auto model = kit::build_model(at);
+    worst = std::max(worst, kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real());
+    if (!(speed_tolerance > 0.0)) break;
+  }
+  return worst;
 }
 
 }  // namespace
 
 std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
-                                    double max_factor) {
-  const double growth0 = growth_at(segment_model, roots);
+                                    double speed_tolerance, double max_factor) {
+  auto worst_growth = [&](const Json& table) { return growth_at(table, roots, speed_tolerance); };
+  const double growth0 = worst_growth(segment_model);
   constexpr double step = 0.05;  // central difference in ln(quantity)
   std::vector<Lever> levers;
   for (const LeverDefinition& d : lever_definitions) {
-    Lever lever{d.name, d.acts_on};
+    Lever lever;
+    lever.name = d.name;
+    lever.acts_on = d.acts_on;
     Json up = segment_model, down = segment_model;
     d.scale(up, std::exp(step));
     d.scale(down, std::exp(-step));
-    lever.growth_per_unit_log = (growth_at(up, roots) - growth_at(down, roots)) / (2 * step);
+    lever.growth_per_unit_log = (worst_growth(up) - worst_growth(down)) / (2 * step);
     if (lever.growth_per_unit_log != 0.0) {
       const double limit = std::log(max_factor);
       const double log_change =
@@ -613,7 +625,7 @@ std::vector<Lever> stability_levers(const Json& segment_model, const RootSetting
       Json changed = segment_model;
       d.scale(changed, std::exp(log_change));
       lever.change_percent = 100.0 * (std::exp(log_change) - 1.0);
-      lever.growth_rate_after_per_s = growth_at(changed, roots);
+      lever.growth_rate_after_per_s = worst_growth(changed);
       lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
     } else {
       lever.growth_rate_after_per_s = growth0;

@@ -251,8 +251,9 @@ struct Lever {
 
 // The levers at a segment's G1 table (segment_model_table): width of cut (kc, kg, kw together),
 // contact stiffness, structural damping, work speed and wheel speed, each tried up to a factor
-// max_factor either way. target_growth_per_s < 0 is the growth rate to reach.
+// max_factor either way. target_growth_per_s < 0 is the growth rate to reach; growth rates are the
+// worst over work speeds n (1 +- speed_tolerance), as the re-plan rates its candidates.
 std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
-                                    double max_factor = 3.0);
+                                    double speed_tolerance, double max_factor = 3.0);
 
 }  // namespace chatterlab::feed_risk

@@ -247,7 +247,7 @@ std::string no_stable_candidate_notice(const OptimiseResult& best, const Optimis
 
 // The levers at the plan's worst segment (largest band growth rate), as JSON rows.
 Json levers_at_worst_segment(const Json& model, const ProcessSettings& p, const PlanRisk& risk,
-                             const RootSettings& roots, const RiskThresholds& thresholds) {
+                             const RootSettings& roots, const RiskThresholds& thresholds, double speed_tolerance) {
   std::size_t worst = 0;
   for (std::size_t k = 1; k < risk.segments.size(); ++k)
     if (risk.segments[k].growth_rate_per_s > risk.segments[worst].growth_rate_per_s) worst = k;
@@ -255,7 +255,7 @@ Json levers_at_worst_segment(const Json& model, const ProcessSettings& p, const 
   // A margin beyond the marginal threshold, so the change lands clearly in the stable class.
   const double target = -1.5 * thresholds.marginal_growth_rate_per_s;
   Json rows = Json::array();
-  for (const Lever& l : stability_levers(table, roots, target))
+  for (const Lever& l : stability_levers(table, roots, target, speed_tolerance))
     rows.push_back({{"lever", l.name},
                     {"acts_on", l.acts_on},
                     {"growth_per_unit_log_per_s", l.growth_per_unit_log},
@@ -725,7 +725,7 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
       optimised["verdict"] = "no stable candidate";
       optimised["plan_written"] = false;
       notice = no_stable_candidate_notice(*best, os, best_risk, thresholds);
-      optimised["levers"] = levers_at_worst_segment(model, p, best_risk, roots, thresholds);
+      optimised["levers"] = levers_at_worst_segment(model, p, best_risk, roots, thresholds, os.speed_tolerance);
       notice += levers_text(optimised["levers"]);
       optimised["notice"] = notice;
     }
@@ -779,7 +779,8 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
           if (!s.x.empty()) search.series.push_back(s);
         }
         const Candidate& chosen = cands[best->best];
-        search.series.push_back({"chosen", {chosen.spindle_speed_rpm}, {chosen.max_floored_log_amplification}, "points"});
+        search.series.push_back({stable_replan ? "chosen" : "least risk: no candidate is stable", {chosen.spindle_speed_rpm},
+                                 {chosen.max_floored_log_amplification}, "points"});
         draw(search, dir, "optimisation", failures);
 
         plot::Curves compare;

@@ -64,6 +64,18 @@ ComputedPoint compute_point(const StudyKind& kind, const Study& study, std::size
   }
   computed.compute_s = std::chrono::duration<double>(Clock::now() - start).count();
   computed.output_failed = failed_output_writes_on_this_thread() != writes_failed_before;
+  // A grid point whose files could not all be written keeps none: they would be an incomplete
+  // set, and they hold the room results.csv and meta.json still need (--retry-failed rewrites it).
+  // A write error a kind caught (e.g. as a plot error) still fails the point: its files are not all there.
+  if (computed.output_failed && result.status == "ok") {
+    result.outputs.assign(columns.size(), Json());
+    result.status = failure_status("a file of this point could not be written (disk full or I/O error; meta.json "
+                                   "output_error): run again with --resume --retry-failed");
+  }
+  if (computed.output_failed && study.point_count() > 1) {
+    std::error_code ignored;
+    std::filesystem::remove_all(point_artifact_dir(out_dir, point, study.point_count()), ignored);
+  }
   return computed;
 }
 

@@ -516,8 +516,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   summary.timed_out = result["timed_out"].get<std::size_t>();
   summary.output_error = result["output_error"].get<std::string>();
   if (result.contains("notices"))
-    for (const Json& n : result["notices"])
-      summary.notices.push_back({n["point"].get<std::size_t>(), n["notice"].get<std::string>()});
+    for (const Json& notice : result["notices"])
+      summary.notices.push_back({notice["point"].get<std::size_t>(), notice["notice"].get<std::string>()});
   summary.resumed = static_cast<std::size_t>(std::count(prep.done.begin(), prep.done.end(), '1'));
   return summary;
 }
