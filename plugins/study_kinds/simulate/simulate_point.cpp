@@ -21,11 +21,12 @@ constexpr std::size_t max_peaks = 10;
 constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
 
 // The samples of `x` whose times lie in [start, end], minus their least-squares line (the static
-// deflection growing with the infeed is not a vibration).
-std::vector<double> detrended_window(const SimulationResult& r, double start, double end) {
+// deflection growing with the infeed is not a vibration); empty below min_samples.
+std::vector<double> detrended_window(const SimulationResult& r, double start, double end,
+                                     std::ptrdiff_t min_samples = 64) {
   auto first = std::lower_bound(r.t_s.begin(), r.t_s.end(), start) - r.t_s.begin();
   auto last = std::upper_bound(r.t_s.begin(), r.t_s.end(), end) - r.t_s.begin();
-  if (last - first < 64) return {};
+  if (last - first < min_samples) return {};
   std::vector<double> window(r.displacement_m.begin() + first, r.displacement_m.begin() + last);
   const double n = static_cast<double>(window.size());
   double st = 0, sx = 0, stt = 0, stx = 0;
@@ -138,19 +139,9 @@ struct FinalAmplitude {
 FinalAmplitude final_amplitude(const SimulationResult& r) {
   const std::size_t n = r.displacement_m.size(), from = n - n / 10;
   if (n / 10 < 8) return {};
-  double st = 0, sx = 0, stt = 0, stx = 0;
-  const double m = static_cast<double>(n - from);
-  for (std::size_t i = from; i < n; ++i) {
-    st += r.t_s[i]; sx += r.displacement_m[i]; stt += r.t_s[i] * r.t_s[i]; stx += r.t_s[i] * r.displacement_m[i];
-  }
-  const double slope = (m * stx - st * sx) / (m * stt - st * st), offset = (sx - slope * st) / m;
-  double lo = INFINITY, hi = -INFINITY;
-  for (std::size_t i = from; i < n; ++i) {
-    const double d = r.displacement_m[i] - offset - slope * r.t_s[i];
-    lo = std::min(lo, d);
-    hi = std::max(hi, d);
-  }
-  return {0.5 * (hi - lo), Json::array({r.t_s[from], r.t_s[n - 1]})};
+  const std::vector<double> tail = detrended_window(r, r.t_s[from], r.t_s[n - 1], 8);
+  const auto [lo, hi] = std::minmax_element(tail.begin(), tail.end());
+  return {0.5 * (*hi - *lo), Json::array({r.t_s[from], r.t_s[n - 1]})};
 }
 
 // Lift-off statistics and the amplitude the response settles at once the contact has opened: the
