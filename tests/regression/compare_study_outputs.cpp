@@ -28,6 +28,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "study_files.hpp"
+
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 
@@ -86,72 +88,16 @@ std::vector<fs::path> result_files(const fs::path& dir) {
   return files;
 }
 
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using study_files::parse_number;
+using study_files::read_text;
+using study_files::Table;
 
-// ------------------------------------------------------------------ CSV
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        cell += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        cell += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      cells.push_back(cell);
-      cell.clear();
-    } else if (c != '\r') {
-      cell += c;
-    }
-  }
-  cells.push_back(cell);
-  return cells;
-}
-
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> columns;  // columns[c][row]
-};
-
+// A CSV table with input paths written portably.
 Table read_csv(const fs::path& file) {
-  std::istringstream in(read_text(file));
-  Table table;
-  std::string line;
-  bool first = true;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    auto cells = split_csv_line(line);
-    if (first) {
-      table.header = cells;
-      table.columns.resize(cells.size());
-      first = false;
-      continue;
-    }
-    cells.resize(table.header.size());
-    for (std::size_t c = 0; c < cells.size(); ++c) table.columns[c].push_back(portable(cells[c]));
-  }
+  Table table = study_files::read_csv(file);
+  for (auto& column : table.columns)
+    for (auto& cell : column) cell = portable(cell);
   return table;
-}
-
-bool parse_number(const std::string& text, double& value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  value = std::strtod(text.c_str(), &end);
-  return end == text.c_str() + text.size();
 }
 
 bool numeric_column(const std::vector<std::string>& cells) {

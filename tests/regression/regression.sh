@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Regression test: every shipped study's result files equal the stored references
-# (tests/regression/references/<study>.tar.xz; README.md says what is compared and how).
-# Usage: regression.sh CHATTERLAB COMPARE_TOOL STUDIES_DIR WORK_DIR
+# (tests/regression/references/<study>.tar.xz; README.md says what is compared and how), and the
+# claims its header states ("# claim:" lines) hold in the same outputs.
+# Usage: regression.sh CHATTERLAB COMPARE_TOOL STUDIES_DIR WORK_DIR CLAIMS_TOOL
 set -u
-bin=$1 compare=$2 studies=$3 work=$4
+bin=$1 compare=$2 studies=$3 work=$4 claims=$5
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 rm -rf "$work" && mkdir -p "$work/out" "$work/ref"
 bash "$here/run_studies.sh" "$bin" "$studies" "$work/out" || exit 1
@@ -27,5 +28,9 @@ for archive in "$here"/references/*.tar.xz; do
   name=$(basename "$archive" .tar.xz)
   [ -f "$studies/$name.toml" ] || { echo "FAIL: reference $name.tar.xz has no study" >&2; failed=$((failed + 1)); }
 done
+"$claims" "$studies" "$work/out" >"$work/claims.log"
+claims_status=$?
+[ "$claims_status" -eq 0 ] || sed 's/^/  | /' "$work/claims.log" >&2
 [ "$failed" -eq 0 ] || { echo "$failed studies differ from their references" >&2; exit 1; }
-echo "all shipped studies match their references"
+[ "$claims_status" -eq 0 ] || { echo "shipped studies' claims fail" >&2; exit 1; }
+echo "all shipped studies match their references; $(tail -n 1 "$work/claims.log")"
