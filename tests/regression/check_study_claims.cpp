@@ -9,10 +9,12 @@
 // evaluated against OUT_DIR/<name>/FILE (a path inside the study's output directory). Operands:
 //   - a number, "a string", true or false;
 //   - in a .json file, a JSON pointer: /peaks/0/frequency_hz;
-//   - in a .csv file, a column reduced over its rows: max(c) min(c) mean(c) sum(c) count(c)
-//     all(c) any(c) (all/any: cells true/false or 1/0), or a bare column c, which must hold
+//   - in a .csv file, a column reduced over its rows: max(c) min(c) mean(c) sd(c) (population
+//     standard deviation) sum(c) count(c) all(c) any(c) (all/any: cells true/false or 1/0), or a
+//     bare column c, which must hold
 //     exactly one row; rows are selected by c[key=value], c[key<value], c[key>value], joined by &
-//     (values compared as numbers when both are numbers, else as text): max(x[k=2e4&mode=a]).
+//     (values compared as numbers when both are numbers, else as text): max(x[k=2e4&mode=a]);
+//   - an operand may name another file of the outputs: points/000001/timeseries.csv:sd(x).
 // OP is one of > >= < <= == != or ~ (approximately: RHS then TOLERANCE, relative "2%" or an
 // absolute number); without OP the left side must be true. A study without a claim, a claim
 // that cannot be evaluated (file, column or key missing) and a claim that is false each fail,
@@ -256,8 +258,14 @@ Value csv_operand(const Table& table, const std::string& expr) {
   if (agg == "max") return *std::max_element(values.begin(), values.end());
   if (agg == "min") return *std::min_element(values.begin(), values.end());
   if (agg == "sum") return sum;
-  if (agg == "mean") return sum / static_cast<double>(values.size());
-  throw std::runtime_error("unknown reduction '" + agg + "' (max min mean sum count all any)");
+  const double mean = sum / static_cast<double>(values.size());
+  if (agg == "mean") return mean;
+  if (agg == "sd") {  // population standard deviation: the size of a fluctuation
+    double sq = 0.0;
+    for (double v : values) sq += (v - mean) * (v - mean);
+    return std::sqrt(sq / static_cast<double>(values.size()));
+  }
+  throw std::runtime_error("unknown reduction '" + agg + "' (max min mean sd sum count all any)");
 }
 
 Value json_operand(const nlohmann::json& doc, const std::string& pointer) {
@@ -271,7 +279,17 @@ Value json_operand(const nlohmann::json& doc, const std::string& pointer) {
   throw std::runtime_error(pointer + " is " + std::string(v.type_name()) + ", not a value");
 }
 
-Value operand(Outputs& out, const std::string& file, const std::string& token) {
+Value operand(Outputs& out, std::string file, std::string token) {
+  // "other.csv:expr" reads another file of the study's outputs.
+  for (const char* ext : {".csv:", ".json:"}) {
+    const auto at = token.find(ext);
+    if (at != std::string::npos && token.front() != '"') {
+      const auto colon = at + std::string_view(ext).size() - 1;
+      file = token.substr(0, colon);
+      token = token.substr(colon + 1);
+      break;
+    }
+  }
   double d = 0.0;
   if (parse_number(token, d)) return d;
   if (token == "true") return true;

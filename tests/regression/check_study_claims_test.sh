@@ -27,6 +27,8 @@ cat >"$work/studies/good.toml" <<'TOML'
 # claim: summary.json /peaks/0/frequency_hz ~ 840 2%       -- carrier near 840 Hz
 # claim: summary.json /verdict == "chatter"
 # claim: summary.json /stable == false
+# claim: results.csv sd(growth_rate_per_s[mode=a]) ~ 0.875 1e-12
+# claim: summary.json /peaks/0/frequency_hz > results.csv:max(growth_rate_per_s)
 [study]
 kind = "simulate"
 TOML
@@ -37,6 +39,7 @@ cat >"$work/studies/bad.toml" <<'TOML'
 # claim: results.csv max(no_such_column) > 0
 # claim: results.csv growth_rate_per_s[mode=a] > 0
 # claim: results.csv max(growth_rate_per_s) >> 0
+# claim: results.csv max(growth_rate_per_s) > summary.json:/peaks/0/frequency_hz
 [study]
 kind = "simulate"
 TOML
@@ -45,7 +48,7 @@ printf '# Says nothing checkable.\n[study]\nkind = "simulate"\n' >"$work/studies
 # True claims alone: exit 0.
 mkdir -p "$work/only_good" && cp "$work/studies/good.toml" "$work/only_good/"
 "$tool" "$work/only_good" "$work/out" >"$work/log" 2>&1 || fail "true claims reported as failing"
-grep -q "all 9 claims of 1 studies hold" "$work/log" || fail "no summary of the true claims"
+grep -q "all 11 claims of 1 studies hold" "$work/log" || fail "no summary of the true claims"
 
 "$tool" "$work/studies" "$work/out" >"$work/log" 2>&1
 [ $? -eq 1 ] || fail "false claims: exit status is not 1"
@@ -55,6 +58,7 @@ expect "FAIL: bad.toml:3: claim 'summary.json /peaks/0/frequency_hz ~ 800 2%': f
 expect "FAIL: bad.toml:4: claim 'results.csv max(no_such_column) > 0': cannot evaluate: no column 'no_such_column'"
 expect "FAIL: bad.toml:5: claim 'results.csv growth_rate_per_s[mode=a] > 0': cannot evaluate: growth_rate_per_s[mode=a] selects 2 rows"
 expect "FAIL: bad.toml:6: claim 'results.csv max(growth_rate_per_s) >> 0': cannot evaluate: expected an operator"
+expect "FAIL: bad.toml:7: claim 'results.csv max(growth_rate_per_s) > summary.json:/peaks/0/frequency_hz': found max(growth_rate_per_s) = 1.5, summary.json:/peaks/0/frequency_hz = 841"
 expect "FAIL: silent.toml: states no claim"
 grep -q "good.toml" "$work/log" && fail "a true claim was reported"
 echo "check_study_claims reports false, unevaluable and missing claims"

@@ -225,6 +225,26 @@ plot::Curves time_figure(const std::string& title, const std::string& y_label, p
   return c;
 }
 
+// The rotor speeds' relative changes, when a model lets them vary (torsion, G5; speed
+// modulation, S2/S3): relative, because the force follows n_w / n_g (G5), so 1 rpm of the work
+// (55 rpm) weighs 26 times 1 rpm of the wheel (1450 rpm). Empty when both speeds stay constant.
+plot::Curves speed_figure(const SimulationResult& r, const std::string& title) {
+  plot::Curves c = time_figure(fmt::format("{}: rotor speeds", title), "speed change [% of the speed at t = 0]", {});
+  c.series.clear();
+  for (std::size_t rotor : {work, wheel}) {
+    const std::vector<double>& rpm = r.speed_rpm[rotor];
+    if (rpm.empty()) continue;
+    const auto [lo, hi] = std::minmax_element(rpm.begin(), rpm.end());
+    if (rpm.front() == 0.0 || *hi - *lo <= 1e-9 * std::abs(rpm.front())) continue;
+    std::vector<double> change(rpm.size());
+    for (std::size_t i = 0; i < rpm.size(); ++i) change[i] = 100.0 * (rpm[i] / rpm.front() - 1.0);
+    c.series.push_back(kit::decimated(fmt::format("{} ({:.4g} rpm at t = 0)", to_string(static_cast<Rotor>(rotor)),
+                                                  rpm.front()),
+                                      r.t_s, change));
+  }
+  return c;
+}
+
 plot::Curves envelope_figure(const std::string& title, const EnvelopeFit& fit, const FitValidity& validity) {
   const std::string verdict = validity.valid ? fmt::format("growth {:.4g} /s, {}", fit.growth_rate_per_s,
                                                            to_string(validity.regime))
@@ -269,11 +289,18 @@ void plot_surfaces(const SimulationResult& r, const std::string& title, const fs
     if (r.snapshots.empty() || r.surface_samples_per_rev[rotor] == 0) continue;
     const std::string name = to_string(static_cast<Rotor>(rotor));
     plot::Curves surf;
-    surf.title = fmt::format("{}: {} surface, unrolled (removal so far)", title, name);
+    surf.title = fmt::format("{}: {} surface, unrolled", title, name);
     surf.x_label = "body angle [deg]";
-    surf.y_label = "radius removed [m]";
-    for (const SurfaceSnapshot& s : r.snapshots)
-      surf.series.push_back(kit::decimated(fmt::format("t = {:.4g} s", s.t_s), s.angle_deg, s.surface_m[rotor]));
+    surf.y_label = "radius removed minus the infeed ramp [um]";
+    for (const SurfaceSnapshot& s : r.snapshots) {
+      // The ramp (a revolution's infeed, tens of um) would hide waves of a few um.
+      Deramped d = without_infeed_ramp(s.surface_m[rotor]);
+      for (double& v : d.values) v *= 1e6;
+      const std::string ramp = d.rise_per_revolution == 0.0
+                                   ? std::string("no ramp above the waves; mean removed")
+                                   : fmt::format("ramp {:.3g} um/rev removed", 1e6 * d.rise_per_revolution);
+      surf.series.push_back(kit::decimated(fmt::format("t = {:.4g} s ({})", s.t_s, ramp), s.angle_deg, d.values));
+    }
     figures.render(surf, dir, name + "_surface");
   }
 }
@@ -287,6 +314,7 @@ void plot_point(const SimulationResult& r, const PointAnalysis& a, const WorkSur
   figures.render(time_figure(fmt::format("{}: normal grinding force", title), "normal force Fn [N]",
                              kit::decimated("force Fn", r.t_s, r.force_n)),
                  dir, "force");
+  if (plot::Curves speeds = speed_figure(r, title); !speeds.series.empty()) figures.render(speeds, dir, "speeds");
   if (a.fit) figures.render(envelope_figure(title, *a.fit, *a.validity), dir, "envelope_fit");
   if (a.spectrum) figures.render(spectrum_figure(title, *a.spectrum, a.peaks), dir, "spectrum");
   plot_surfaces(r, title, dir, figures);
@@ -301,6 +329,48 @@ void plot_point(const SimulationResult& r, const PointAnalysis& a, const WorkSur
 }
 
 }  // namespace
+
+// See simulate_point.hpp.
+Deramped without_infeed_ramp(std::span<const double> y) {
+  const std::size_t n = y.size();
+  Deramped out{std::vector<double>(y.begin(), y.end()), 0.0};
+  if (n < 3) return out;
+  const double nd = static_cast<double>(n);
+  const double su = nd * (nd - 1.0) / 2.0, suu = (nd - 1.0) * nd * (2.0 * nd - 1.0) / 6.0;
+  const double var_u = suu - su * su / nd;
+  double sy = 0.0, siy = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sy += y[i];
+    siy += static_cast<double>(i) * y[i];
+  }
+  double before = 0.0, best_cov = 0.0;  // before: sum of y[i] for i < b
+  std::size_t best = 0;
+  for (std::size_t b = 0; b < n; ++b) {
+    const double suy = siy - static_cast<double>(b) * sy + nd * before;
+    const double cov = suy - su * sy / nd;
+    if (b == 0 || std::abs(cov) > std::abs(best_cov)) {
+      best_cov = cov;
+      best = b;
+    }
+    before += y[b];
+  }
+  const double slope = best_cov / var_u, offset = (sy - slope * su) / nd;
+  double squares = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double u = static_cast<double>((i + n - best) % n);
+    out.values[i] = y[i] - (offset + slope * u);
+    squares += out.values[i] * out.values[i];
+  }
+  out.rise_per_revolution = slope * nd;
+  // The best of n breakpoints always finds some sawtooth in random waviness: a ramp that does not
+  // rise above twice the residual rms is not one, and only the mean is removed.
+  if (std::abs(out.rise_per_revolution) < 2.0 * std::sqrt(squares / nd)) {
+    for (std::size_t i = 0; i < n; ++i) out.values[i] = y[i] - sy / nd;
+    out.rise_per_revolution = 0.0;
+  }
+  return out;
+}
+
 
 PointAnalysis analyse(const SimulationResult& r, const kit::SimulationTable& sim, double longest_delay_s) {
   PointAnalysis a;

@@ -3,6 +3,7 @@
 // spectrum, the part quality of the final work surface, and the point's files and figures.
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,5 +46,19 @@ WorkSurfaceQuality measure_work_surface(const SimulationResult& r, const Json& s
 // timeseries.csv (or .npy), surfaces_NN.csv, spectrum.csv, summary.json and (with context.plots) figures.
 void write_point_files(const SimulationResult& r, const PointAnalysis& a, const WorkSurfaceQuality& quality,
                        const Json& document, const SimulateSettings& settings, const PointContext& context);
+
+// A rotor's removal so far over one revolution, minus the infeed ramp: the angle cut last carries
+// a revolution's more infeed (or wear) than the angle about to be cut, so the unrolled surface is
+// a sawtooth of one step per revolution on which the chatter waves ride. The ramp is the line
+// a + c u in u = (i - b) mod n, the samples counted from the step b; b is the one whose line fits
+// best (all b share the sums of u, u^2 and y, so only sum(u y) depends on b, and it follows from
+// prefix sums). A ramp whose rise c n is below twice the residual rms is none (the best of n
+// breakpoints finds a sawtooth in any random waviness): then only the mean is removed and the
+// rise is 0. The surface plots show the residual and name the rise.
+struct Deramped {
+  std::vector<double> values;
+  double rise_per_revolution = 0.0;
+};
+Deramped without_infeed_ramp(std::span<const double> removal);
 
 }  // namespace chatterlab::simulate_point

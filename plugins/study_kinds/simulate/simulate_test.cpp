@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -100,3 +101,26 @@ TEST(Simulate, ALinearG1RunGrowsAtTheCertifiedRoot) {
 
 }  // namespace
 }  // namespace chatterlab
+
+// The unrolled work surface of a plunge: a revolution's infeed as one ramp with its step where
+// the wheel cuts now, plus chatter waves. The ramp removal returns the waves and the rise.
+TEST(SimulateSurfacePlot, InfeedRampIsRemovedAndItsRiseReported) {
+  const std::size_t n = 3600, step = 1234;
+  const double rise_m = 16.4e-6, wave_m = 2e-6;
+  std::vector<double> removal(n), waves(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double u = static_cast<double>((i + n - step) % n) / static_cast<double>(n);  // 0 just after the cut
+    waves[i] = wave_m * std::sin(2.0 * std::numbers::pi * 37.0 * static_cast<double>(i) / static_cast<double>(n));
+    removal[i] = 5e-6 + rise_m * u + waves[i];
+  }
+  const chatterlab::simulate_point::Deramped d = chatterlab::simulate_point::without_infeed_ramp(removal);
+  EXPECT_NEAR(d.rise_per_revolution, rise_m, 0.01 * rise_m);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, std::abs(d.values[i] - waves[i]));
+  EXPECT_LT(worst, 0.05 * wave_m);
+
+  // Waves alone (a wheel that hardly wears): no ramp is invented.
+  const chatterlab::simulate_point::Deramped none = chatterlab::simulate_point::without_infeed_ramp(waves);
+  EXPECT_EQ(none.rise_per_revolution, 0.0);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_NEAR(none.values[i], waves[i], 1e-3 * wave_m);
+}
