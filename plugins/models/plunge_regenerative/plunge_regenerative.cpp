@@ -1,7 +1,11 @@
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
 #include "shared/plunge_dynamics/process_scaling.hpp"
+#include "shared/plunge_dynamics/wheel_growth_rate.hpp"
 
 namespace chatterlab {
 
@@ -49,6 +53,37 @@ std::unique_ptr<TimeDomainModel> PlungeRegenerative::time_domain() const {
 
 std::optional<StiffnessChain> PlungeRegenerative::stiffness_chain() const {
   return plunge_dynamics::stiffness_chain(parameters_);
+}
+
+std::vector<ClosedFormIndicatorSpec> PlungeRegenerative::indicator_specs() const {
+  return {
+      {"g3_growth_rate_per_s",
+       "G3 closed form (corrected 2-68) at the wheel lattice's frequencies of this speed: 2 pi rho/Tg, the "
+       "largest (wheel regeneration alone); > 0: chatter",
+       true},
+      {"g3_growth_rate_per_wheel_rev", "its rho: A_{n+1}/A_n = e^{2 pi rho} per wheel revolution", false},
+      {"g3_chatter_frequency_hz", "the frequency of that rho", false},
+      {"g3_max_growth_rate_per_wheel_rev",
+       "rho_max over every frequency up to 4 x the highest mode: what some wheel speed reaches (5-38)", false},
+  };
+}
+
+std::vector<Json> PlungeRegenerative::indicator_values() const {
+  const PlungeRegenerativeParameters& p = parameters_;
+  std::vector<Json> values(4);  // null: G3 is wheel regeneration alone
+  if (!p.wheel_regeneration || p.work_regeneration || p.modes.empty()) return values;
+  double highest_hz = 0.0;
+  for (const StructuralMode& mode : p.modes) highest_hz = std::max(highest_hz, mode.frequency_hz);
+  const auto g3 = wheel_growth::wheel_chatter_at_speed(
+      p.wheel_wear_stiffness_n_per_m, p.contact_stiffness_n_per_m,
+      [this](double w) { return characteristic_.structural_compliance(Complex(0.0, w)); },
+      60.0 / p.wheel_speed_rpm, 4.0 * highest_hz);
+  auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+  values[0] = number(g3.growth_rate_per_s);
+  values[1] = number(g3.growth_rate_per_rev);
+  values[2] = number(g3.chatter_frequency_hz);
+  values[3] = number(g3.max_growth_rate_per_rev);
+  return values;
 }
 
 Complex PlungeRegenerative::compliance_m_per_n(Complex s) const {

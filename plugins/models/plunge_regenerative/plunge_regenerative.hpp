@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "chatterlab/characteristic.hpp"
+#include "chatterlab/closed_form.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
 #include "chatterlab/process_conditions.hpp"
@@ -18,7 +19,10 @@
 
 namespace chatterlab {
 
-class PlungeRegenerative final : public Model, public StructuralCompliance, public ProcessConditionsModel {
+class PlungeRegenerative final : public Model,
+                                 public StructuralCompliance,
+                                 public ProcessConditionsModel,
+                                 public ClosedFormIndicators {
  public:
   explicit PlungeRegenerative(const ParamValues& values);
   explicit PlungeRegenerative(PlungeRegenerativeParameters parameters);
@@ -34,6 +38,12 @@ class PlungeRegenerative final : public Model, public StructuralCompliance, publ
   const StructuralCompliance* structural_compliance() const override { return this; }
   Complex compliance_m_per_n(Complex s) const override;
   const ProcessConditionsModel* process_conditions() const override { return this; }
+
+  // G3's closed form (shared/plunge_dynamics/wheel_growth_rate.hpp) beside the root: it applies to
+  // wheel regeneration alone (work_regeneration = false); null otherwise.
+  const ClosedFormIndicators* closed_forms() const override { return this; }
+  std::vector<ClosedFormIndicatorSpec> indicator_specs() const override;
+  std::vector<Json> indicator_values() const override;
   ProcessConditions nominal_conditions() const override;
   Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                      const ProcessScaling& scaling) const override;

@@ -1,5 +1,6 @@
 #include "shared/plunge_dynamics/wheel_growth_rate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -30,6 +31,40 @@ double log_amplification(std::span<const double> rho) {
 
 double amplitude_after_revolutions(double initial_amplitude, std::span<const double> rho) {
   return initial_amplitude * std::exp(log_amplification(rho));
+}
+
+WheelChatterClosedForm wheel_chatter_at_speed(
+    double kg, double kc, const std::function<std::complex<double>(double)>& compliance, double tg,
+    double max_frequency_hz) {
+  constexpr double two_pi = 2.0 * std::numbers::pi;
+  const double w_max = two_pi * max_frequency_hz;
+  const double step = std::min(0.05 / tg, two_pi * 0.1);
+  WheelChatterClosedForm out;
+  // Lattice mismatch w Tg - phase, wrapped into (-pi, pi]: zero where the lattice admits a root.
+  auto mismatch = [&](double w, std::complex<double> h) {
+    const double phase = lattice_phase_rad(1.0, kg / kc, kg * h);
+    return std::remainder(w * tg - phase, two_pi);
+  };
+  double w_prev = step, g_prev = mismatch(w_prev, compliance(w_prev));
+  for (double w = 2.0 * step; w <= w_max; w += step) {
+    const std::complex<double> h = compliance(w);
+    const double rho_here = growth_rate_per_rev_from_compliance(kg, kc, h);
+    if (!(out.max_growth_rate_per_rev >= rho_here)) out.max_growth_rate_per_rev = rho_here;
+    const double g = mismatch(w, h);
+    // A sign change without the 2 pi jump of the wrap is a lattice frequency.
+    if ((g_prev < 0.0) != (g < 0.0) && std::abs(g - g_prev) < std::numbers::pi) {
+      const double w_root = w_prev - g_prev * (w - w_prev) / (g - g_prev);
+      const double rho = growth_rate_per_rev_from_compliance(kg, kc, compliance(w_root));
+      if (!(out.growth_rate_per_rev >= rho)) {
+        out.growth_rate_per_rev = rho;
+        out.chatter_frequency_hz = w_root / two_pi;
+      }
+    }
+    w_prev = w;
+    g_prev = g;
+  }
+  if (std::isfinite(out.growth_rate_per_rev)) out.growth_rate_per_s = two_pi * out.growth_rate_per_rev / tg;
+  return out;
 }
 
 }  // namespace chatterlab::wheel_growth

@@ -12,6 +12,8 @@
 // The formula is exact when Gm is evaluated at the root s = sigma + j w; the closed form
 // evaluates it at s = j w (error ~ sigma |dW/ds| |d rho/dW|: good while |sigma| << zeta w_n).
 #include <complex>
+#include <functional>
+#include <limits>
 #include <span>
 
 namespace chatterlab::wheel_growth {
@@ -35,5 +37,23 @@ double amplitude_after_revolutions(double initial_amplitude, std::span<const dou
 
 // ln(A_n/A_0) = 2 pi sum rho_i (never overflows; for long schedules).
 double log_amplification(std::span<const double> growth_rates_per_rev);
+
+// G3 at one wheel speed, the closed form beside the root (Model::closed_forms()): the frequencies
+// w in (0, max_frequency] at which the wheel lattice admits a root, w Tg = lattice phase (mod
+// 2 pi), found as sign changes of the wrapped difference on a grid of 0.05 rad of w Tg (and at
+// most 0.1 Hz), the closed-form rho at each, and the largest. The neutral root at w = 0 is left
+// out. max_growth_rate_per_rev is rho_max over every frequency of the band: the rate some wheel
+// speed reaches (the constant-speed bound of 5-38).
+struct WheelChatterClosedForm {
+  static constexpr double none = std::numeric_limits<double>::quiet_NaN();
+  double growth_rate_per_rev = none;   // largest rho over this speed's lattice frequencies
+  double growth_rate_per_s = none;     // 2 pi rho / Tg
+  double chatter_frequency_hz = none;  // the frequency of that rho
+  double max_growth_rate_per_rev = none;
+};
+WheelChatterClosedForm wheel_chatter_at_speed(
+    double wheel_wear_stiffness_n_per_m, double contact_stiffness_n_per_m,
+    const std::function<std::complex<double>(double frequency_rad_s)>& compliance_m_per_n,
+    double wheel_period_s, double max_frequency_hz);
 
 }  // namespace chatterlab::wheel_growth

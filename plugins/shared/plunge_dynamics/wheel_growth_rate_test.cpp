@@ -152,3 +152,30 @@ TEST(WheelGrowthRate, AmplificationPerRevolution) {
 
 }  // namespace
 }  // namespace chatterlab
+
+namespace chatterlab {
+namespace {
+
+// The closed form at one wheel speed (wheel_chatter_at_speed, the stability_map column): its
+// lattice search finds the rightmost root's frequency, and its rho is the closed form at that
+// frequency, so it agrees with the root as compare() does, at every speed of a sweep across lobes;
+// rho_max bounds the root's rho everywhere.
+TEST(WheelGrowthRate, AtOneSpeedTheLatticeSearchFindsTheRootsFrequency) {
+  for (double rpm : {1200.0, 1333.0, 1450.0, 1575.0, 1700.0}) {
+    SCOPED_TRACE(rpm);
+    PlungeRegenerativeParameters p = wheel_only(180.0, 0.03, 1.3);
+    p.wheel_speed_rpm = rpm;
+    const Comparison root = compare(p);
+    const PlungeCharacteristic e(p);
+    const auto g3 = wheel_growth::wheel_chatter_at_speed(
+        p.wheel_wear_stiffness_n_per_m, p.contact_stiffness_n_per_m,
+        [&](double w) { return e.structural_compliance(std::complex<double>(0.0, w)); }, 60.0 / rpm, 720.0);
+    EXPECT_NEAR(g3.chatter_frequency_hz, root.frequency_hz, 0.01 * root.frequency_hz);
+    EXPECT_NEAR(g3.growth_rate_per_rev, root.rho_closed, 1e-3 * std::abs(root.rho_closed) + 1e-9);
+    EXPECT_NEAR(g3.growth_rate_per_s, kTwoPi * g3.growth_rate_per_rev * rpm / 60.0, 1e-12);
+    EXPECT_GE(g3.max_growth_rate_per_rev, root.rho_exact);
+  }
+}
+
+}  // namespace
+}  // namespace chatterlab

@@ -119,6 +119,7 @@ void plot_closed_form_margins(const std::vector<kit::PlotAxis>& axes, const Stud
       ++compared;
       disagree += (g > 0.0) != (m > 0.0) ? 1 : 0;
     }
+    if (compared == 0) continue;  // the closed form applies nowhere in this study (G3 with the work chain on)
     kit::ColumnFigure figure{spec.name,
                              fmt::format("{} ({}/{} points disagree with the root)", spec.name, disagree, compared),
                              axes.size() == 1 ? spec.name + " (> 0: chatter)" : spec.name};

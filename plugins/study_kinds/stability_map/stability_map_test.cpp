@@ -103,6 +103,10 @@ TEST(StabilityMap, WheelColumnOnlyForModelsWithAWheel) {
   for (const char* c : {"band_worst_growth_rate_per_s", "band_worst_chatter_frequency_hz",
                         "stable_over_speed_band", "exact_speed_ratio"})
     with_wheel.push_back(c);
+  // G1 also reports G3's closed form (null unless the work chain is off).
+  for (const char* c : {"g3_growth_rate_per_s", "g3_growth_rate_per_wheel_rev", "g3_chatter_frequency_hz",
+                        "g3_max_growth_rate_per_wheel_rev"})
+    with_wheel.push_back(c);
   EXPECT_EQ(kind.output_columns(plunge_study().document), with_wheel);
 }
 
