@@ -142,8 +142,11 @@ Json column_digest(const std::vector<std::string>& cells) {
       weighted += v * static_cast<double>(i + 1) / static_cast<double>(cells.size());
     }
     d["non_finite_or_blank"] = blanks;
-    d["min"] = lo;
-    d["max"] = hi;
+    // A column without a finite value has no extremes: null, as its stored reference reads back
+    // (JSON has no infinity).
+    const bool none = blanks == cells.size();
+    d["min"] = none ? Json() : Json(lo);
+    d["max"] = none ? Json() : Json(hi);
     d["sum"] = sum;
     d["abs_sum"] = abs_sum;
     d["weighted_sum"] = weighted;
