@@ -13,7 +13,8 @@
 //   };
 //
 // and optionally initial_state(disturbance, x), state_scales(displacement_m, scales),
-// highest_frequency_hz() and diagnostics() (the TimeDomainModel members, dynamics.hpp). From that
+// highest_frequency_hz(), diagnostics(), angle_state(rotor) and speed_rpm_from_state(rotor, x)
+// (the TimeDomainModel members, dynamics.hpp; angles as states: G5). From that
 // one definition the framework derives
 //   - the time-domain form the dynamics engine integrates (EquationsTimeDomain: S = double),
 //   - the Jacobian at rest by forward-mode automatic differentiation (S = Dual, dual.hpp),
@@ -29,6 +30,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -165,6 +167,15 @@ class EquationsTimeDomain final : public TimeDomainModel {
   }
   bool regenerates(Rotor rotor) const override { return eqs_.regenerates(rotor); }
   double nominal_speed_rpm(Rotor rotor) const override { return eqs_.nominal_speed_rpm(rotor); }
+  // G5: rotation angles that are states (optional members of the equations, dynamics.hpp).
+  std::optional<std::size_t> angle_state(Rotor rotor) const override {
+    if constexpr (requires { eqs_.angle_state(rotor); }) return eqs_.angle_state(rotor);
+    else return std::nullopt;
+  }
+  double speed_rpm_from_state(Rotor rotor, std::span<const double> state) const override {
+    if constexpr (requires { eqs_.speed_rpm_from_state(rotor, state); }) return eqs_.speed_rpm_from_state(rotor, state);
+    else return 0.0;
+  }
   void contact(const ContactInput& in, ContactOutput& out) const override {
     ContactOutputOf<double> c;
     eqs_.contact(convert(in), c);

@@ -195,11 +195,30 @@ TEST(Floquet, ConstantSpeedModelIsItsRightmostRoot) {
       << floquet.method;
 }
 
+// Least-squares slope of ln max|x| per modulation period, periods starting in [from, to): one
+// sample per period, so the periodic part of ln|x(t)| (a deep modulation swings the instantaneous
+// growth within each period) cannot bias the slope. An envelope fit over a few periods can: its
+// slope picks up the covariance of that periodic part with t (for ln|x| = sigma t + P cos(2 pi t / T
+// + phi) over n whole periods the bias is 6 P sin(phi) / (pi n^2 T)).
+double per_period_growth(const std::vector<double>& t, const std::vector<double>& x, double from, double to,
+                         double period) {
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
+  for (double start = from; start + period <= to + 1e-12; start += period) {
+    double largest = 0.0;
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (t[i] >= start && t[i] < start + period) largest = std::max(largest, std::abs(x[i]));
+    const double y = std::log(largest);
+    sx += start, sy += y, sxx += start * start, sxy += start * y, count += 1.0;
+  }
+  return (count * sxy - sx * sy) / (count * sxx - sx * sx);
+}
+
 TEST(FloquetAccuracy, ModulatedWheelSpeedMatchesSimulatedGrowth) {
   // MODELS.md S2: wheel speed 1450 rpm (1 + a sin 2 pi f t); the Floquet growth rate against the
   // envelope of a bilateral (linear) simulation with the same speed law.
   const G1Model model(wheel_chatter());
-  for (auto [amplitude, frequency] : {std::pair{0.05, 5.0}, std::pair{0.02, 10.0}, std::pair{0.02, 2.0}, std::pair{0.01, 5.0}}) {
+  for (auto [amplitude, frequency] :
+       {std::pair{0.05, 5.0}, std::pair{0.02, 10.0}, std::pair{0.02, 2.0}, std::pair{0.01, 5.0}, std::pair{0.05, 2.0}}) {
     std::shared_ptr<const SpeedLaw> law = make_modulated_speed(1450.0, SpeedModulation::sinusoidal, amplitude, frequency);
     PeriodicProcess process;
     process.speed[static_cast<std::size_t>(Rotor::wheel)] = law;
@@ -214,18 +233,17 @@ TEST(FloquetAccuracy, ModulatedWheelSpeedMatchesSimulatedGrowth) {
     settings.relative_tolerance = 1e-8;
     settings.speed[static_cast<std::size_t>(Rotor::wheel)] = law;
     const SimulationResult run = simulate(*model.time_domain(), settings);
-    // Whole modulation periods in the fit window, after the transients of the weaker multipliers.
-    // Measured (Floquet / simulated, 1/s): a 0.05 f 5: 3.379 / 3.329; a 0.02 f 10: 3.134 / 3.125;
-    // a 0.02 f 2: 3.156 / 3.098; a 0.01 f 5: 3.088 / 3.076. Open: deeper modulation is not held to
-    // 2 % here: at a 0.1 f 5 two multipliers of nearly equal modulus make the fit depend on the
-    // window (1.56-1.60 against 1.613), at a 0.05 f 2 the engine's envelope grows at 3.336 against
-    // 3.476: the simulated rate is below the Floquet rate at every point, and the independent
-    // time stepping below sides with Floquet (docs/derived_stability.md).
+    // The growth per modulation period over 4..8 s (after the transients of the weaker
+    // multipliers), as the direct time stepping below measures it. The envelope fit over 6..8 s
+    // that this test used before read the deep, slow modulation low (a 0.05 f 2: 3.337 against
+    // 3.476 1/s, docs/derived_stability.md): the periodic swing of ln|x| within a period biases a
+    // slope fitted over few periods; it is printed here for the record.
+    const double simulated = per_period_growth(run.t_s, run.displacement_m, 4.0, 8.0, 1.0 / frequency);
     const double start = 6.0, end = start + std::floor(2.0 * frequency) / frequency;
     const EnvelopeFit fit = fit_envelope(run.t_s, run.displacement_m, start, end, 50.0);
-    std::printf("a = %g, f = %g Hz: Floquet %.4f 1/s, simulated %.4f 1/s\n", amplitude, frequency,
-                floquet.growth_rate_per_s, fit.growth_rate_per_s);
-    EXPECT_NEAR(fit.growth_rate_per_s, floquet.growth_rate_per_s, 0.02 * std::abs(floquet.growth_rate_per_s))
+    std::printf("a = %g, f = %g Hz: Floquet %.4f 1/s, simulated per period %.4f 1/s (envelope fit 6..%g s %.4f)\n",
+                amplitude, frequency, floquet.growth_rate_per_s, simulated, end, fit.growth_rate_per_s);
+    EXPECT_NEAR(simulated, floquet.growth_rate_per_s, 2e-3 * std::abs(floquet.growth_rate_per_s))
         << "a = " << amplitude << ", f = " << frequency << " Hz: " << floquet.method;
   }
 }
@@ -282,17 +300,9 @@ double direct_growth(const G1Equations& eqs, double amplitude, double frequency,
     surface[static_cast<std::size_t>(before + n + 1)] = previous + ks * (-q - previous) / eqs.kg;
     history.push_back(q);
   }
-  // Least-squares slope of ln max|q| per modulation period, periods starting in [4, 8) s.
-  const double period = 1.0 / frequency;
-  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
-  for (double start = 4.0; start + period <= duration + 1e-12; start += period) {
-    double largest = 0.0;
-    for (auto i = static_cast<std::size_t>(start / dt); i < static_cast<std::size_t>((start + period) / dt); ++i)
-      largest = std::max(largest, std::abs(history[i]));
-    const double y = std::log(largest);
-    sx += start, sy += y, sxx += start * start, sxy += start * y, count += 1.0;
-  }
-  return (count * sxy - sx * sy) / (count * sxx - sx * sx);
+  std::vector<double> times(history.size());
+  for (std::size_t i = 0; i < times.size(); ++i) times[i] = static_cast<double>(i) * dt;
+  return per_period_growth(times, history, 4.0, duration, 1.0 / frequency);
 }
 
 TEST(FloquetAccuracy, ModulatedWheelSpeedMatchesDirectTimeStepping) {

@@ -309,6 +309,10 @@ std::string check_time_domain_agreement(const Model& model, Problems& problems) 
   s.sample_rate_hz = 40.0 * frequency;
   s.one_sided_contact = false;
   s.infeed_rate_m_per_s = 0.0;
+  // The roots are those of the linearisation: start where the nonlinear terms are negligible
+  // over the whole run (G5: 1 um of vibration already modulates a 55 rpm work speed by ~9 %
+  // through the torque, and the speed correction is quadratic in the amplitude).
+  s.disturbance = {1e-12, 0.0};
   s.divergence_limit_m = 1e250;
   const SimulationResult r = simulate(*td, s);
   if (r.diverged || r.status != "completed") {

@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/param_table.hpp"
 
@@ -355,12 +356,19 @@ void check_sizes(const LinearDdeParameters& p) {
   if (n == 0 || !is_square_of(p.a0, n))
     throw InputError(fmt::format("model.a0 is {}: the state matrix A0 must be square (n x n)",
                                  shape(p.a0)));
+  if (!p.mass.empty() && !is_square_of(p.mass, n))
+    throw InputError(fmt::format("model.mass is {} but model.a0 is {}x{}: the mass matrix must be "
+                                 "square with the size of a0", shape(p.mass), n, n));
   for (std::size_t k = 0; k < p.delayed.size(); ++k) {
     const DelayedTerm& term = p.delayed[k];
     if (!is_square_of(term.matrix, n))
       throw InputError(fmt::format(
           "model.delayed.{}.matrix is {} but model.a0 is {}x{}: every delayed matrix must be "
           "square with the size of a0", k, shape(term.matrix), n, n));
+    if (!term.neutral_matrix.empty() && !is_square_of(term.neutral_matrix, n))
+      throw InputError(fmt::format(
+          "model.delayed.{}.neutral_matrix is {} but model.a0 is {}x{}: every neutral matrix must be "
+          "square with the size of a0", k, shape(term.neutral_matrix), n, n));
     if (!(term.delay_s > 0.0) || !std::isfinite(term.delay_s))
       throw InputError(fmt::format("model.delayed.{}.delay_s = {}: must be finite and > 0", k,
                                    term.delay_s));
@@ -374,22 +382,73 @@ const ParamTable<LinearDdeParameters>& parameters_table() {
     term.add(&DelayedTerm::matrix, "matrix", "1/s", "delayed matrix A_k (n x n, the size of a0)")
         .min_items(1)
         .required();
+    term.add(&DelayedTerm::neutral_matrix, "neutral_matrix", "1",
+             "neutral matrix B_k of x'(t - tau_k) on the left (n x n); omitted: none");
     ParamTable<LinearDdeParameters> t;
     t.add(&LinearDdeParameters::a0, "a0", "1/s", "state matrix A0 (n x n) of x' = A0 x + sum_k A_k x(t - tau_k)")
         .min_items(1)
         .required();
+    t.add(&LinearDdeParameters::mass, "mass", "1",
+          "mass matrix M of M x' (n x n; may be singular: zero rows are algebraic equations); "
+          "omitted: the identity");
     t.add_tables(&LinearDdeParameters::delayed, "delayed", "delayed terms A_k x(t - tau_k); empty: an ODE", term);
     return t;
   }();
   return table;
 }
 
+Eigen::MatrixXd to_eigen(const std::vector<std::vector<double>>& m) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(m.size()), static_cast<Eigen::Index>(m.size()));
+  for (std::size_t i = 0; i < m.size(); ++i)
+    for (std::size_t j = 0; j < m.size(); ++j) out(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = m[i][j];
+  return out;
+}
+
+LinearDelaySystem delay_system(const LinearDdeParameters& p) {
+  LinearDelaySystem system;
+  if (!p.mass.empty()) system.mass = to_eigen(p.mass);
+  system.a0 = to_eigen(p.a0);
+  for (const DelayedTerm& term : p.delayed)
+    system.delayed.push_back(
+        {term.delay_s, to_eigen(term.matrix), term.neutral_matrix.empty() ? Eigen::MatrixXd() : to_eigen(term.neutral_matrix)});
+  return system;
+}
+
 }  // namespace
 
-LinearDde::LinearDde(const ParamValues& values) : LinearDde(parameters_table().read(values)) {}
+bool LinearDdeParameters::general() const {
+  return !mass.empty() ||
+         std::any_of(delayed.begin(), delayed.end(), [](const DelayedTerm& t) { return !t.neutral_matrix.empty(); });
+}
+
+namespace {
+
+// A study's table is validated (defaults filled in) before a model is built; a table given
+// directly (tests, the SDK's conformance run of example_params) may omit the optional matrices.
+Json with_optional_matrices(Json table) {
+  if (!table.contains("mass")) table["mass"] = Json::array();
+  if (table.contains("delayed") && table["delayed"].is_array())
+    for (Json& term : table["delayed"])
+      if (term.is_object() && !term.contains("neutral_matrix")) term["neutral_matrix"] = Json::array();
+  return table;
+}
+
+}  // namespace
+
+LinearDde::LinearDde(const ParamValues& values)
+    : LinearDde(parameters_table().read(with_optional_matrices(values.json()))) {}
 
 LinearDde::LinearDde(LinearDdeParameters parameters) : parameters_(std::move(parameters)) {
   check_sizes(parameters_);
+  // The general route checks the system at load (index > 1, neutral terms on algebraic rows):
+  // its message names the matrix; the study's load adds the file.
+  if (parameters_.general()) {
+    try {
+      DelayCharacteristic check(delay_system(parameters_));
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("model (mass / neutral_matrix): {}", e.what()));
+    }
+  }
 }
 
 PluginInfo LinearDde::info() {
@@ -408,6 +467,7 @@ PluginInfo LinearDde::info() {
 }
 
 std::unique_ptr<CharacteristicFunction> LinearDde::characteristic() const {
+  if (parameters_.general()) return std::make_unique<DelayCharacteristic>(delay_system(parameters_));
   return std::make_unique<LinearDdeCharacteristic>(parameters_);
 }
 

@@ -1,7 +1,16 @@
 #pragma once
 // A general linear delay-differential system given in the study (no C++ needed):
 //
-//   x'(t) = A0 x(t) + sum_k A_k x(t - tau_k),     E(s) = det(s I - A0 - sum_k A_k e^{-tau_k s}).
+//   x'(t) = A0 x(t) + sum_k A_k x(t - tau_k),     E(s) = det(s I - A0 - sum_k A_k e^{-tau_k s}),
+//
+// or, with a mass matrix M (`mass`, may be singular: its zero rows are algebraic equations, as
+// G1's surfaces) and neutral terms B_k (`delayed.neutral_matrix`, DDE-BIFTOOL's conventions),
+//
+//   M x'(t) - sum_k B_k x'(t - tau_k) = A0 x(t) + sum_k A_k x(t - tau_k),
+//
+// whose certified characteristic function is the general DelayCharacteristic (delay_system.hpp:
+// real-part bound from the matrices, essential spectrum of neutral systems). Retarded systems
+// without them keep the fast path below (LinearDdeCharacteristic).
 //
 // Used for systems that are not (yet) a model plugin and as the solver's known-answer testbed
 // (DDE-BIFTOOL-style oscillator with delayed feedback). Docs: docs/models/linear_dde.md.
@@ -17,11 +26,15 @@ namespace chatterlab {
 struct DelayedTerm {
   double delay_s = 0.0;
   std::vector<std::vector<double>> matrix;
+  std::vector<std::vector<double>> neutral_matrix;  // B_k; empty: none
 };
 
 struct LinearDdeParameters {
   std::vector<std::vector<double>> a0;
   std::vector<DelayedTerm> delayed;
+  std::vector<std::vector<double>> mass;  // M; empty: the identity
+  // A mass matrix or a neutral term: the general (delay-differential-algebraic) route.
+  bool general() const;
 };
 
 class LinearDdeCharacteristic final : public CharacteristicFunction {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/registry.hpp"
@@ -88,7 +89,7 @@ LinearDdeParameters oscillator_parameters(double zeta, std::vector<std::pair<dou
   LinearDdeParameters p;
   for (auto [gain, delay] : gain_delay) {
     total_gain += gain;
-    p.delayed.push_back({delay, {{0.0, 0.0}, {gain, 0.0}}});
+    p.delayed.push_back({delay, {{0.0, 0.0}, {gain, 0.0}}, {}});
   }
   p.a0 = {{0.0, 1.0}, {-(1.0 + total_gain), -2.0 * zeta}};
   return p;
@@ -160,7 +161,7 @@ TEST(LinearDde, ScalarDelayEquationMatchesLambertW) {
 
     LinearDdeParameters p;
     p.a0 = {{c.a}};
-    p.delayed = {{c.tau, {{c.b}}}};
+    p.delayed = {{c.tau, {{c.b}}, {}}};
     RightmostRoot found = rightmost(p, 2.0);
     expect_close(found.root, reference, 1e-9, "scalar DDE a=" + std::to_string(c.a));
     EXPECT_TRUE(found.certified) << found.certificate;
@@ -187,8 +188,8 @@ TEST(LinearDde, WithoutDelaysTheRootsAreTheEigenvalues) {
 TEST(LinearDde, DerivativeMatchesFiniteDifferencesForThreeStatesAndTwoDelays) {
   LinearDdeParameters p;
   p.a0 = {{-0.3, 1.0, 0.2}, {-1.0, -0.1, 0.0}, {0.4, 0.0, -2.0}};
-  p.delayed = {{3.0, {{0.0, 0.1, 0.0}, {0.5, 0.0, 0.0}, {0.0, 0.0, 0.3}}},
-               {1.7, {{0.2, 0.0, 0.0}, {0.0, 0.0, 0.1}, {0.0, 0.3, 0.0}}}};
+  p.delayed = {{3.0, {{0.0, 0.1, 0.0}, {0.5, 0.0, 0.0}, {0.0, 0.0, 0.3}}, {}},
+               {1.7, {{0.2, 0.0, 0.0}, {0.0, 0.0, 0.1}, {0.0, 0.3, 0.0}}, {}}};
   LinearDdeCharacteristic e(p);
   for (Complex s : {Complex(0.1, 0.7), Complex(-0.4, 2.3), Complex(1.0, 0.0)}) {
     const double h = 1e-6;
@@ -202,7 +203,7 @@ TEST(LinearDde, RealPartBoundHoldsForAnUnstableSystem) {
   // x' = 2 x + 0.5 x(t - 1): one real root right of 2; the bound must lie beyond it.
   LinearDdeParameters p;
   p.a0 = {{2.0}};
-  p.delayed = {{1.0, {{0.5}}}};
+  p.delayed = {{1.0, {{0.5}}, {}}};
   LinearDdeCharacteristic e(p);
   RightmostRoot found = rightmost(p, 1.0);
   EXPECT_GT(found.root.real(), 2.0);
@@ -245,6 +246,87 @@ TEST(LinearDde, SizeMismatchesNameTheKeyAndBothSizes) {
   EXPECT_EQ(construction_error(not_square), "model.a0 is 2x3: the state matrix A0 must be square (n x n)");
   Json delay = {{"a0", {{-1.0}}}, {"delayed", {Json{{"delay_s", 0.0}, {"matrix", {{0.1}}}}}}};
   EXPECT_EQ(construction_error(delay), "model.delayed.0.delay_s = 0: must be finite and > 0");
+}
+
+// ---------------------------------------------------------------- mass matrix and neutral terms
+
+// MODELS.md G1 in its G3 setting (wheel regeneration only, one mode) typed in as matrices, with
+// the wheel surface S an algebraic variable (mass row 0):
+//   F = (-q - S(t - T)) / C,  C = 1/kc + 1/kg,
+//   q'' = -w^2 q - 2 zeta w q' + (w^2/k) F,    0 = -S + S(t - T) + F/kg,
+// must have plunge_regenerative's rightmost root (its hand-written eq 2-16), at three wheel speeds.
+TEST(LinearDde, G1TypedAsMatricesHasPlungeRegenerativesRoot) {
+  const double f = 180.0, zeta = 0.03, k = 5e7, kc = 1e8, kg = 3e9, w = kTwoPi * f, c = 1.0 / kc + 1.0 / kg;
+  for (double rpm : {1300.0, 1450.0, 1600.0}) {
+    const Json matrices = {
+        {"mass", {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 0.0}}},
+        {"a0", {{0.0, 1.0, 0.0}, {-w * w - w * w / (k * c), -2.0 * zeta * w, 0.0}, {-1.0 / (kg * c), 0.0, -1.0}}},
+        {"delayed", {Json{{"delay_s", 60.0 / rpm},
+                          {"matrix", {{0.0, 0.0, 0.0}, {0.0, 0.0, -w * w / (k * c)}, {0.0, 0.0, 1.0 - 1.0 / (kg * c)}}}}}}};
+    const Json g1 = {{"wheel_speed_rpm", rpm}, {"work_speed_rpm", 60.0}, {"contact_stiffness_n_per_m", kc},
+                     {"wheel_wear_stiffness_n_per_m", kg}, {"work_removal_stiffness_n_per_m", 5e7},
+                     {"work_regeneration", false},
+                     {"modes", {Json{{"frequency_hz", f}, {"damping_ratio", zeta}, {"stiffness_n_per_m", k}}}}};
+    RootSearchOptions options;
+    options.max_frequency_hz = 800.0;
+    const auto typed = model_registry().at("linear_dde").create(ParamValues(matrices));
+    const auto reference = model_registry().at("plunge_regenerative").create(ParamValues(g1));
+    const RightmostRoot a = find_rightmost_root(*typed->characteristic(), options);
+    const RightmostRoot b = find_rightmost_root(*reference->characteristic(), options);
+    ASSERT_TRUE(a.certified) << a.certificate;
+    ASSERT_TRUE(b.certified) << b.certificate;
+    EXPECT_NEAR(a.root.real(), b.root.real(), 1e-9 * std::abs(b.root)) << rpm << ": " << a.root << " vs " << b.root;
+    EXPECT_NEAR(a.root.imag(), b.root.imag(), 1e-9 * std::abs(b.root)) << rpm;
+  }
+}
+
+// A scalar neutral equation x'(t) - b x'(t - tau) = -a x(t) - g x(t - tau): its rightmost root is
+// a zero of s (1 - b e^{-s tau}) + a + g e^{-s tau}, refined independently in long double, and
+// its root chains accumulate at Re s = ln|b| / tau (the difference operator x - b x(t - tau)),
+// which the certificate brackets.
+TEST(LinearDde, NeutralScalarEquationMatchesItsQuasiPolynomial) {
+  const long double a = 1.0L, g = 0.6L, b = 0.5L, tau = 1.0L;
+  const Json table = {{"a0", {{-static_cast<double>(a)}}},
+                      {"delayed", {Json{{"delay_s", static_cast<double>(tau)},
+                                        {"matrix", {{-static_cast<double>(g)}}},
+                                        {"neutral_matrix", {{static_cast<double>(b)}}}}}}};
+  const LinearDde model{ParamValues(table)};
+  const auto e = model.characteristic();
+  RootSearchOptions options;
+  options.max_frequency_hz = 5.0;
+  const RightmostRoot found = find_rightmost_root(*e, options);
+  ASSERT_TRUE(found.certified) << found.certificate;
+  const ScalarFunction quasi = [&](LongComplex s) {
+    const LongComplex z = std::exp(-s * tau);
+    return std::make_pair(s * (1.0L - b * z) + a + g * z, 1.0L - b * z + s * b * tau * z - g * tau * z);
+  };
+  const auto refined = long_double_newton(quasi, LongComplex(found.root.real(), found.root.imag()));
+  ASSERT_TRUE(refined);
+  EXPECT_NEAR(found.root.real(), static_cast<double>(refined->real()), 1e-12 * std::abs(found.root));
+  EXPECT_NEAR(found.root.imag(), static_cast<double>(refined->imag()), 1e-12 * std::abs(found.root));
+  const auto* general = dynamic_cast<const DelayCharacteristic*>(e.get());
+  ASSERT_NE(general, nullptr);
+  const double chains = std::log(static_cast<double>(b)) / static_cast<double>(tau);
+  EXPECT_TRUE(general->summary().neutral);
+  EXPECT_LE(general->summary().difference_spectrum_lower, chains + 1e-9);
+  EXPECT_GE(general->summary().difference_spectrum_upper, chains - 1e-9);
+  EXPECT_GE(found.root.real(), chains);  // the rightmost root lies right of the chains here
+}
+
+TEST(LinearDde, MassAndNeutralErrorsNameTheKey) {
+  Json mass = {{"a0", {{-1.0, 0.0}, {0.0, -1.0}}}, {"mass", {{1.0}}}, {"delayed", Json::array()}};
+  EXPECT_EQ(construction_error(mass),
+            "model.mass is 1x1 but model.a0 is 2x2: the mass matrix must be square with the size of a0");
+  Json neutral = {{"a0", {{-1.0}}},
+                  {"delayed", {Json{{"delay_s", 1.0}, {"matrix", {{0.1}}}, {"neutral_matrix", {{0.1, 0.0}}}}}}};
+  EXPECT_EQ(construction_error(neutral),
+            "model.delayed.0.neutral_matrix is 1x2 but model.a0 is 1x1: every neutral matrix must be square "
+            "with the size of a0");
+  // An algebraic row that does not determine its variable (index > 1).
+  Json index2 = {{"a0", {{-1.0, 1.0}, {1.0, 0.0}}}, {"mass", {{1.0, 0.0}, {0.0, 0.0}}},
+                 {"delayed", {Json{{"delay_s", 1.0}, {"matrix", {{0.0, 0.0}, {0.0, 0.0}}}}}}};
+  const std::string e = construction_error(index2);
+  EXPECT_EQ(e.rfind("model (mass / neutral_matrix): ", 0), 0u) << e;
 }
 
 }  // namespace

@@ -12,11 +12,9 @@ namespace chatterlab {
 
 namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double rpm_per_rad_s = 60.0 / kTwoPi;
-constexpr double stall_fraction = 0.01;  // below 1 % of the nominal wheel speed: force law off
 }  // namespace
 
-TorsionalCouplingTimeDomain::TorsionalCouplingTimeDomain(const TorsionalCouplingParameters& p)
+TorsionalCouplingEquations::TorsionalCouplingEquations(const TorsionalCouplingParameters& p)
     : p_(p),
       lambda_ratio_(p.work_radius_m * p.work_speed_rpm /
                     (p.grinding_ratio * p.wheel_radius_m * p.wheel_speed_rpm)),
@@ -24,13 +22,13 @@ TorsionalCouplingTimeDomain::TorsionalCouplingTimeDomain(const TorsionalCoupling
       sin_alpha_(std::sin(p.force_angle_deg * std::numbers::pi / 180.0)),
       lowest_wheel_rpm_(p.wheel_speed_rpm) {}
 
-void TorsionalCouplingTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+void TorsionalCouplingEquations::initial_state(const Disturbance& d, std::span<double> x) const {
   std::fill(x.begin(), x.end(), 0.0);
   x[0] = d.displacement_m;
   x[1] = d.velocity_m_per_s;
 }
 
-void TorsionalCouplingTimeDomain::state_scales(double displacement_m, std::span<double> s) const {
+void TorsionalCouplingEquations::state_scales(double displacement_m, std::span<double> s) const {
   const double w = kTwoPi * highest_frequency_hz();
   s[0] = displacement_m;
   s[1] = displacement_m * w;
@@ -42,7 +40,7 @@ void TorsionalCouplingTimeDomain::state_scales(double displacement_m, std::span<
   s[6] = s[7] = 1.0;
 }
 
-double TorsionalCouplingTimeDomain::highest_frequency_hz() const {
+double TorsionalCouplingEquations::highest_frequency_hz() const {
   const double contact = p_.removal_coefficient_n_per_m2 * p_.grinding_width_m / (1.0 + lambda_ratio_);
   const double transverse = std::sqrt((p_.stiffness_n_per_m + contact) / p_.mass_kg);
   const double work = std::sqrt((p_.work_torsional_stiffness_n_m + contact * p_.work_radius_m * p_.work_radius_m) /
@@ -52,57 +50,20 @@ double TorsionalCouplingTimeDomain::highest_frequency_hz() const {
   return 1.5 * std::max({transverse, work, wheel}) / kTwoPi;
 }
 
-double TorsionalCouplingTimeDomain::nominal_speed_rpm(Rotor rotor) const {
+double TorsionalCouplingEquations::nominal_speed_rpm(Rotor rotor) const {
   return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
 }
 
-double TorsionalCouplingTimeDomain::speed_rpm_from_state(Rotor rotor, std::span<const double> s) const {
-  return rotor == Rotor::wheel ? p_.wheel_speed_rpm + s[5] * rpm_per_rad_s : p_.work_speed_rpm + s[3] * rpm_per_rad_s;
+double TorsionalCouplingEquations::speed_rpm_from_state(Rotor rotor, std::span<const double> s) const {
+  return speed_rpm(rotor, s);
 }
 
-void TorsionalCouplingTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
-  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel), work = static_cast<std::size_t>(Rotor::work);
-  const double interference = in.state[0] - in.previous_surface_m[work] - in.previous_surface_m[wheel];
-  const double delta_w = interference / (1.0 + lambda_ratio_);
-  const double delta_g = delta_w * lambda_ratio_;
-  const double work_rpm = in.speed_rpm[work], wheel_rpm = in.speed_rpm[wheel];
-  double force = p_.removal_coefficient_n_per_m2 * p_.grinding_width_m * delta_w;
-  if (wheel_rpm < lowest_wheel_rpm_) lowest_wheel_rpm_ = wheel_rpm;
-  if (wheel_rpm <= stall_fraction * p_.wheel_speed_rpm) {
-    // F ~ v_w / v_g: singular as the wheel stops. No grinding without wheel speed: force off.
-    if (stalled_since_s_ < 0.0) stalled_since_s_ = in.t_s;
-    force = 0.0;
-  } else {
-    force *= std::max(work_rpm, 0.0) / p_.work_speed_rpm * p_.wheel_speed_rpm / wheel_rpm;
-  }
-  out.penetration_m = interference;
-  out.normal_force_n = force;
-  out.tangential_force_n = force * sin_alpha_;
-  out.depth_of_cut_m = delta_w;
-  out.removed_m[work] = delta_w;
-  out.removed_m[wheel] = delta_g;
+void TorsionalCouplingEquations::note_wheel_speed(double t_s, double wheel_rpm) const {
+  lowest_wheel_rpm_ = std::min(lowest_wheel_rpm_, wheel_rpm);
+  if (wheel_rpm <= stall_fraction * p_.wheel_speed_rpm && stalled_since_s_ < 0.0) stalled_since_s_ = t_s;
 }
 
-void TorsionalCouplingTimeDomain::derivatives(const ContactInput& in, const ContactOutput& c,
-                                              std::span<double> dx) const {
-  const auto& s = in.state;
-  const double infeed_rate = in.infeed_rate_m_per_s;
-  const double f = c.normal_force_n;
-  dx[0] = s[1];
-  dx[1] = (-f * cos_alpha_ - p_.damping_n_s_per_m * (s[1] - infeed_rate) - p_.stiffness_n_per_m * (s[0] - in.infeed_m)) / p_.mass_kg;
-  dx[2] = s[3];
-  dx[3] = (-f * p_.work_radius_m * sin_alpha_ - p_.work_torsional_damping_n_m_s * s[3] -
-           p_.work_torsional_stiffness_n_m * s[2]) / p_.work_inertia_kg_m2;
-  dx[4] = s[5];
-  dx[5] = (-f * p_.wheel_radius_m * sin_alpha_ - p_.wheel_torsional_damping_n_m_s * s[5] -
-           p_.wheel_torsional_stiffness_n_m * s[4]) / p_.wheel_inertia_kg_m2;
-  // Rotation angles: nominal speed plus torsional velocity; never backwards (a reversing body
-  // would regrind its surface the wrong way: documented limit).
-  dx[6] = std::max(kTwoPi * p_.work_speed_rpm / 60.0 + s[3], 0.0);
-  dx[7] = std::max(kTwoPi * p_.wheel_speed_rpm / 60.0 + s[5], 0.0);
-}
-
-std::vector<std::string> TorsionalCouplingTimeDomain::diagnostics() const {
+std::vector<std::string> TorsionalCouplingEquations::diagnostics() const {
   std::vector<std::string> out;
   if (stalled_since_s_ >= 0.0)
     out.push_back(fmt::format("wheel speed fell below {} % of nominal ({:.4g} rpm) at t = {:.6g} s: the force "
@@ -177,7 +138,8 @@ const ParamTable<TorsionalCouplingParameters>& parameters_table() {
 
 }  // namespace
 
-TorsionalCoupling::TorsionalCoupling(const ParamValues& values) : p_(parameters_table().read(values)) {}
+TorsionalCoupling::TorsionalCoupling(const ParamValues& values)
+    : DerivedModel(TorsionalCouplingEquations(parameters_table().read(values))) {}
 
 PluginInfo TorsionalCoupling::info() {
   PluginInfo info;

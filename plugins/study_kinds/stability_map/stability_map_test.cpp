@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/registry.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
 #include "unit/study_test_support.hpp"
@@ -169,6 +170,23 @@ TEST(StabilityMap, DdeBiftoolPointMatchesTheReferenceRoot) {
   EXPECT_GE(out[column(columns, "certified_real_part_per_s")].get<double>(), sigma);
   EXPECT_EQ(out[column(columns, "certificate")].get<std::string>().substr(0, 3), "ok:");
   EXPECT_FALSE(kind.requires_serial(study.document));
+}
+
+// MODELS.md G5 written once (issue 17's "must show"): the example of `chatterlab describe
+// torsional_coupling` as a stability_map point gets a certified root from the derived route.
+TEST(StabilityMap, TorsionalCouplingExampleIsCertifiedThroughTheDerivedRoute) {
+  TempDir dir;
+  const PluginInfo& info = model_registry().at("torsional_coupling").info;
+  std::string model = "[model]\ntype = \"torsional_coupling\"\n";
+  for (const auto& [key, value] : info.example_params.items()) model += key + " = " + value.dump() + "\n";
+  Study study = load(dir, model);
+  std::vector<std::string> columns = kind.output_columns(study.document);
+  std::vector<Json> out = kind.run_point(study.point_document(0), {});
+  ASSERT_EQ(out.size(), columns.size());
+  EXPECT_EQ(out[column(columns, "certified")], true);
+  EXPECT_EQ(out[column(columns, "certificate")].get<std::string>().substr(0, 3), "ok:")
+      << out[column(columns, "certificate")];
+  EXPECT_GT(out[column(columns, "chatter_frequency_hz")].get<double>(), 0.0);
 }
 
 TEST(StabilityMap, GrowthPerWheelRevolutionIsTgReSOver2Pi) {
