@@ -1,4 +1,4 @@
-#include "analysis/motif/motif.hpp"
+#include "shared/metrology/motif.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "analysis/profile_filter/profile_filter.hpp"
+#include "shared/metrology/profile_filter.hpp"
 
 #include <gtest/gtest.h>
 

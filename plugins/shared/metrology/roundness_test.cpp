@@ -1,4 +1,4 @@
-#include "analysis/roundness/roundness.hpp"
+#include "shared/metrology/roundness.hpp"
 
 #include <gtest/gtest.h>
 

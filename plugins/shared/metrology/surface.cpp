@@ -1,13 +1,13 @@
-#include "analysis/surface/surface.hpp"
+#include "shared/metrology/surface.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
 #include <numbers>
 
-#include "analysis/motif/motif.hpp"
-#include "analysis/roundness/roundness.hpp"
-#include "analysis/waviness/waviness.hpp"
+#include "shared/metrology/motif.hpp"
+#include "shared/metrology/roundness.hpp"
+#include "shared/metrology/waviness.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab::surface {

@@ -11,7 +11,7 @@
 #include <optional>
 #include <vector>
 
-#include "analysis/profile_filter/profile_filter.hpp"
+#include "shared/metrology/profile_filter.hpp"
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/params.hpp"
 

@@ -1,4 +1,4 @@
-#include "analysis/waviness/waviness.hpp"
+#include "shared/metrology/waviness.hpp"
 
 #include <gtest/gtest.h>
 

@@ -68,6 +68,12 @@ class Detector {
   // summary, test confusion, density snapshots).
   virtual ScoreTrack scores(const SampledSeries& series, Json& details) const = 0;
   virtual std::size_t persistence() const = 0;
+  // The state behind the score of the window ending at sample `last_sample`, for "stable vs
+  // chatter" snapshot figures (plot_density_snapshots): an amplitude-density detector gives its
+  // density on a grid; null for a detector without such a state.
+  virtual Json snapshot(const SampledSeries& /*series*/, std::size_t /*last_sample*/) const {
+    return nullptr;
+  }
 };
 
 // Detector::check, scores and track_alarms as one JSON result (what analyse() returns):
@@ -78,6 +84,12 @@ Json detector_result(const Detector& detector, const SampledSeries& series);
 // step line and the threshold dashed; <stem>.png/.svg in out_dir.
 void plot_scores(const Json& result, const std::string& title, const std::string& score_label,
                  const std::filesystem::path& out_dir, const std::string& stem);
+
+// A figure of density snapshots (Detector::snapshot: "t_s", "x", "density", "mean", "x_max",
+// "ratio", "flagged"), each window scaled to its own |x_max - mean|; <stem>.png/.svg in out_dir.
+void plot_density_snapshots(const std::vector<Json>& snapshots, const std::string& title,
+                            const std::string& signal_unit, const std::filesystem::path& out_dir,
+                            const std::string& stem);
 
 // Time of the last sample of a series (t = 0 at the first sample).
 double end_time_s(const SampledSeries& series);

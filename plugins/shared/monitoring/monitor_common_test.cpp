@@ -1,5 +1,5 @@
 // The alarm persistence rule and the synthetic transition signal shared by the monitors.
-#include "analysis/monitor_common/monitor_common.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 
 #include <gtest/gtest.h>
 

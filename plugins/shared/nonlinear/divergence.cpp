@@ -1,10 +1,10 @@
-#include "analysis/lyapunov/divergence.hpp"
+#include "shared/nonlinear/divergence.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 
 namespace chatterlab {
 

@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "analysis/lyapunov/kantz_scan.hpp"
+#include "shared/nonlinear/kantz_scan.hpp"
 
 namespace chatterlab {
 

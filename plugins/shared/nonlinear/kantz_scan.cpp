@@ -1,4 +1,4 @@
-#include "analysis/lyapunov/kantz_scan.hpp"
+#include "shared/nonlinear/kantz_scan.hpp"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-#include "analysis/nonlinear_common/box_grid.hpp"
+#include "shared/nonlinear/box_grid.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab {

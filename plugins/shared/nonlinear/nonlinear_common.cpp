@@ -1,4 +1,4 @@
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 
 #include <fmt/format.h>
 

@@ -16,7 +16,7 @@
 
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/fft.hpp"
-#include "study/source_map.hpp"
+#include "chatterlab/kit/data.hpp"
 
 namespace chatterlab::test_signals {
 
@@ -254,7 +254,7 @@ inline SampledSeries series(std::vector<double> values, double dt, const char* n
 inline std::unique_ptr<Analysis> make_analysis(const std::string& name,
                                                const Json& params = Json::object()) {
   const auto& entry = analysis_registry().at(name);
-  LineSourceMap sources("test");
+  kit::FileSourceMap sources("test");
   return entry.create(ParamValues(validate_params(params, entry.info.params, name, sources)));
 }
 

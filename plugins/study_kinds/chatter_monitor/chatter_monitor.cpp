@@ -1,4 +1,4 @@
-#include "analysis/chatter_monitor/chatter_monitor.hpp"
+#include "study_kinds/chatter_monitor/chatter_monitor.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -6,16 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
-#include "analysis/bp_network/bp_network.hpp"
-#include "analysis/monitor_common/monitor_common.hpp"
-#include "analysis/rbf_density/rbf_density.hpp"
-#include "analysis/study_support/study_support.hpp"
-#include "analysis/window_features/window_features.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "shared/monitoring/features.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 
 namespace chatterlab {
 
@@ -28,30 +28,43 @@ constexpr std::size_t shading_lines = 1500;      // vertical lines drawing the a
 constexpr std::size_t plot_max_points = 20000;   // longer signals are drawn as min/max envelope
 constexpr double uniform_tolerance = 1e-6;       // relative spread of t_s steps accepted
 
-std::vector<ParamSpec> input_specs() {
-  ParamSpec file = param_spec("file", ValueKind::string, "",
-                              "signal file: CSV / whitespace columns or WAV (relative to the study "
-                              "file)");
-  ParamSpec column = param_spec("column", ValueKind::string, "",
-                                "column name or 1-based number (default: the only column besides "
-                                "t_s)");
-  column.optional = true;
-  ParamSpec rate = param_spec("sample_rate_hz", ValueKind::real, "Hz",
-                              "sample rate (default: from a WAV header or a uniform t_s column)");
-  rate.optional = true;
-  rate.min = 0.0;
-  rate.min_exclusive = true;
-  return {file, column, rate};
+// [input] and the kind's own [monitor] keys, declared once.
+struct MonitorInput {
+  std::string file;
+  std::optional<std::string> column;     // absent: the only column besides t_s
+  std::optional<double> sample_rate_hz;  // absent: WAV header or a uniform t_s column
+};
+
+const ParamTable<MonitorInput>& input_table() {
+  static const ParamTable<MonitorInput> table = [] {
+    ParamTable<MonitorInput> t;
+    t.add(&MonitorInput::file, "file", "",
+          "signal file: CSV / whitespace columns or WAV (relative to the study file)")
+        .required();
+    t.add(&MonitorInput::column, "column", "",
+          "column name or 1-based number (default: the only column besides t_s)");
+    t.add(&MonitorInput::sample_rate_hz, "sample_rate_hz", "Hz",
+          "sample rate (default: from a WAV header or a uniform t_s column)")
+        .positive();
+    return t;
+  }();
+  return table;
 }
 
-std::vector<ParamSpec> monitor_specs() {
-  ParamSpec snapshots = param_spec(
-      "snapshot_times_s", ValueKind::real_list, "s",
-      "times at which density snapshots are drawn (default: first window, first rbf_density "
-      "alarm, last window)");
-  snapshots.optional = true;
-  snapshots.min = 0.0;
-  return {snapshots};
+struct MonitorSettings {
+  std::optional<std::vector<double>> snapshot_times_s;  // absent: the detector's own choice
+};
+
+const ParamTable<MonitorSettings>& monitor_table() {
+  static const ParamTable<MonitorSettings> table = [] {
+    ParamTable<MonitorSettings> t;
+    t.add(&MonitorSettings::snapshot_times_s, "snapshot_times_s", "s",
+          "times at which density snapshots are drawn (default: first window, first rbf_density "
+          "alarm, last window)")
+        .non_negative();
+    return t;
+  }();
+  return table;
 }
 
 const Registry<Analysis>::Entry& detector_entry(const std::string& name) {
@@ -97,12 +110,12 @@ void validate_input(Json& document, const SourceMap& sources) {
         "{}: missing table [input] (file = \"signal.csv\", column = \"...\", sample_rate_hz = "
         "...)",
         sources.locate("input").str()));
-  study_support::integer_columns_as_names(document["input"], {"column"});
-  Json input = validate_params(document["input"], input_specs(), "input", sources);
+  kit::integer_columns_as_names(document["input"], {"column"});
+  Json input = validate_params(document["input"], input_table().specs(), "input", sources);
   const std::string where = sources.locate("input.file").str();
-  input["file"] = study_support::resolve_data_file(input["file"], "input.file", sources).string();
+  input["file"] = kit::resolve_data_file(input["file"], "input.file", sources).string();
   const DataTable table =
-      study_support::read_table_at(input["file"].get<std::string>(), "input.file", sources);
+      kit::read_table_at(input["file"].get<std::string>(), "input.file", sources);
   if (input["column"].is_null()) {
     std::vector<std::string> candidates;
     for (const auto& name : table.names)
@@ -223,7 +236,7 @@ void plot_point(const SampledSeries& series, const std::map<std::string, Json>& 
   }
   if (!snapshots.empty())
     figures.attempt([&] {
-      RbfDensityAnalysis::plot_snapshots(
+      monitor::plot_density_snapshots(
           snapshots, fmt::format("{}: RBF amplitude densities, stable vs chatter", series.name),
           series.name, dir, "density_snapshots");
     });
@@ -248,7 +261,7 @@ PluginInfo ChatterMonitor::info() {
       "chatter onset monitoring of one signal (window features, 3-4-1 network, RBF amplitude "
       "density): alarm times, scores, training and test results";
   info.models_md_ids = "C1, C2, C3";
-  info.params = monitor_specs();
+  info.params = monitor_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = Json::object();
   return info;
@@ -269,7 +282,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     const bool detector = std::find(std::begin(detector_names), std::end(detector_names), key) !=
                           std::end(detector_names);
     if (!detector) {
-      const auto specs = monitor_specs();
+      const auto specs = monitor_table().specs();
       if (std::none_of(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.key == key; }))
         throw InputError(fmt::format(
             "{}: unknown key 'monitor.{}' (valid: {}, snapshot_times_s)",
@@ -283,7 +296,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     validated_detectors[key] = validate_params(value, detector_entry(key).info.params,
                                                "monitor." + key, sources);
   }
-  own = validate_params(own, monitor_specs(), "monitor", sources);
+  own = validate_params(own, monitor_table().specs(), "monitor", sources);
   if (validated_detectors.empty())
     throw InputError(fmt::format(
         "{}: [monitor] enables no detector: add [monitor.bp_network] (with stable_s and onset_s, "
@@ -292,7 +305,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
   if (validated_detectors.contains("bp_network")) {
     Json& bp = validated_detectors["bp_network"];
     if (bp.contains("weights_file") && bp["weights_file"].is_string())
-      bp["weights_file"] = study_support::resolve_data_file(
+      bp["weights_file"] = kit::resolve_data_file(
                                bp["weights_file"], "monitor.bp_network.weights_file", sources)
                                .string();
   }
@@ -310,13 +323,11 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
                                    monitor::end_time_s(series)));
     }
   }
-  if (own["snapshot_times_s"].is_array())
-    for (const Json& t : own["snapshot_times_s"])
-      if (t.get<double>() > monitor::end_time_s(series))
-        throw InputError(fmt::format(
-            "{}: monitor.snapshot_times_s: {} s is after the end of the signal ({:.6g} s)",
-            sources.locate("monitor.snapshot_times_s").str(), t.get<double>(),
-            monitor::end_time_s(series)));
+  for (double t : monitor_table().read(own).snapshot_times_s.value_or(std::vector<double>{}))
+    if (t > monitor::end_time_s(series))
+      throw InputError(fmt::format(
+          "{}: monitor.snapshot_times_s: {} s is after the end of the signal ({:.6g} s)",
+          sources.locate("monitor.snapshot_times_s").str(), t, monitor::end_time_s(series)));
   for (auto& [name, table] : validated_detectors.items()) own[name] = table;
   document["monitor"] = std::move(own);
 }
@@ -329,6 +340,78 @@ std::vector<std::string> ChatterMonitor::output_columns(const Json& document) co
   }
   return columns;
 }
+
+namespace {
+
+// One detector's entry in summary.json: alarm times, threshold, parameters, training and test.
+Json detector_summary(const Json& r, const Json& parameters) {
+  const Json& alarms = r.at("alarms");
+  Json entry = {{"first_alarm_s", alarms.at("first_alarm_s")},
+                {"first_flag_s", alarms.at("first_flag_s")},
+                {"alarm_intervals_s", alarms.at("intervals")},
+                {"alarm_open_at_end", alarms.at("alarm_open_at_end")},
+                {"threshold", r.at("threshold")},
+                {"persistence_windows", r.at("persistence_windows")},
+                {"evaluations", r.at("t_s").size()},
+                {"parameters", parameters}};
+  for (const char* key : {"training", "test"})
+    if (r.contains(key)) entry[key] = r[key];
+  return entry;
+}
+
+// Density snapshots of a detector with a density state: at monitor.snapshot_times_s when given,
+// else the detector's own (first window, first alarm, last window).
+std::vector<Json> density_snapshots(const monitor::Detector& detector, const Json& r,
+                                    const Json& monitor, const std::string& name,
+                                    const SampledSeries& series) {
+  const std::optional<std::vector<double>> times = monitor_table().read(monitor).snapshot_times_s;
+  if (!times) return r.at("snapshots").get<std::vector<Json>>();
+  const std::size_t window = monitor.at(name).at("window_samples").get<std::size_t>();
+  std::vector<Json> out;
+  for (double t : *times) {
+    auto last = static_cast<std::size_t>(std::llround(t * series.sample_rate()));
+    out.push_back(detector.snapshot(series, std::clamp(last, window - 1, series.values.size() - 1)));
+  }
+  return out;
+}
+
+// alarms.csv: every evaluation of every detector, in time order.
+void write_alarms_csv(const std::map<std::string, Json>& results, const fs::path& dir) {
+  struct Row { double t; std::string detector; double score; bool alarm; };
+  std::vector<Row> rows;
+  for (const auto& [name, r] : results) {
+    const auto t = r.at("t_s").get<std::vector<double>>();
+    const auto score = r.at("score").get<std::vector<double>>();
+    const auto alarm = r.at("alarm").get<std::vector<bool>>();
+    for (std::size_t k = 0; k < t.size(); ++k) rows.push_back({t[k], name, score[k], alarm[k]});
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
+  std::string csv = "t_s,detector,score,alarm\n";
+  for (const auto& row : rows)
+    csv += fmt::format("{},{},{},{}\n", csv_number(row.t), row.detector, csv_number(row.score),
+                       row.alarm ? 1 : 0);
+  write_file_atomically(dir / "alarms.csv", csv);
+}
+
+// features.csv: C1 features over the network's windows (10 samples unless configured).
+void write_features_csv(const SampledSeries& series, const Json& monitor, const fs::path& dir) {
+  const std::size_t window = monitor.contains("bp_network")
+                                 ? monitor.at("bp_network").at("window_samples").get<std::size_t>()
+                                 : 10;
+  if (series.values.size() < window) return;
+  const FeatureSeries windows = feature_series(series.values, window, window, series.sample_interval);
+  std::vector<double> variance, rho1, residual;
+  for (const auto& f : windows.features) {
+    variance.push_back(f.variance);
+    rho1.push_back(f.rho1);
+    residual.push_back(f.residual_variance);
+  }
+  write_file_atomically(dir / "features.csv",
+                        csv_text({"t_s", "variance", "rho1", "residual_variance"},
+                                 {windows.t_s, variance, rho1, residual}));
+}
+
+}  // namespace
 
 std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
                                             const PointContext& context) const {
@@ -350,67 +433,16 @@ std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
     const Json& alarms = r.at("alarms");
     outputs.push_back(alarms.at("first_alarm_s"));
     outputs.emplace_back(alarms.at("intervals").size());
-    Json entry = {{"first_alarm_s", alarms.at("first_alarm_s")},
-                  {"first_flag_s", alarms.at("first_flag_s")},
-                  {"alarm_intervals_s", alarms.at("intervals")},
-                  {"alarm_open_at_end", alarms.at("alarm_open_at_end")},
-                  {"threshold", r.at("threshold")},
-                  {"persistence_windows", r.at("persistence_windows")},
-                  {"evaluations", r.at("t_s").size()},
-                  {"parameters", monitor.at(name)}};
-    for (const char* key : {"training", "test"})
-      if (r.contains(key)) entry[key] = r[key];
-    if (name == "rbf_density") {
-      const auto& rbf = dynamic_cast<const RbfDensityAnalysis&>(*analysis);
-      if (monitor.at("snapshot_times_s").is_array()) {
-        const std::size_t window = monitor.at(name).at("window_samples").get<std::size_t>();
-        for (const Json& t : monitor.at("snapshot_times_s")) {
-          auto last = static_cast<std::size_t>(std::llround(t.get<double>() * series.sample_rate()));
-          snapshots.push_back(rbf.snapshot(series, std::clamp(last, window - 1, series.values.size() - 1)));
-        }
-      } else {
-        snapshots = r.at("snapshots").get<std::vector<Json>>();
-      }
-    }
-    summary["detectors"][name] = std::move(entry);
+    if (r.contains("snapshots"))  // a detector with a density state (rbf_density)
+      snapshots = density_snapshots(as_detector(*analysis), r, monitor, name, series);
+    summary["detectors"][name] = detector_summary(r, monitor.at(name));
     results[name] = std::move(r);
   }
   if (context.artifact_dir.empty()) return outputs;
 
   const fs::path& dir = context.artifact_dir;
-  // alarms.csv: every evaluation of every detector, in time order.
-  struct Row { double t; std::string detector; double score; bool alarm; };
-  std::vector<Row> rows;
-  for (const auto& [name, r] : results) {
-    const auto t = r.at("t_s").get<std::vector<double>>();
-    const auto score = r.at("score").get<std::vector<double>>();
-    const auto alarm = r.at("alarm").get<std::vector<bool>>();
-    for (std::size_t k = 0; k < t.size(); ++k) rows.push_back({t[k], name, score[k], alarm[k]});
-  }
-  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
-  std::string csv = "t_s,detector,score,alarm\n";
-  for (const auto& row : rows)
-    csv += fmt::format("{},{},{},{}\n", csv_number(row.t), row.detector, csv_number(row.score),
-                       row.alarm ? 1 : 0);
-  write_file_atomically(dir / "alarms.csv", csv);
-
-  // features.csv: C1 features over the network's windows (10 samples unless configured).
-  const std::size_t window = monitor.contains("bp_network")
-                                 ? monitor.at("bp_network").at("window_samples").get<std::size_t>()
-                                 : 10;
-  if (series.values.size() >= window) {
-    const FeatureSeries windows =
-        feature_series(series.values, window, window, series.sample_interval);
-    std::vector<double> variance, rho1, residual;
-    for (const auto& f : windows.features) {
-      variance.push_back(f.variance);
-      rho1.push_back(f.rho1);
-      residual.push_back(f.residual_variance);
-    }
-    write_file_atomically(dir / "features.csv",
-                          csv_text({"t_s", "variance", "rho1", "residual_variance"},
-                                   {windows.t_s, variance, rho1, residual}));
-  }
+  write_alarms_csv(results, dir);
+  write_features_csv(series, monitor, dir);
   // A network trained here is saved for reuse (monitor.bp_network.weights_file).
   if (results.count("bp_network") && !ParamValues(monitor.at("bp_network")).has("weights_file"))
     write_json_file(dir / "network_weights.json", results["bp_network"].at("weights"));

@@ -1,7 +1,7 @@
 // Study kind chatter_monitor: the shipped transition study end to end (alarm times against the
 // known onset, files written), reuse of saved weights, a simulate-style CSV with t_s, and bad
 // input (exit 2 messages naming file, key and limit).
-#include "analysis/chatter_monitor/chatter_monitor.hpp"
+#include "study_kinds/chatter_monitor/chatter_monitor.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "analysis/monitor_common/monitor_common.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/catalog.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"

@@ -1,4 +1,4 @@
-#include "analysis/doe/doe.hpp"
+#include "study_kinds/doe/doe.hpp"
 
 #include <fmt/format.h>
 

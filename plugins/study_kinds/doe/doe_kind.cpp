@@ -1,4 +1,4 @@
-#include "analysis/doe/doe_kind.hpp"
+#include "study_kinds/doe/doe_kind.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -6,12 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <set>
 
-#include "analysis/doe/doe.hpp"
-#include "analysis/study_support/study_support.hpp"
+#include "study_kinds/doe/doe.hpp"
+#include "chatterlab/kit/data.hpp"
+#include "chatterlab/kit/plots.hpp"
+#include "chatterlab/kit/settings.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
 
 namespace chatterlab {
@@ -19,37 +23,51 @@ namespace chatterlab {
 namespace {
 
 namespace fs = std::filesystem;
-namespace ss = study_support;
+namespace ss = kit;
 
 constexpr std::size_t max_factors = 26;
 const double alphas[] = {0.25, 0.10, 0.05, 0.01};  // the book's F table levels (Table 5-4)
 
-std::vector<ParamSpec> doe_specs() {
-  ParamSpec goal = param_spec("goal", ValueKind::string, "",
-                              "best level = the one with the smallest (minimize, e.g. chatter) or "
-                              "largest (maximize) mean response");
-  goal.default_value = "minimize";
-  goal.choices = {"minimize", "maximize"};
-  return {goal};
+// [doe] and [regression], declared once ([input] holds lists of column names: checked by hand).
+struct DoeSettings {
+  std::string goal = "minimize";
+};
+
+const ParamTable<DoeSettings>& doe_table() {
+  static const ParamTable<DoeSettings> table = [] {
+    ParamTable<DoeSettings> t;
+    t.add(&DoeSettings::goal, "goal", "",
+          "best level = the one with the smallest (minimize, e.g. chatter) or largest (maximize) "
+          "mean response")
+        .choices({"minimize", "maximize"});
+    return t;
+  }();
+  return table;
 }
 
-std::vector<ParamSpec> regression_specs() {
-  ParamSpec file = param_spec("file", ValueKind::string, "", "single-factor data table");
-  ParamSpec x = param_spec("x", ValueKind::string, "", "column of the factor (e.g. vf_um_per_s)");
-  ParamSpec y = param_spec("y", ValueKind::string, "", "column of the response");
-  ParamSpec x0 = param_spec("x0", ValueKind::real, "as x",
-                            "reference of the exponential y = a b^(x - x0) (default: mean of x)");
-  x0.optional = true;
-  ParamSpec parabola =
-      param_spec("two_point_parabola", ValueKind::real_list, "as x",
-                 "x of the vertex point and of a second point: the book's parabola "
-                 "through two data points (5-46)");
-  parabola.optional = true;
-  ParamSpec exponential =
-      param_spec("two_point_exponential", ValueKind::real_list, "as x",
-                 "x of two data points: the book's exponential through them (5-47)");
-  exponential.optional = true;
-  return {file, x, y, x0, parabola, exponential};
+struct RegressionSettings {
+  std::string file, x, y;
+  std::optional<double> x0;                                  // absent: mean of x
+  std::optional<std::vector<double>> two_point_parabola;     // x of the vertex and a second point
+  std::optional<std::vector<double>> two_point_exponential;  // x of two data points
+};
+
+const ParamTable<RegressionSettings>& regression_table() {
+  static const ParamTable<RegressionSettings> table = [] {
+    ParamTable<RegressionSettings> t;
+    t.add(&RegressionSettings::file, "file", "", "single-factor data table").required();
+    t.add(&RegressionSettings::x, "x", "", "column of the factor (e.g. vf_um_per_s)").required();
+    t.add(&RegressionSettings::y, "y", "", "column of the response").required();
+    t.add(&RegressionSettings::x0, "x0", "as x",
+          "reference of the exponential y = a b^(x - x0) (default: mean of x)");
+    t.add(&RegressionSettings::two_point_parabola, "two_point_parabola", "as x",
+          "x of the vertex point and of a second point: the book's parabola through two data "
+          "points (5-46)");
+    t.add(&RegressionSettings::two_point_exponential, "two_point_exponential", "as x",
+          "x of two data points: the book's exponential through them (5-47)");
+    return t;
+  }();
+  return table;
 }
 
 struct Design {
@@ -146,13 +164,26 @@ std::size_t index_of_x(const std::vector<double>& x, double value, const std::st
       fmt::format("{}: {}: no data point with x = {}", sources.locate(key).str(), key, value));
 }
 
+// The validated-table check of one two-point key: the x of two different data points.
+std::optional<std::pair<std::size_t, std::size_t>> two_points(
+    const std::optional<std::vector<double>>& given, const std::vector<double>& x, const char* key,
+    const SourceMap& sources) {
+  if (!given) return std::nullopt;
+  const std::vector<double>& v = *given;
+  const std::string path = std::string("regression.") + key;
+  if (v.size() != 2 || v[0] == v[1])
+    throw InputError(fmt::format("{}: {} = [{}]: give the x of two different data points",
+                                 sources.locate(path).str(), path, fmt::join(v, ", ")));
+  return std::pair{index_of_x(x, v[0], path, sources), index_of_x(x, v[1], path, sources)};
+}
+
 std::optional<Regression> load_regression(const Json& table, const SourceMap& sources) {
   if (table.empty()) return std::nullopt;
+  const RegressionSettings settings = regression_table().read(table);
   Regression r;
-  const fs::path file = table.at("file").get<std::string>();
-  const DataTable data = ss::read_table_at(file, "regression.file", sources);
-  r.x_name = table.at("x").get<std::string>();
-  r.y_name = table.at("y").get<std::string>();
+  const DataTable data = ss::read_table_at(settings.file, "regression.file", sources);
+  r.x_name = settings.x;
+  r.y_name = settings.y;
   r.x = ss::column_at(data, r.x_name, "regression.x", sources);
   r.y = ss::column_at(data, r.y_name, "regression.y", sources);
   if (r.x.size() < 4)
@@ -160,9 +191,8 @@ std::optional<Regression> load_regression(const Json& table, const SourceMap& so
         fmt::format("{}: regression.file: {} points, at least 4 needed (quadratic "
                     "fit with a residual)",
                     sources.locate("regression.file").str(), r.x.size()));
-  const double x0 = table.at("x0").is_null() ? std::accumulate(r.x.begin(), r.x.end(), 0.0) /
-                                                   static_cast<double>(r.x.size())
-                                             : table.at("x0").get<double>();
+  const double x0 = settings.x0.value_or(std::accumulate(r.x.begin(), r.x.end(), 0.0) /
+                                         static_cast<double>(r.x.size()));
   const bool positive = std::all_of(r.y.begin(), r.y.end(), [](double v) { return v > 0; });
   r.fits.push_back(doe::fit_linear(r.x, r.y));
   r.fits.push_back(doe::fit_quadratic(r.x, r.y));
@@ -170,18 +200,9 @@ std::optional<Regression> load_regression(const Json& table, const SourceMap& so
     r.fits.push_back(doe::fit_exponential_log_linear(r.x, r.y, x0));
     r.fits.push_back(doe::fit_exponential_nonlinear(r.x, r.y, x0));
   }
-  auto pair_of = [&](const char* key) -> std::optional<std::pair<std::size_t, std::size_t>> {
-    if (table.at(key).is_null()) return std::nullopt;
-    const auto v = table.at(key).get<std::vector<double>>();
-    const std::string path = std::string("regression.") + key;
-    if (v.size() != 2 || v[0] == v[1])
-      throw InputError(fmt::format("{}: {} = [{}]: give the x of two different data points",
-                                   sources.locate(path).str(), path, fmt::join(v, ", ")));
-    return std::pair{index_of_x(r.x, v[0], path, sources), index_of_x(r.x, v[1], path, sources)};
-  };
-  if (auto p = pair_of("two_point_parabola"))
+  if (auto p = two_points(settings.two_point_parabola, r.x, "two_point_parabola", sources))
     r.fits.push_back(doe::fit_two_point_parabola(r.x, r.y, p->first, p->second));
-  if (auto p = pair_of("two_point_exponential")) {
+  if (auto p = two_points(settings.two_point_exponential, r.x, "two_point_exponential", sources)) {
     if (!(r.y[p->first] > 0 && r.y[p->second] > 0))
       throw InputError(
           fmt::format("{}: regression.two_point_exponential: the two points need y > 0",
@@ -278,7 +299,7 @@ PluginInfo DoeKind::info() {
       "orthogonal-array experiment: range analysis, ANOVA with F tests and p-values, regression "
       "fits with SSE";
   info.models_md_ids = "S4";
-  info.params = doe_specs();
+  info.params = doe_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"goal", "minimize"}};
   return info;
@@ -300,10 +321,10 @@ void DoeKind::validate(Json& document, const SourceMap& sources) const {
   ss::string_list(input["error_columns"], "input.error_columns", sources, 0, max_factors);
 
   Json doe =
-      validate_params(ss::table_or_empty(document, "doe", sources), doe_specs(), "doe", sources);
+      validate_params(ss::table_or_empty(document, "doe", sources), doe_table().specs(), "doe", sources);
   Json regression = ss::table_or_empty(document, "regression", sources);
   if (!regression.empty()) {
-    regression = validate_params(regression, regression_specs(), "regression", sources);
+    regression = validate_params(regression, regression_table().specs(), "regression", sources);
     regression["file"] =
         ss::resolve_data_file(regression["file"], "regression.file", sources).string();
   }
@@ -326,22 +347,9 @@ std::vector<std::string> DoeKind::output_columns(const Json& document) const {
   return columns;
 }
 
-std::vector<Json> DoeKind::run_point(const Json& point_document,
-                                     const PointContext& context) const {
-  const SourceMap& sources = ss::no_sources();  // validated already: no line numbers needed
-  const Design d = load_design(point_document.at("input"), sources);
-  const auto regression = load_regression(point_document.at("regression"), sources);
-  const std::string goal = point_document.at("doe").at("goal").get<std::string>();
-  const bool minimise = goal == "minimize";
+namespace {
 
-  std::vector<doe::FactorRange> ranges;
-  for (const auto& levels : d.factor_levels)
-    ranges.push_back(doe::range_analysis(levels, d.y, minimise));
-  const doe::Anova anova = doe::analyse_variance(d.factor_levels, d.factors, d.error_levels, d.y);
-  std::string best;
-  for (std::size_t f = 0; f < d.factors.size(); ++f)
-    best += fmt::format("{}{}{}", f ? " " : "", d.factors[f], level_text(ranges[f].best_level));
-
+std::vector<std::string> design_warnings(const Design& d, const doe::Anova& anova) {
   std::vector<std::string> warnings;
   if (!d.orthogonal)
     warnings.push_back(
@@ -351,6 +359,85 @@ std::vector<Json> DoeKind::run_point(const Json& point_document,
     warnings.push_back(
         "no degrees of freedom left for the error: no F values (add error_columns "
         "or runs)");
+  return warnings;
+}
+
+// The ANOVA table of summary.json: per factor S, df, MS, F, p, significance and the F table's
+// critical values; the error and total rows.
+Json anova_json(const doe::Anova& anova, const Design& d) {
+  Json a = Json::object();
+  for (const auto& row : anova.factors) {
+    Json entry = {{"S", row.s},
+                  {"df", row.df},
+                  {"MS", row.ms},
+                  {"F", optional_number(row.f)},
+                  {"p", optional_number(row.p)}};
+    entry["significance"] = row.p ? Json(doe::significance(*row.p)) : Json();
+    if (anova.error.df > 0) {
+      Json critical;
+      for (double alpha : alphas)
+        critical[fmt::format("{}", alpha)] = doe::f_critical(alpha, row.df, anova.error.df);
+      entry["F_critical"] = critical;
+    }
+    a[row.source] = entry;
+  }
+  a["error"] = {
+      {"S", anova.error.s},   {"df", anova.error.df},
+      {"MS", anova.error.ms}, {"F", nullptr},
+      {"p", nullptr},         {"columns", d.errors.empty() ? Json("residual") : Json(d.errors)}};
+  a["total"] = {{"S", anova.total.s}, {"df", anova.total.df}, {"F", nullptr}, {"p", nullptr}};
+  return a;
+}
+
+Json ranges_json(const Design& d, const std::vector<doe::FactorRange>& ranges) {
+  Json r = Json::object();
+  for (std::size_t f = 0; f < d.factors.size(); ++f) {
+    r[d.factors[f]] = {{"levels", ranges[f].levels}, {"sums", ranges[f].sums},
+                       {"counts", ranges[f].counts}, {"means", ranges[f].means},
+                       {"R", ranges[f].range},       {"best_level", ranges[f].best_level}};
+  }
+  return r;
+}
+
+// Factor names by decreasing range R (the most influential first).
+std::vector<std::string> factors_by_range(const Design& d, const std::vector<doe::FactorRange>& ranges) {
+  std::vector<std::size_t> order(d.factors.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t i, std::size_t j) { return ranges[i].range > ranges[j].range; });
+  std::vector<std::string> by_range;
+  for (std::size_t i : order) by_range.push_back(d.factors[i]);
+  return by_range;
+}
+
+Json regression_json(const Regression& regression) {
+  Json fits = Json::array();
+  for (const auto& fit : regression.fits)
+    fits.push_back({{"model", fit.model},
+                    {"formula", fit.formula},
+                    {"coefficients", fit.coefficients},
+                    {"sse", fit.sse}});
+  return {{"x", regression.x_name}, {"y", regression.y_name}, {"fits", fits}};
+}
+
+}  // namespace
+
+std::vector<Json> DoeKind::run_point(const Json& point_document,
+                                     const PointContext& context) const {
+  const SourceMap& sources = ss::no_sources();  // validated already: no line numbers needed
+  const Design d = load_design(point_document.at("input"), sources);
+  const auto regression = load_regression(point_document.at("regression"), sources);
+  const std::string goal = doe_table().read(point_document.at("doe")).goal;
+  const bool minimise = goal == "minimize";
+
+  std::vector<doe::FactorRange> ranges;
+  for (const auto& levels : d.factor_levels)
+    ranges.push_back(doe::range_analysis(levels, d.y, minimise));
+  const doe::Anova anova = doe::analyse_variance(d.factor_levels, d.factors, d.error_levels, d.y);
+  std::string best;
+  for (std::size_t f = 0; f < d.factors.size(); ++f)
+    best += fmt::format("{}{}{}", f ? " " : "", d.factors[f], level_text(ranges[f].best_level));
+  const std::vector<std::string> warnings = design_warnings(d, anova);
   for (const auto& w : warnings) ss::warn(w);
 
   if (!context.artifact_dir.empty()) {
@@ -361,55 +448,13 @@ std::vector<Json> DoeKind::run_point(const Json& point_document,
     summary["runs"] = d.y.size();
     summary["array"] = d.array.empty() ? Json() : Json(d.array);
     summary["design_orthogonal"] = d.orthogonal;
-    Json a = Json::object();
-    for (const auto& row : anova.factors) {
-      Json entry = {{"S", row.s},
-                    {"df", row.df},
-                    {"MS", row.ms},
-                    {"F", optional_number(row.f)},
-                    {"p", optional_number(row.p)}};
-      entry["significance"] = row.p ? Json(doe::significance(*row.p)) : Json();
-      if (anova.error.df > 0) {
-        Json critical;
-        for (double alpha : alphas)
-          critical[fmt::format("{}", alpha)] = doe::f_critical(alpha, row.df, anova.error.df);
-        entry["F_critical"] = critical;
-      }
-      a[row.source] = entry;
-    }
-    a["error"] = {
-        {"S", anova.error.s},   {"df", anova.error.df},
-        {"MS", anova.error.ms}, {"F", nullptr},
-        {"p", nullptr},         {"columns", d.errors.empty() ? Json("residual") : Json(d.errors)}};
-    a["total"] = {{"S", anova.total.s}, {"df", anova.total.df}, {"F", nullptr}, {"p", nullptr}};
-    summary["anova"] = a;
+    summary["anova"] = anova_json(anova, d);
     summary["correction_term"] = anova.correction_term;
     summary["unassigned_S"] = anova.unassigned;
-    Json r = Json::object();
-    for (std::size_t f = 0; f < d.factors.size(); ++f) {
-      r[d.factors[f]] = {{"levels", ranges[f].levels}, {"sums", ranges[f].sums},
-                         {"counts", ranges[f].counts}, {"means", ranges[f].means},
-                         {"R", ranges[f].range},       {"best_level", ranges[f].best_level}};
-    }
-    summary["ranges"] = r;
-    std::vector<std::size_t> order(d.factors.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t i, std::size_t j) { return ranges[i].range > ranges[j].range; });
-    std::vector<std::string> by_range;
-    for (std::size_t i : order) by_range.push_back(d.factors[i]);
-    summary["factors_by_range"] = by_range;
+    summary["ranges"] = ranges_json(d, ranges);
+    summary["factors_by_range"] = factors_by_range(d, ranges);
     summary["best_combination"] = best;
-    if (regression) {
-      Json fits = Json::array();
-      for (const auto& fit : regression->fits)
-        fits.push_back({{"model", fit.model},
-                        {"formula", fit.formula},
-                        {"coefficients", fit.coefficients},
-                        {"sse", fit.sse}});
-      summary["regression"] = {
-          {"x", regression->x_name}, {"y", regression->y_name}, {"fits", fits}};
-    }
+    if (regression) summary["regression"] = regression_json(*regression);
     summary["warnings"] = warnings;
     if (context.plots) {
       try {

@@ -1,6 +1,6 @@
 // The `doe` study kind end to end: the shipped book study (MODELS.md S4) recomputed into
 // summary.json, the maximise goal, and bad input with the message text.
-#include "analysis/doe/doe_kind.hpp"
+#include "study_kinds/doe/doe_kind.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Known-answer tests of the DOE core (MODELS.md S4): orthogonal arrays, the F distribution
 // against closed forms and printed table values, the book's L9 experiment recomputed from its raw
 // numbers, and the single-factor regression fits.
-#include "analysis/doe/doe.hpp"
+#include "study_kinds/doe/doe.hpp"
 
 #include <gtest/gtest.h>
 

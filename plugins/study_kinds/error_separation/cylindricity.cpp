@@ -1,4 +1,4 @@
-#include "analysis/error_separation/cylindricity.hpp"
+#include "study_kinds/error_separation/cylindricity.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

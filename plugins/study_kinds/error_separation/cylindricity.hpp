@@ -17,7 +17,7 @@
 #include <span>
 #include <vector>
 
-#include "analysis/error_separation/error_separation.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
 
 namespace chatterlab::error_separation {
 

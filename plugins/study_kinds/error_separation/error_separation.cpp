@@ -1,4 +1,4 @@
-#include "analysis/error_separation/error_separation.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
 
 #include <fmt/format.h>
 

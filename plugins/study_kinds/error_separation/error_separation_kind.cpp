@@ -1,4 +1,4 @@
-#include "analysis/error_separation/error_separation_kind.hpp"
+#include "study_kinds/error_separation/error_separation_kind.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -10,9 +10,11 @@
 #include <numeric>
 #include <optional>
 
-#include "analysis/error_separation/cylindricity.hpp"
-#include "analysis/error_separation/error_separation.hpp"
-#include "analysis/study_support/study_support.hpp"
+#include "study_kinds/error_separation/cylindricity.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
+#include "chatterlab/kit/data.hpp"
+#include "chatterlab/kit/plots.hpp"
+#include "chatterlab/kit/settings.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
@@ -23,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 namespace es = error_separation;
-namespace ss = study_support;
+namespace ss = kit;
 
 constexpr double deg = std::numbers::pi / 180.0;
 constexpr std::size_t max_probes = 8;

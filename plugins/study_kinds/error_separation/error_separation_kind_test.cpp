@@ -2,7 +2,7 @@
 // separation of synthetic probe data written as CSV, the suppressed-harmonic report and its
 // "error" mode, the shipped studies against the true profile stated in their headers, and bad
 // input with the message text.
-#include "analysis/error_separation/error_separation_kind.hpp"
+#include "study_kinds/error_separation/error_separation_kind.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "analysis/error_separation/error_separation.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/signal_io.hpp"
 #include "chatterlab/study.hpp"

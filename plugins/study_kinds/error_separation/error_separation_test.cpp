@@ -2,7 +2,7 @@
 // profiles and spindle motions, suppressed harmonics from the gcd condition, agreement of the
 // time recursion with the frequency method, the two-point approximation against the book's error
 // formula (6-54), the first-harmonic validity check, the zero-phase FIR and the angle optimiser.
-#include "analysis/error_separation/error_separation.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <numeric>
 #include <random>
 
-#include "analysis/error_separation/cylindricity.hpp"
+#include "study_kinds/error_separation/cylindricity.hpp"
 #include "chatterlab/fft.hpp"
 
 namespace chatterlab::error_separation {

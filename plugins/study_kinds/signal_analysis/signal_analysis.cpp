@@ -1,15 +1,17 @@
-#include "analysis/signal_analysis/signal_analysis.hpp"
+#include "study_kinds/signal_analysis/signal_analysis.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
-#include "analysis/study_support/study_support.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
 
@@ -39,26 +41,31 @@ std::vector<Headline> headlines(bool per_second) {
           {"correlation_dimension", "correlation_dimension", "correlation_dimension", true},
           {lyapunov, "lyapunov", lyapunov, true}};
 }
-bool per_second(const Json& input) { return input.contains("sample_rate_hz") && input["sample_rate_hz"].is_number(); }
+// The [input] table, declared once.
+struct SignalInput {
+  std::string file;
+  std::optional<std::string> column;        // absent: the only column
+  std::optional<double> sample_rate_hz;     // absent: time counted in samples (unless WAV)
+};
 
-ParamSpec input_file_spec() {
-  return param_spec("file", ValueKind::string, "",
-                    "data file: CSV/whitespace columns or WAV (relative to the study file)");
+const ParamTable<SignalInput>& input_table() {
+  static const ParamTable<SignalInput> table = [] {
+    ParamTable<SignalInput> t;
+    t.add(&SignalInput::file, "file", "",
+          "data file: CSV/whitespace columns or WAV (relative to the study file)")
+        .required();
+    t.add(&SignalInput::column, "column", "",
+          "column: header name or 1-based index (\"2\" or 2; absent: the only column)");
+    t.add(&SignalInput::sample_rate_hz, "sample_rate_hz", "Hz",
+          "samples per second (absent: the WAV header's, else time is counted in samples and "
+          "every rate is per sample)")
+        .positive();
+    return t;
+  }();
+  return table;
 }
 
-std::vector<ParamSpec> input_specs() {
-  ParamSpec column = param_spec(
-      "column", ValueKind::string, "",
-      "column: header name or 1-based index (\"2\" or 2; absent: the only column)");
-  column.optional = true;
-  ParamSpec rate = param_spec("sample_rate_hz", ValueKind::real, "Hz",
-                              "samples per second (absent: the WAV header's, else time is "
-                              "counted in samples and every rate is per sample)");
-  rate.min = 0;
-  rate.min_exclusive = true;
-  rate.optional = true;
-  return {input_file_spec(), column, rate};
-}
+bool per_second(const Json& input) { return input_table().read(input).sample_rate_hz.has_value(); }
 
 std::string json_list(const std::vector<std::string>& names) {
   return fmt::format("{}", fmt::join(names, ", "));
@@ -81,27 +88,27 @@ PluginInfo SignalAnalysis::info() {
   info.models_md_ids = "N1-N4";
   // The [input] table; [analysis] holds `methods` (a list of analysis names, default
   // embedding, correlation_dimension, lyapunov, surrogates) and one optional table per method.
-  info.params = input_specs();
+  info.params = input_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"file", "signal.csv"}, {"column", "x"}, {"sample_rate_hz", 1000.0}};
   return info;
 }
 
 SampledSeries SignalAnalysis::load_series(const Json& input) {
-  const DataTable table = read_data_table(input.at("file").get<std::string>());
+  const SignalInput in = input_table().read(input);
+  const DataTable table = read_data_table(in.file);  // validated: column chosen, rate resolved
   SampledSeries s;
-  const std::string column = input.at("column").get<std::string>();
+  const std::string column = in.column.value();
   s.values = table.column(column);
-  if (per_second(input)) {
-    s.sample_interval = 1.0 / input.at("sample_rate_hz").get<double>();
+  if (in.sample_rate_hz) {
+    s.sample_interval = 1.0 / *in.sample_rate_hz;
     s.sample_unit = "s";
   } else {
     // No sample rate: time is counted in samples and every rate is per sample.
     s.sample_interval = 1.0;
     s.sample_unit = "sample";
   }
-  s.name = fmt::format("{} [{}]", fs::path(input.at("file").get<std::string>()).filename().string(),
-                       column);
+  s.name = fmt::format("{} [{}]", fs::path(in.file).filename().string(), column);
   return s;
 }
 
@@ -141,11 +148,11 @@ Input validate_input(Json& document, const SourceMap& sources) {
     throw InputError(fmt::format(
         "{}: missing table [input] (file = \"...\", column = \"...\", sample_rate_hz = ...)",
         where("input")));
-  study_support::integer_columns_as_names(document["input"], {"column"});
+  kit::integer_columns_as_names(document["input"], {"column"});
   Input in;
-  in.table = validate_params(document["input"], input_specs(), "input", sources);
-  in.file = study_support::resolve_data_file(in.table["file"], "input.file", sources);
-  in.data = study_support::read_table_at(in.file, "input.file", sources);
+  in.table = validate_params(document["input"], input_table().specs(), "input", sources);
+  in.file = kit::resolve_data_file(in.table["file"], "input.file", sources);
+  in.data = kit::read_table_at(in.file, "input.file", sources);
   in.column = choose_column(in.table, in.data, in.file, sources);
   // Without a sample rate (and not a WAV file) time is counted in samples: every rate is then
   // reported per sample (lyapunov_max_per_sample instead of lyapunov_max_per_s).

@@ -1,4 +1,4 @@
-#include "analysis/signal_analysis/signal_analysis.hpp"
+#include "study_kinds/signal_analysis/signal_analysis.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <fstream>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/catalog.hpp"
 #include "chatterlab/runner.hpp"
 #include "unit/study_test_support.hpp"

@@ -1,365 +1,72 @@
-#include "analysis/surface/surface_kind.hpp"
+#include "study_kinds/surface/surface.hpp"
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <cmath>
-#include <numbers>
+#include <cstdint>
+#include <functional>
 
-#include "analysis/study_support/study_support.hpp"
-#include "analysis/surface/surface.hpp"
-#include "analysis/waviness/waviness.hpp"
 #include "chatterlab/errors.hpp"
-#include "chatterlab/fft.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "shared/metrology/surface_report.hpp"
 
 namespace chatterlab::surface {
-namespace {
-
 namespace fs = std::filesystem;
 
-ParamSpec optional_spec(std::string key, ValueKind kind, std::string unit, std::string what) {
-  ParamSpec s = param_spec(std::move(key), kind, std::move(unit), std::move(what));
-  s.optional = true;
-  return s;
+namespace {
+
+// Reports a violated limit: fail(key, message) throws InputError at the key's line.
+using Fail = std::function<void(const std::string& key, const std::string& message)>;
+
+// A closed profile: one revolution (samples_per_rev = rows), its cut-off in UPR.
+void check_closed_keys(const Json& input, const Json& filter, const DataTable& table,
+                       const fs::path& file, const Fail& fail) {
+  if (input["samples_per_rev"].is_number_integer() &&
+      static_cast<std::size_t>(input["samples_per_rev"].get<std::int64_t>()) != table.rows())
+    fail("input.samples_per_rev",
+         fmt::format("input.samples_per_rev = {}: {} has {} rows; a closed profile is exactly "
+                     "one revolution",
+                     input["samples_per_rev"].get<std::int64_t>(), file.string(), table.rows()));
+  if (filter["cutoff_mm"].is_number() && filter["cutoff_upr"].is_number())
+    fail("filter.cutoff_mm", "filter.cutoff_mm and filter.cutoff_upr: give one cut-off");
+  if (filter["cutoff_mm"].is_number() && !input["spacing_mm"].is_number())
+    fail("filter.cutoff_mm", "filter.cutoff_mm: a closed profile takes its cut-off in "
+                             "undulations per revolution: use cutoff_upr (or give "
+                             "input.spacing_mm, the circumferential spacing, to convert)");
 }
 
-ParamSpec positive(ParamSpec s) {
-  s.min = 0.0;
-  s.min_exclusive = true;
-  return s;
-}
-
-ParamSpec unit_spec() {
-  ParamSpec unit = param_spec("unit", ValueKind::string, "1",
-                              "unit of the profile values: um (default), mm or m");
-  unit.default_value = "um";
-  unit.choices = {"um", "mm", "m"};
-  return unit;
-}
-
-std::vector<ParamSpec> input_specs() {
-  ParamSpec file = param_spec("file", ValueKind::string, "1",
-                              "profile data file (CSV/whitespace table or WAV), relative to the "
-                              "study file");
-  ParamSpec closed = param_spec("closed", ValueKind::boolean, "1",
-                                "true: one revolution of a circumferential profile (periodic)");
-  closed.default_value = false;
-  const ParamSpec unit = unit_spec();
-  ParamSpec per_rev = optional_spec("samples_per_rev", ValueKind::integer, "1",
-                                    "closed profiles: samples in one revolution (= rows)");
-  per_rev.min = 4;
-  return {file,
-          optional_spec("column", ValueKind::string, "1",
-                        "profile column (header name or 1-based index); default: the only "
-                        "column besides x_column"),
-          optional_spec("x_column", ValueKind::string, "mm",
-                        "open profiles: column of positions in mm (must be uniformly spaced)"),
-          positive(optional_spec("spacing_mm", ValueKind::real, "mm",
-                                 "open profiles: sample spacing")),
-          per_rev,
-          closed,
-          unit};
-}
-
-std::vector<ParamSpec> filter_specs() {
-  ParamSpec type = param_spec("type", ValueKind::string, "1",
-                              "gaussian (ISO 16610-21) or robust_gaussian (ISO 16610-31)");
-  type.default_value = "gaussian";
-  type.choices = {"gaussian", "robust_gaussian"};
-  ParamSpec iterations = param_spec("max_iterations", ValueKind::integer, "1",
-                                    "robust_gaussian: most reweighting passes");
-  iterations.default_value = 50;
-  iterations.min = 1;
-  iterations.max = 1000;
-  return {type,
-          positive(optional_spec("cutoff_mm", ValueKind::real, "mm",
-                                 "open profiles: cut-off wavelength lambda_c")),
-          positive(optional_spec("cutoff_upr", ValueKind::real, "1/rev",
-                                 "closed profiles: cut-off in undulations per revolution "
-                                 "(default 50; ISO 12181-2 uses 15, 50, 150, 500)")),
-          iterations};
-}
-
-std::vector<ParamSpec> process_specs() {
-  ParamSpec low = optional_spec("low_band_upr", ValueKind::real_list, "1/rev",
-                                "Wz|f low band [from, to] (default around Z = n_g / n_w)");
-  low.min_items = 2;
-  low.min = 0;
-  ParamSpec high = optional_spec("high_band_upr", ValueKind::real_list, "1/rev",
-                                 "Wz|f high band [from, to] (default: above the low band)");
-  high.min_items = 2;
-  high.min = 0;
-  return {positive(optional_spec("wheel_speed_rpm", ValueKind::real, "rpm",
-                                 "wheel speed n_g (with work_speed_rpm: Wz|f bands)")),
-          positive(optional_spec("work_speed_rpm", ValueKind::real, "rpm", "work speed n_w")),
-          low, high};
-}
-
-std::vector<ParamSpec> parameter_specs() {
-  ParamSpec lengths = param_spec("sampling_lengths", ValueKind::integer, "1",
-                                 "W parameters averaged over this many equal sampling lengths");
-  lengths.default_value = 1;
-  lengths.min = 1;
-  ParamSpec a = positive(param_spec("motif_a_mm", ValueKind::real, "mm",
-                                    "ISO 12085 limit A of roughness motifs"));
-  a.default_value = 0.5;
-  ParamSpec b = positive(param_spec("motif_b_mm", ValueKind::real, "mm",
-                                    "ISO 12085 limit B of waviness motifs"));
-  b.default_value = 2.5;
-  return {lengths, a, b};
-}
-
-Json validated_table(const Json& document, const std::string& name,
-                     const std::vector<ParamSpec>& specs, const SourceMap& sources) {
-  Json table = document.contains(name) ? document.at(name) : Json::object();
-  if (!table.is_object())
-    throw InputError(fmt::format("{}: {} = {}: expected a table [{}]",
-                                 sources.locate(name).str(), name, table.dump(), name));
-  return validate_params(table, specs, name, sources);
-}
-
-// The [process] keys' joint limits, shared by the study kind and the analysis plugin: both
-// speeds or none, bands [from, to] with from <= to. `prefix` is how the caller names the keys
-// ("process." in a surface study, "" for the flat analysis parameters); fail(key, message).
-template <class Fail>
-void check_process(const Json& process, const std::string& prefix, Fail&& fail) {
-  const bool wheel = process["wheel_speed_rpm"].is_number(), work = process["work_speed_rpm"].is_number();
-  if (wheel != work)
-    fail(prefix + "wheel_speed_rpm",
-         fmt::format("Wz|f needs both {0}wheel_speed_rpm and {0}work_speed_rpm", prefix));
-  for (const char* key : {"low_band_upr", "high_band_upr"}) {
-    const Json& band = process[key];
-    if (!band.is_array()) continue;
-    if (band.size() != 2 || band[0].get<double>() > band[1].get<double>())
-      fail(prefix + key,
-           fmt::format("{}{} = {}: expected [from, to] with from <= to", prefix, key, band.dump()));
-  }
-}
-
-double unit_to_um(const std::string& unit) {
-  if (unit == "mm") return 1e3;
-  if (unit == "m") return 1e6;
-  return 1.0;
-}
-
-// The profile column's name: as given, or the only column that is not the x column.
-std::string profile_column(const Json& input, const DataTable& table, const SourceMap* sources) {
-  if (input["column"].is_string()) return input["column"].get<std::string>();
-  std::vector<std::string> candidates;
-  for (const auto& name : table.names)
-    if (!input["x_column"].is_string() || name != input["x_column"].get<std::string>())
-      candidates.push_back(name);
-  if (candidates.size() == 1) return candidates.front();
-  std::string list;
-  for (const auto& name : table.names) list += (list.empty() ? "" : ", ") + name;
-  throw InputError(fmt::format("{}: missing key 'input.column': {} has {} columns ({}); name the "
-                               "profile column",
-                               sources ? sources->locate("input").str() : std::string("input"),
-                               table.file.string(), table.names.size(), list));
-}
-
-SampledSeries series_from(const Json& input, const DataTable& table, const std::string& column) {
-  SampledSeries s;
-  s.values = table.column(column);
-  s.closed = input["closed"].get<bool>();
-  s.name = column;
-  if (s.closed) {
-    s.sample_unit = "deg";
-    s.sample_interval = 360.0 / static_cast<double>(s.values.size());
-  } else {
-    s.sample_unit = "mm";
+// An open profile: a cut-off in mm and a spacing (spacing_mm or a uniform x column, agreeing
+// when both are given).
+void check_open_keys(const Json& input, const Json& filter, const DataTable& table,
+                     const std::string& column, const SourceMap& sources, const Fail& fail) {
+  if (input["samples_per_rev"].is_number())
+    fail("input.samples_per_rev", "input.samples_per_rev needs closed = true (an open profile "
+                                  "takes spacing_mm or x_column)");
+  if (filter["cutoff_upr"].is_number())
+    fail("filter.cutoff_upr", "filter.cutoff_upr needs closed = true (an open profile takes "
+                              "cutoff_mm)");
+  if (!filter["cutoff_mm"].is_number())
+    fail("filter", "missing key 'filter.cutoff_mm': the cut-off wavelength of an open profile "
+                   "(e.g. 0.8 or 2.5 mm)");
+  if (!input["spacing_mm"].is_number() && !input["x_column"].is_string())
+    fail("input", "missing key 'input.spacing_mm' (or input.x_column): the sample spacing of "
+                  "an open profile");
+  if (input["x_column"].is_string()) {
+    check_uniform(table, input["x_column"].get<std::string>(), sources);
     if (input["spacing_mm"].is_number()) {
-      s.sample_interval = input["spacing_mm"].get<double>();
-    } else {
-      const auto& x = table.column(input["x_column"].get<std::string>());
-      s.sample_interval = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+      const SampledSeries s = series_from(input, table, column);
+      Json without_spacing = input;
+      without_spacing["spacing_mm"] = nullptr;
+      const double from_x = series_from(without_spacing, table, column).sample_interval;
+      if (std::abs(from_x - s.sample_interval) > 1e-3 * from_x)
+        fail("input.spacing_mm",
+             fmt::format("input.spacing_mm = {} disagrees with the x column's spacing {} mm",
+                         s.sample_interval, from_x));
     }
   }
-  return s;
-}
-
-// `rows`: the profile's samples; for a closed profile given with spacing_mm (circumferential
-// spacing) and cutoff_mm, the cut-off becomes cutoff_upr = circumference / cutoff_mm.
-SurfaceSettings settings_from(const Json& document, std::size_t rows = 0) {
-  const Json& input = document.at("input");
-  const Json& filter = document.at("filter");
-  const Json& process = document.at("process");
-  const Json& parameters = document.at("parameters");
-  SurfaceSettings s;
-  s.filter = filter["type"] == "robust_gaussian" ? FilterType::robust_gaussian
-                                                  : FilterType::gaussian;
-  if (filter["cutoff_mm"].is_number()) s.cutoff_mm = filter["cutoff_mm"].get<double>();
-  if (filter["cutoff_upr"].is_number()) s.cutoff_upr = filter["cutoff_upr"].get<double>();
-  s.max_iterations = filter["max_iterations"].get<int>();
-  s.value_to_um = unit_to_um(input["unit"].get<std::string>());
-  s.sampling_lengths = parameters["sampling_lengths"].get<int>();
-  s.motif_a_mm = parameters["motif_a_mm"].get<double>();
-  s.motif_b_mm = parameters["motif_b_mm"].get<double>();
-  if (process["wheel_speed_rpm"].is_number())
-    s.wheel_speed_rpm = process["wheel_speed_rpm"].get<double>();
-  if (process["work_speed_rpm"].is_number())
-    s.work_speed_rpm = process["work_speed_rpm"].get<double>();
-  auto band = [&](const char* key) -> std::optional<std::pair<double, double>> {
-    if (!process[key].is_array()) return std::nullopt;
-    return std::pair{process[key][0].get<double>(), process[key][1].get<double>()};
-  };
-  s.low_band_upr = band("low_band_upr");
-  s.high_band_upr = band("high_band_upr");
-  // value()/contains(): operator[] on a const JSON object is undefined for a missing key, and the
-  // analysis plugin's document carries no `closed`/`spacing_mm`.
-  if (input.value("closed", false) && s.cutoff_mm && input.contains("spacing_mm") &&
-      input["spacing_mm"].is_number() && rows > 0) {
-    s.cutoff_upr = static_cast<double>(rows) * input["spacing_mm"].get<double>() / *s.cutoff_mm;
-    s.cutoff_mm.reset();
-  }
-  return s;
-}
-
-// Uniform spacing of an x column: every step within 0.1 % of the mean step (and increasing).
-void check_uniform(const DataTable& table, const std::string& x_column, const SourceMap& sources) {
-  const auto& x = table.column(x_column);
-  if (x.size() < 2) return;
-  const double mean = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
-  for (std::size_t i = 0; i + 1 < x.size(); ++i) {
-    const double step = x[i + 1] - x[i];
-    if (!(mean > 0) || std::abs(step - mean) > 1e-3 * mean) {
-      const std::size_t line = i + 1 < table.source_lines.size() ? table.source_lines[i + 1] : i + 2;
-      throw InputError(fmt::format(
-          "{}: input.x_column = \"{}\": non-uniform spacing in {} at line {}: step {} mm differs "
-          "from the mean spacing {} mm by more than 0.1 % (resample the profile uniformly)",
-          sources.locate("input.x_column").str(), x_column, table.file.string(), line, step,
-          mean));
-    }
-  }
-}
-
-// ---------------------------------------------------------------- outputs
-std::vector<double> every(const std::vector<double>& v, std::size_t stride) {
-  std::vector<double> out;
-  for (std::size_t i = 0; i < v.size(); i += stride) out.push_back(v[i]);
-  return out;
-}
-
-void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& title,
-                   const fs::path& dir) {
-  const std::size_t stride = std::max<std::size_t>(1, e.position.size() / 20000);
-  const std::string x_label = closed ? "angle [deg]" : "x [mm]";
-  const auto x = every(e.position, stride);
-  plot::Curves profile;
-  profile.title = title + ": profile and waviness (filter mean line)";
-  profile.x_label = x_label;
-  profile.y_label = "height [um]";
-  profile.series.push_back({"profile", x, every(e.profile_um, stride), "lines"});
-  const Json& filter = e.summary.at("filter");
-  const std::string cutoff = filter.contains("cutoff_upr")
-                                 ? fmt::format("{} UPR", filter["cutoff_upr"].get<double>())
-                                 : fmt::format("lc = {} mm", filter["cutoff_mm"].get<double>());
-  profile.series.push_back({fmt::format("waviness ({} filter, {})",
-                                        filter["type"].get<std::string>(), cutoff),
-                            x, every(e.waviness_um, stride), "lines"});
-  plot::render(profile, dir, "profile");
-  plot::Curves roughness;
-  roughness.title = title + ": roughness (profile - waviness)";
-  roughness.x_label = x_label;
-  roughness.y_label = "roughness [um]";
-  roughness.series.push_back({"roughness", x, every(e.roughness_um, stride), "lines"});
-  roughness.reference_y = 0.0;
-  roughness.reference_label = "mean line";
-  plot::render(roughness, dir, "roughness");
-}
-
-// Polar plot of the waviness about the least-squares centre (eccentricity removed, as roundness
-// instruments draw it), magnified onto a base circle of twice the LS peak-to-valley, with the
-// four reference circles (limacons relative to the LS circle) in the same scale.
-void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir,
-                const std::string& stem = "polar") {
-  const Json& rd = e.summary.at("roundness");
-  const Json& ls = rd.at("least_squares");
-  const double base = std::max(2.0 * ls.at("RONt_um").get<double>(), 1e-9);
-  auto limacon = [](const Json& c, double th) {
-    return c.at("radius_offset_um").get<double>() + c.at("centre_x_um").get<double>() * std::cos(th) +
-           c.at("centre_y_um").get<double>() * std::sin(th);
-  };
-  const std::size_t n = e.waviness_um.size(), stride = std::max<std::size_t>(1, n / 4000);
-  plot::Curves polar;
-  polar.title = fmt::format("{}: roundness about the LS centre (base circle {:.3g} um)", title, base);
-  polar.x_label = "x [um]";
-  polar.y_label = "y [um]";
-  polar.equal_aspect = true;  // a round part must look round
-  plot::Series profile{"waviness", {}, {}, "lines"};
-  for (std::size_t i = 0; i <= n; i += stride) {
-    const std::size_t k = i % n;
-    const double th = e.position[k] * std::numbers::pi / 180.0;
-    const double rho = base + e.waviness_um[k] - limacon(ls, th);
-    profile.x.push_back(rho * std::cos(th));
-    profile.y.push_back(rho * std::sin(th));
-  }
-  polar.series.push_back(std::move(profile));
-  auto circle_points = [&](plot::Series& series, const Json& c, double offset_um) {
-    for (int k = 0; k <= 360; ++k) {
-      const double th = k * std::numbers::pi / 180.0;
-      const double rho = base + limacon(c, th) + offset_um - limacon(ls, th);
-      series.x.push_back(rho * std::cos(th));
-      series.y.push_back(rho * std::sin(th));
-    }
-  };
-  for (const char* name : {"minimum_circumscribed", "maximum_inscribed", "least_squares"}) {
-    const Json& c = rd.at(name);
-    const bool dashed = std::string_view(name) == "least_squares";
-    plot::Series circle{fmt::format("{} (RONt {:.3g} um)", name, c.at("RONt_um").get<double>()),
-                        {}, {}, dashed ? "dashes" : "lines"};
-    circle_points(circle, c, 0.0);
-    polar.series.push_back(std::move(circle));
-  }
-  // The minimum zone is two concentric circles (its centre, radii R -+ RONt/2) holding the whole
-  // profile between them: one series (a NaN breaks the line between the two), drawn last and
-  // dashed because the circumscribed and inscribed circles often lie almost on them.
-  const Json& mz = rd.at("minimum_zone");
-  const double half = 0.5 * mz.at("RONt_um").get<double>();
-  plot::Series zone{fmt::format("minimum zone: two circles {:.3g} um apart (RONt)", 2 * half), {}, {},
-                    "dashes"};
-  circle_points(zone, mz, half);
-  zone.x.push_back(std::nan(""));
-  zone.y.push_back(std::nan(""));
-  circle_points(zone, mz, -half);
-  polar.series.push_back(std::move(zone));
-  plot::render(polar, dir, stem);
-}
-
-// Amplitude per UPR of the profile with the Wz|f bands marked.
-void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::path& dir,
-                const std::string& stem = "wz_f_bands") {
-  const Json& wzf = e.summary.at("Wz_f");
-  const std::size_t n = e.profile_um.size();
-  RealFft fft(n);
-  const auto spectrum = fft.forward(e.profile_um);
-  plot::Curves bands;
-  bands.title = fmt::format("{}: Wz|f low {:.3g} um, high {:.3g} um", title,
-                            wzf["low"]["Wz_um"].get<double>(), wzf["high"]["Wz_um"].get<double>());
-  bands.x_label = "undulations per revolution [UPR]";
-  bands.y_label = "amplitude [um]";
-  bands.log_x = true;
-  plot::Series low{"low band (forced lobes)", {}, {}, "impulses"},
-      high{"high band (chatter)", {}, {}, "impulses"}, other{"outside the bands", {}, {}, "impulses"};
-  for (std::size_t k = 2; k < spectrum.size(); ++k) {
-    const double upr = static_cast<double>(k);
-    const double amplitude = (2 * k == n ? 1.0 : 2.0) * std::abs(spectrum[k]) / static_cast<double>(n);
-    plot::Series& target =
-        upr >= wzf["low"]["from_upr"].get<double>() && upr <= wzf["low"]["to_upr"].get<double>()
-            ? low
-            : (upr >= wzf["high"]["from_upr"].get<double>() &&
-                       upr <= wzf["high"]["to_upr"].get<double>()
-                   ? high
-                   : other);
-    target.x.push_back(upr);
-    target.y.push_back(amplitude);
-  }
-  for (auto* s : {&low, &high, &other})
-    if (!s->x.empty()) bands.series.push_back(std::move(*s));
-  plot::render(bands, dir, stem);
 }
 
 }  // namespace
@@ -382,18 +89,18 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
     throw InputError(fmt::format("{}: missing table [input] (file, column, spacing_mm or "
                                  "samples_per_rev with closed = true)",
                                  sources.locate("input").str()));
-  study_support::integer_columns_as_names(document["input"], {"column", "x_column"});
+  kit::integer_columns_as_names(document["input"], {"column", "x_column"});
   Json input = validated_table(document, "input", input_specs(), sources);
   Json filter = validated_table(document, "filter", filter_specs(), sources);
   Json process = validated_table(document, "process", process_specs(), sources);
   Json parameters = validated_table(document, "parameters", parameter_specs(), sources);
-  auto fail = [&](const std::string& key, const std::string& what) {
+  const Fail fail = [&](const std::string& key, const std::string& what) {
     throw InputError(fmt::format("{}: {}", sources.locate(key).str(), what));
   };
 
-  const fs::path file = study_support::resolve_data_file(input["file"], "input.file", sources);
+  const fs::path file = kit::resolve_data_file(input["file"], "input.file", sources);
   input["file"] = file.string();
-  const DataTable table = study_support::read_table_at(file, "input.file", sources);
+  const DataTable table = kit::read_table_at(file, "input.file", sources);
   const bool closed = input["closed"].get<bool>();
   if (input["x_column"].is_string()) {
     if (closed) fail("input.x_column", "input.x_column: closed profiles are sampled by angle "
@@ -412,46 +119,10 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
   }
   input["column"] = column;
 
-  if (closed) {
-    if (input["samples_per_rev"].is_number_integer() &&
-        static_cast<std::size_t>(input["samples_per_rev"].get<std::int64_t>()) != table.rows())
-      fail("input.samples_per_rev",
-           fmt::format("input.samples_per_rev = {}: {} has {} rows; a closed profile is exactly "
-                       "one revolution",
-                       input["samples_per_rev"].get<std::int64_t>(), file.string(), table.rows()));
-    if (filter["cutoff_mm"].is_number() && filter["cutoff_upr"].is_number())
-      fail("filter.cutoff_mm", "filter.cutoff_mm and filter.cutoff_upr: give one cut-off");
-    if (filter["cutoff_mm"].is_number() && !input["spacing_mm"].is_number())
-      fail("filter.cutoff_mm", "filter.cutoff_mm: a closed profile takes its cut-off in "
-                               "undulations per revolution: use cutoff_upr (or give "
-                               "input.spacing_mm, the circumferential spacing, to convert)");
-  } else {
-    if (input["samples_per_rev"].is_number())
-      fail("input.samples_per_rev", "input.samples_per_rev needs closed = true (an open profile "
-                                    "takes spacing_mm or x_column)");
-    if (filter["cutoff_upr"].is_number())
-      fail("filter.cutoff_upr", "filter.cutoff_upr needs closed = true (an open profile takes "
-                                "cutoff_mm)");
-    if (!filter["cutoff_mm"].is_number())
-      fail("filter", "missing key 'filter.cutoff_mm': the cut-off wavelength of an open profile "
-                     "(e.g. 0.8 or 2.5 mm)");
-    if (!input["spacing_mm"].is_number() && !input["x_column"].is_string())
-      fail("input", "missing key 'input.spacing_mm' (or input.x_column): the sample spacing of "
-                    "an open profile");
-    if (input["x_column"].is_string()) {
-      check_uniform(table, input["x_column"].get<std::string>(), sources);
-      if (input["spacing_mm"].is_number()) {
-        const SampledSeries s = series_from(input, table, column);
-        Json without_spacing = input;
-        without_spacing["spacing_mm"] = nullptr;
-        const double from_x = series_from(without_spacing, table, column).sample_interval;
-        if (std::abs(from_x - s.sample_interval) > 1e-3 * from_x)
-          fail("input.spacing_mm",
-               fmt::format("input.spacing_mm = {} disagrees with the x column's spacing {} mm",
-                           s.sample_interval, from_x));
-      }
-    }
-  }
+  if (closed)
+    check_closed_keys(input, filter, table, file, fail);
+  else
+    check_open_keys(input, filter, table, column, sources, fail);
   if (process["wheel_speed_rpm"].is_number() && !closed)
     fail("process.wheel_speed_rpm", "process.wheel_speed_rpm: Wz|f bands need a closed "
                                     "(circumferential) profile, closed = true");
@@ -526,110 +197,6 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
   return out;
 }
 
-PluginInfo SurfaceAnalysis::info() {
-  PluginInfo info;
-  info.name = "surface_profile";  // names are unique across registries: the kind is "surface"
-  info.description =
-      "waviness, MOTIF, roundness and Wz|f of a profile series (the surface study's evaluation)";
-  info.models_md_ids = "W1, W2";
-  info.params = {unit_spec()};
-  for (const auto& specs : {filter_specs(), process_specs(), parameter_specs()})
-    info.params.insert(info.params.end(), specs.begin(), specs.end());
-  // `type` names the plugin in a component table: the filter type is `filter` here.
-  info.params[1].key = "filter";
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"cutoff_upr", 50}, {"unit", "m"}};
-  return info;
-}
-
-SurfaceAnalysis::SurfaceAnalysis(const ParamValues& params) : params_(params.json()) {
-  check_process(params_, "", [](const std::string&, const std::string& what) {
-    throw InputError(what);
-  });
-}
-
-SurfaceSettings SurfaceAnalysis::settings() const {
-  // The flat parameters regrouped into the study kind's tables, read by the same code.
-  Json document{{"input", Json::object()}, {"filter", Json::object()},
-                {"process", Json::object()}, {"parameters", Json::object()}};
-  auto take = [&](const std::vector<ParamSpec>& specs, const char* table) {
-    for (const auto& spec : specs)
-      document[table][spec.key] = params_.contains(spec.key) ? params_.at(spec.key) : Json();
-  };
-  take({unit_spec()}, "input");
-  take(filter_specs(), "filter");
-  document["filter"]["type"] = params_.at("filter");
-  take(process_specs(), "process");
-  take(parameter_specs(), "parameters");
-  return settings_from(document);
-}
-
-Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
-  return evaluate_surface(series, settings());
-}
-
-void SurfaceAnalysis::plot(const Json& /*result*/, const SampledSeries& series,
-                           const fs::path& out_dir) const {
-  plot_closed(series, settings(), out_dir);
-}
-
-void SurfaceAnalysis::plot_closed(const SampledSeries& series, const SurfaceSettings& settings,
-                                  const fs::path& out_dir) const {
-  // The study kind's figures of a closed profile, drawn from a re-evaluation (the summary alone
-  // does not hold the filtered profile): polar roundness and, with speeds, the Wz|f bands.
-  if (!series.closed) return;
-  const SurfaceEvaluation e = evaluate_surface_profile(series, settings);
-  const std::string title = series.name.empty() ? std::string("profile") : series.name;
-  plot_polar(e, title, out_dir, "surface_profile_polar");
-  if (e.summary.contains("Wz_f")) plot_bands(e, title, out_dir, "surface_profile_wz_f_bands");
-}
-
-std::vector<ParamSpec> SurfaceAnalysis::measurement_params() const {
-  std::vector<ParamSpec> specs = info().params;
-  std::erase_if(specs, [](const ParamSpec& spec) { return spec.key == unit_spec().key; });
-  return specs;
-}
-
-std::optional<ProfileQualityMeasurement::SettingProblem> SurfaceAnalysis::setting_problem(bool closed_profile) const {
-  const Json& cutoff_mm = params_.contains("cutoff_mm") ? params_.at("cutoff_mm") : Json();
-  if (closed_profile && cutoff_mm.is_number())
-    return SettingProblem{"cutoff_mm", cutoff_mm, "a closed profile takes its cut-off in undulations per revolution: "
-                                                  "give cutoff_upr"};
-  return std::nullopt;
-}
-
-SurfaceSettings SurfaceAnalysis::settings_in_metres(const ProfileSpeeds& speeds, bool& speeds_from_caller) const {
-  SurfaceSettings s = settings();
-  s.value_to_um = unit_to_um("m");
-  speeds_from_caller = !s.work_speed_rpm && speeds.work_speed_rpm > 0.0 && speeds.wheel_speed_rpm > 0.0;
-  if (speeds_from_caller) {
-    s.wheel_speed_rpm = speeds.wheel_speed_rpm;
-    s.work_speed_rpm = speeds.work_speed_rpm;
-  }
-  return s;
-}
-
-ProfileQuality SurfaceAnalysis::measure_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds) const {
-  ProfileQuality q;
-  const SurfaceSettings s = settings_in_metres(speeds, q.speeds_from_caller);
-  q.report = evaluate_surface(profile_m, s);
-  auto number = [&](const char* key) -> std::optional<double> {
-    const Json& v = q.report.contains(key) ? q.report.at(key) : Json();
-    return v.is_number() ? std::optional<double>(v.get<double>()) : std::nullopt;
-  };
-  q.waviness_wt_um = number("Wt_um");
-  q.waviness_wz_um = number("Wz_um");
-  q.roundness_ront_um = number("RONt_um");
-  if (s.work_speed_rpm && s.wheel_speed_rpm) q.speeds = ProfileSpeeds{*s.wheel_speed_rpm, *s.work_speed_rpm};
-  return q;
-}
-
-void SurfaceAnalysis::plot_profile(const SampledSeries& profile_m, const ProfileSpeeds& speeds,
-                                   const fs::path& out_dir) const {
-  bool from_caller = false;
-  plot_closed(profile_m, settings_in_metres(speeds, from_caller), out_dir);
-}
-
 void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& results,
                                    const fs::path& out_dir) const {
   // Figures of one profile are drawn by run_point next to its summary.json. A grid over one
@@ -661,4 +228,3 @@ void SurfaceStudy::write_artifacts(const Study& study, const ResultTable& result
 }  // namespace chatterlab::surface
 
 CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::surface::SurfaceStudy);
-CHATTERLAB_REGISTER_ANALYSIS(chatterlab::surface::SurfaceAnalysis);

@@ -1,4 +1,4 @@
-#include "analysis/surface/surface.hpp"
+#include "shared/metrology/surface.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,10 +7,10 @@
 #include <numbers>
 #include <sstream>
 
-#include "analysis/surface/surface_kind.hpp"
+#include "study_kinds/surface/surface.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/signal_io.hpp"
-#include "study/source_map.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::surface {
@@ -119,7 +119,7 @@ TEST(SurfaceEvaluation, AnalysisPluginEvaluatesASimulatedWorkSurface) {
   const auto& entry = analysis_registry().at("surface_profile");
   const auto analysis = entry.create(ParamValues(
       validate_params(Json{{"unit", "m"}, {"cutoff_upr", 150}}, entry.info.params, "analysis",
-                      chatterlab::LineSourceMap("test"))));
+                      chatterlab::kit::FileSourceMap("test"))));
   const Json j = analysis->analyse(s, Json::object());
   EXPECT_NEAR(j["RONt_um"].get<double>(), 3.0 * waviness_transmission(FilterType::gaussian, 150.0 / 7),
               1e-5);
