@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/fft.hpp"
 #include "chatterlab/plot.hpp"
 #include "shared/metrology/waviness.hpp"
 

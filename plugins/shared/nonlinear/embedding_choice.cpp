@@ -208,8 +208,8 @@ EmbeddingParameters resolve_embedding(const ParamValues& params, const SampledSe
     return nonlinear::context_value(context, "embedding", key);
   };
   std::vector<std::string> sources;
-  std::optional<Choice> automatic;
-  auto automatic_choice = [&]() -> const Choice& {
+  std::optional<EmbeddingChoice> automatic;
+  auto automatic_choice = [&]() -> const EmbeddingChoice& {
     if (!automatic)
       automatic = choose_embedding(series.values, embedding_default_max_lag(series.values.size()), embedding_default_bins,
                              embedding_default_max_dimension, embedding_default_distance_ratio,
