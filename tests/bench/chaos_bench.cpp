@@ -40,7 +40,7 @@
 #include "analysis/correlation_dimension/correlation_dimension.hpp"
 #include "analysis/lyapunov/lyapunov.hpp"
 #include "analysis/lyapunov_spectrum/lyapunov_spectrum.hpp"
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/signal_io.hpp"
 
 #include <fmt/format.h>

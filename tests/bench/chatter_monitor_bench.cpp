@@ -6,7 +6,7 @@
 //   build/release/tests/bench/chatter_monitor_bench
 #include <benchmark/benchmark.h>
 
-#include "analysis/monitor_common/monitor_common.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 #include "analysis/window_features/window_features.hpp"
 #include "chatterlab/analysis.hpp"
 #include "chatterlab/registry.hpp"

@@ -12,7 +12,7 @@
 #include <numeric>
 #include <vector>
 
-#include "analysis/error_separation/error_separation.hpp"
+#include "study_kinds/error_separation/error_separation.hpp"
 
 namespace {
 

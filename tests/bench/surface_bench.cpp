@@ -10,7 +10,7 @@
 #include <numbers>
 #include <random>
 
-#include "analysis/surface/surface.hpp"
+#include "shared/metrology/surface.hpp"
 
 namespace {
 

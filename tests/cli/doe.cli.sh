@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The doe study kind through the `chatterlab` command on the book's L9 experiment (MODELS.md S4):
 # exit 0, summary.json holds the recomputed sums of squares (S_A = 155.74, S_B = 265.13,
-# S_C = 392.11, S_e = 71.43, S_T = 884.41; derivation in plugins/analysis/doe/doe_test.cpp) and
+# S_C = 392.11, S_e = 71.43, S_T = 884.41; derivation in plugins/study_kinds/doe/doe_test.cpp) and
 # the best combination A1 B3 C1, results.csv the F values, the plots exist; a missing factor
 # column is bad input (exit 2, message, nothing written).
 # Usage: doe.cli.sh CHATTERLAB WORK_DIR SOURCE_DIR

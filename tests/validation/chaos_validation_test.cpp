@@ -28,8 +28,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
-#include "analysis/signal_analysis/signal_analysis.hpp"
+#include "shared/nonlinear/test_signals.hpp"
+#include "study_kinds/signal_analysis/signal_analysis.hpp"
 #include "study/source_map.hpp"
 #include "validation/reference_exponents.hpp"
 

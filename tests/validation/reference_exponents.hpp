@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 
 namespace chatterlab::reference {
 

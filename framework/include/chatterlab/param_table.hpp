@@ -97,7 +97,9 @@ class ParamTable {
     Entry& e = push(param_spec(key, detail::value_kind_of<Value>(), std::move(unit), std::move(description)));
     e.optional = detail::is_optional<T>::value;
     e.read = [member, key](S& s, const Json& table) {
-      const Json& v = table.at(key);
+      const Json* found = find(table, key);
+      if (!found) return;  // absent: the member keeps its default
+      const Json& v = *found;
       if constexpr (detail::is_optional<T>::value) {
         if (v.is_null()) s.*member = std::nullopt;
         else s.*member = v.template get<Value>();
@@ -122,7 +124,9 @@ class ParamTable {
     Entry& e = push(param_spec(key, ValueKind::string, "", std::move(description)));
     for (const auto& [name, value] : names) e.spec.choices.push_back(name);
     e.read = [member, key, names](S& s, const Json& table) {
-      const std::string text = table.at(key).template get<std::string>();
+      const Json* found = find(table, key);
+      if (!found) return;
+      const std::string text = found->template get<std::string>();
       for (const auto& [name, value] : names)
         if (name == text) { s.*member = value; return; }
       throw std::logic_error("ParamTable: '" + text + "' is no choice of " + key);
@@ -141,7 +145,9 @@ class ParamTable {
                   const ParamTable<Sub>& fields) {
     Entry& e = push(param_spec(key, ValueKind::table, "", std::move(description)));
     e.spec.fields = fields.specs();
-    e.read = [member, key, fields](S& s, const Json& table) { s.*member = fields.read(table.at(key)); };
+    e.read = [member, key, fields](S& s, const Json& table) {
+      if (const Json* found = find(table, key)) s.*member = fields.read(*found);
+    };
     e.write = [member, key, fields](const S& s, Json& table) { table[key] = fields.write(s.*member); };
     return Field(&e.spec, &e.required);
   }
@@ -155,9 +161,10 @@ class ParamTable {
     e.spec.fields = fields.specs();
     e.optional = true;
     e.read = [member, key, fields](S& s, const Json& table) {
-      const Json& v = table.at(key);
-      if (v.is_null()) s.*member = std::nullopt;
-      else s.*member = fields.read(v);
+      const Json* found = find(table, key);
+      if (!found) return;
+      if (found->is_null()) s.*member = std::nullopt;
+      else s.*member = fields.read(*found);
     };
     e.write = [member, key, fields](const S& s, Json& table) {
       table[key] = (s.*member) ? fields.write(*(s.*member)) : Json(nullptr);
@@ -172,8 +179,10 @@ class ParamTable {
     Entry& e = push(param_spec(key, ValueKind::table_list, "", std::move(description)));
     e.spec.fields = fields.specs();
     e.read = [member, key, fields](S& s, const Json& table) {
+      const Json* found = find(table, key);
+      if (!found) return;
       (s.*member).clear();
-      for (const Json& item : table.at(key)) (s.*member).push_back(fields.read(item));
+      for (const Json& item : *found) (s.*member).push_back(fields.read(item));
     };
     e.write = [member, key, fields](const S& s, Json& table) {
       Json list = Json::array();
@@ -211,10 +220,19 @@ class ParamTable {
     return out;
   }
 
-  // The struct from a table validated against specs() (defaults filled in).
+  // The struct from a table validated against specs(). A key the table lacks keeps the struct's
+  // default (the value specs() declares), so a kind or test that builds a plugin from a partial
+  // table gets what validation would have filled in; a null or absent table gives every default.
+  // A missing required key is a programming error (validation reports it to the user first).
   S read(const Json& validated_table) const {
+    if (!validated_table.is_null() && !validated_table.is_object())
+      throw std::logic_error("ParamTable: expected a table, got " + validated_table.dump());
     S s{};
-    for (const Entry& e : entries_) e.read(s, validated_table);
+    for (const Entry& e : entries_) {
+      if (e.required && !find(validated_table, e.spec.key))
+        throw std::logic_error("ParamTable: required parameter '" + e.spec.key + "' missing");
+      e.read(s, validated_table);
+    }
     return s;
   }
   S read(const ParamValues& values) const { return read(values.json()); }
@@ -228,6 +246,13 @@ class ParamTable {
 
  private:
   template <class> friend class ParamTable;  // add_fields reads another table's entries
+  // The value at key, or nullptr when the table (or the key) is absent.
+  static const Json* find(const Json& table, const std::string& key) {
+    if (!table.is_object()) return nullptr;
+    const auto it = table.find(key);
+    return it == table.end() ? nullptr : &*it;
+  }
+
   template <class T> struct unwrap { using type = T; };
   template <class T> struct unwrap<std::optional<T>> { using type = T; };
 

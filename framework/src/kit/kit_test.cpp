@@ -105,6 +105,33 @@ TEST(ParamTable, ReadsAValidatedTableIntoTheStruct) {
   EXPECT_EQ(settings_table().write(s), validated);
 }
 
+TEST(ParamTable, ReadFillsKeysATableLacksFromTheStructsDefaults) {
+  // A partial (unvalidated) table: what validation would fill in, read() fills in too, at every
+  // level (a nested list item keeps its own defaults), so no plugin needs its own merge step.
+  const Settings s = settings_table().read(Json{{"stiffness_n_per_m", 5e7},
+                                                {"steps", 4},
+                                                {"modes", {{{"damping_ratio", 0.2}}}}});
+  EXPECT_EQ(s.steps, 4);
+  EXPECT_EQ(s.duration_s, 2.0);
+  EXPECT_TRUE(s.one_sided);
+  EXPECT_EQ(s.label, "run");
+  EXPECT_FALSE(s.fit_start_s.has_value());
+  EXPECT_EQ(s.levels, (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(s.shape, Shape::square);
+  ASSERT_EQ(s.modes.size(), 1u);
+  EXPECT_EQ(s.modes[0].frequency_hz, 100.0);
+  EXPECT_EQ(s.modes[0].damping_ratio, 0.2);
+  // The filled struct writes back as the validated table of the same input.
+  const Json validated = validate_params({{"stiffness_n_per_m", 5e7}, {"steps", 4},
+                                          {"modes", {{{"damping_ratio", 0.2}}}}},
+                                         settings_table().specs(), "simulation", LineSeven());
+  EXPECT_EQ(settings_table().write(s), validated);
+  // A required key has no default to fall back on; a non-table is no table.
+  EXPECT_THROW(settings_table().read(Json::object()), std::logic_error);
+  EXPECT_THROW(settings_table().read(Json(3.0)), std::logic_error);
+  EXPECT_EQ(mode_table().read(Json()).frequency_hz, 100.0);  // absent table: every default
+}
+
 TEST(ParamTable, ValidationNamesFileLineKeyValueAndLimit) {
   const std::string message = input_error_of([] {
     validate_params({{"stiffness_n_per_m", 5e7}, {"duration_s", 250.0}}, settings_table().specs(),

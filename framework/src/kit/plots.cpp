@@ -22,6 +22,18 @@ void Figures::finish() const {
   if (!errors_.empty()) throw plot::PlotError(errors_);
 }
 
+void render_all(const std::vector<std::pair<std::string, std::function<void()>>>& figures) {
+  Figures out;
+  for (const auto& [stem, draw] : figures) {
+    try {
+      draw();
+    } catch (const std::exception& e) {
+      out.add_error(stem, e.what());
+    }
+  }
+  out.finish();
+}
+
 std::string study_title(const Json& document, const fs::path& study_file) {
   auto it = document.find("study");
   if (it != document.end() && it->is_object() && it->contains("name") && (*it)["name"].is_string())

@@ -19,8 +19,8 @@
 
 #include <Eigen/Core>
 
-#include "analysis/monitor_common/monitor_common.hpp"
-#include "analysis/window_features/window_features.hpp"
+#include "shared/monitoring/monitor_common.hpp"
+#include "shared/monitoring/features.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {

@@ -10,8 +10,8 @@
 #include <numbers>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/output_files.hpp"
-#include "study/source_map.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -89,7 +89,7 @@ Json book_params() {
             {"stable_s", {0.0, 149.5 / 8000.0}},
             {"onset_s", {150.0 / 8000.0, 299.0 / 8000.0}}};
   return validate_params(p, BpNetworkAnalysis::info().params, "bp_network",
-                         LineSourceMap("test"));
+                         kit::FileSourceMap("test"));
 }
 
 TEST(BpNetwork, BookSetupStableVersusChatterOnset) {

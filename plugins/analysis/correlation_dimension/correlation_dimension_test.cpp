@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 
 namespace chatterlab {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab {

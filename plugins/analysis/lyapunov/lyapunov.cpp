@@ -10,8 +10,8 @@
 #include <map>
 #include <optional>
 
-#include "analysis/embedding/embedding.hpp"
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/embedding_choice.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
 

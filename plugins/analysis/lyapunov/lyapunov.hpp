@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/lyapunov/divergence.hpp"
-#include "analysis/lyapunov/kantz_scan.hpp"
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/divergence.hpp"
+#include "shared/nonlinear/kantz_scan.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {

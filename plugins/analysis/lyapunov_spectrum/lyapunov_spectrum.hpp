@@ -8,7 +8,7 @@
 // are flagged spurious (Parlitz 1992). docs/analysis/chaos.md, section "Lyapunov spectrum".
 #include <vector>
 
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {

@@ -195,39 +195,13 @@ Json RbfDensityAnalysis::snapshot(const SampledSeries& series, std::size_t last_
           {"flagged", c.ratio >= rho_}};
 }
 
-void RbfDensityAnalysis::plot_snapshots(const std::vector<Json>& snapshots,
-                                        const std::string& title, const std::string& signal_unit,
-                                        const std::filesystem::path& out_dir,
-                                        const std::string& stem) {
-  plot::Curves c;
-  c.title = title;
-  c.x_label = fmt::format("(x - mean) / |x_max - mean|   (x in {})", signal_unit);
-  c.y_label = "RBF density estimate, same scaling [1]";
-  for (const Json& s : snapshots) {
-    // Each window's amplitude is scaled to its own |x_max - mean| so stable and chatter windows
-    // (amplitudes decades apart) share one axis; the density is rescaled to keep unit area.
-    const double mean = s.at("mean").get<double>();
-    double spread = std::abs(s.at("x_max").get<double>() - mean);
-    if (!(spread > 0.0)) spread = 1.0;
-    std::vector<double> x = s.at("x").get<std::vector<double>>();
-    std::vector<double> p = s.at("density").get<std::vector<double>>();
-    for (auto& v : x) v = (v - mean) / spread;
-    for (auto& v : p) v *= spread;
-    c.series.push_back({fmt::format("window ending t = {:.4g} s: ratio {:.2f}{}",
-                                    s.at("t_s").get<double>(), s.at("ratio").get<double>(),
-                                    s.at("flagged").get<bool>() ? " (chatter)" : " (stable)"),
-                        std::move(x), std::move(p)});
-  }
-  plot::render(c, out_dir, stem);
-}
-
 void RbfDensityAnalysis::plot(const Json& result, const SampledSeries& /*series*/,
                               const std::filesystem::path& out_dir) const {
   monitor::plot_scores(result, fmt::format("C3 density criterion (5-22), latest {} samples", window_),
                        "|x_at_max_density - mean| / |x_max - mean|", out_dir,
                        "rbf_density_criterion");
-  plot_snapshots(result.at("snapshots").get<std::vector<Json>>(),
-                 "C3 RBF amplitude densities", "signal unit", out_dir, "rbf_density_snapshots");
+  monitor::plot_density_snapshots(result.at("snapshots").get<std::vector<Json>>(),
+                                 "C3 RBF amplitude densities", "signal unit", out_dir, "rbf_density_snapshots");
 }
 
 }  // namespace chatterlab

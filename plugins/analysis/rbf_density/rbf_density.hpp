@@ -15,7 +15,7 @@
 #include <span>
 #include <vector>
 
-#include "analysis/monitor_common/monitor_common.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {
@@ -52,11 +52,7 @@ class RbfDensityAnalysis final : public Analysis, public monitor::Detector {
 
   // The window ending at sample `last_sample`: its density on a grid, the criterion's points and
   // a label (for "stable vs chatter" snapshot plots).
-  Json snapshot(const SampledSeries& series, std::size_t last_sample) const;
-  // A figure of snapshots made by snapshot(), written as <stem>.png/.svg.
-  static void plot_snapshots(const std::vector<Json>& snapshots, const std::string& title,
-                             const std::string& signal_unit, const std::filesystem::path& out_dir,
-                             const std::string& stem);
+  Json snapshot(const SampledSeries& series, std::size_t last_sample) const override;
 
  private:
   std::size_t window_, hop_, nodes_, persistence_;

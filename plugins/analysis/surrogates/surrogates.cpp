@@ -8,11 +8,11 @@
 #include <numeric>
 #include <random>
 
-#include "analysis/correlation_dimension/correlation_dimension.hpp"
-#include "analysis/embedding/embedding.hpp"
-#include "analysis/lyapunov/divergence.hpp"
-#include "analysis/lyapunov/kantz_scan.hpp"
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/correlation_sums.hpp"
+#include "shared/nonlinear/embedding_choice.hpp"
+#include "shared/nonlinear/divergence.hpp"
+#include "shared/nonlinear/kantz_scan.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/plot.hpp"
 

@@ -17,7 +17,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "analysis/nonlinear_common/nonlinear_common.hpp"
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
 
 namespace chatterlab {

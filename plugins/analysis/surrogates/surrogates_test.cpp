@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "analysis/nonlinear_common/test_signals.hpp"
+#include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/fft.hpp"
 
 namespace chatterlab {

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "analysis/monitor_common/monitor_common.hpp"
+#include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab {

@@ -9,20 +9,7 @@
 
 namespace chatterlab {
 
-namespace {
-
-// The parameters of a table, keys it lacks at their declared defaults (validation writes them; a
-// kind or test that builds the model from a partial table gets the same).
-PlungeRegenerativeParameters read_parameters(const ParamValues& values) {
-  const auto& table = plunge_dynamics::plunge_parameters_table();
-  Json complete = table.write(PlungeRegenerativeParameters{});
-  complete.update(values.json());
-  return table.read(complete);
-}
-
-}  // namespace
-
-PlungeRegenerative::PlungeRegenerative(const ParamValues& values) : PlungeRegenerative(read_parameters(values)) {}
+PlungeRegenerative::PlungeRegenerative(const ParamValues& values) : PlungeRegenerative(plunge_dynamics::plunge_parameters_table().read(values)) {}
 
 PlungeRegenerative::PlungeRegenerative(PlungeRegenerativeParameters parameters)
     : parameters_(std::move(parameters)), characteristic_(parameters_) {}

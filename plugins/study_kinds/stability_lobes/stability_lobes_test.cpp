@@ -16,7 +16,6 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
 #include "study_kinds/stability_lobes/lobe_results.hpp"
-#include "study_kinds/stability_map/stability_map.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -80,6 +79,12 @@ std::vector<std::vector<std::string>> csv(const fs::path& file) {
   return rows;
 }
 
+// The stability_map kind, reached through the registry as the runner reaches it (a plugin
+// includes no other plugin's header).
+std::unique_ptr<StudyKind> stability_map_kind() {
+  return study_kind_registry().at("stability_map").create(ParamValues(Json::object()));
+}
+
 // The growth rate of stability_map at one (parameter, speed): the independent route.
 double growth_rate(const TempDir& dir, const std::string& model, const std::string& parameter, double p,
                    const std::string& speed, double v) {
@@ -88,8 +93,7 @@ double growth_rate(const TempDir& dir, const std::string& model, const std::stri
   Json document = map.point_document(0);
   set_at_path(document, parameter, p);
   set_at_path(document, speed, v);
-  const StabilityMap map_kind;
-  return map_kind.run_point(document, {})[0].get<double>();
+  return stability_map_kind()->run_point(document, {})[0].get<double>();
 }
 
 // Bisection on the growth rate's sign between a stable and an unstable value.
@@ -330,7 +334,7 @@ TEST(StabilityLobesAccuracy, SingleModeLobeMinimaMatchTheClassicalFormula) {
     Json document = map.point_document(0);
     set_at_path(document, kw_path, factor * kw_min);
     set_at_path(document, speed_path, speeds[1]);
-    const std::vector<Json> row = StabilityMap{}.run_point(document, {});
+    const std::vector<Json> row = stability_map_kind()->run_point(document, {});
     const double sigma = row[0].get<double>(), f = row[1].get<double>();
     if (factor == 1.0) {
       EXPECT_NEAR(sigma, 0.0, 1e-6);

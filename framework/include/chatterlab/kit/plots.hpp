@@ -5,6 +5,7 @@
 // two), which is what a kind's write_artifacts mostly needs.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,6 +40,10 @@ class Figures {
  private:
   std::string errors_;
 };
+
+// Runs every figure-drawing action (stem, action) the same way: all run, the failures are
+// reported together in one PlotError.
+void render_all(const std::vector<std::pair<std::string, std::function<void()>>>& figures);
 
 // The study's name for plot titles: [study] name, else the study file's stem.
 std::string study_title(const Json& document, const std::filesystem::path& study_file);

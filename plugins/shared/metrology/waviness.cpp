@@ -1,0 +1,204 @@
+#include "shared/metrology/waviness.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+
+#include "chatterlab/fft.hpp"
+
+namespace chatterlab::surface {
+namespace {
+
+enum class Phase { none, peak, valley };
+
+struct PhaseExtreme {
+  Phase kind;
+  double extreme;
+  bool started_by_transition;
+  std::size_t first, last;  // first and last sample beyond the height discrimination
+  double up_crossing;       // peaks: the mean-line up-crossing that starts them (-1: none)
+};
+
+struct AmplitudeMoments {
+  double Wa = 0, Wq = 0, Wp = 0, Wv = 0, Wsk = 0, Wku = 0;
+};
+
+AmplitudeMoments amplitude_moments(const double* w, std::size_t n) {
+  AmplitudeMoments m;
+  double s1 = 0, s2 = 0, s3 = 0, s4 = 0, hi = w[0], lo = w[0];
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v = w[i], v2 = v * v;
+    s1 += std::abs(v);
+    s2 += v2;
+    s3 += v2 * v;
+    s4 += v2 * v2;
+    hi = std::max(hi, v);
+    lo = std::min(lo, v);
+  }
+  const double count = static_cast<double>(n);
+  m.Wa = s1 / count;
+  m.Wq = std::sqrt(s2 / count);
+  m.Wp = hi;
+  m.Wv = -lo;
+  if (m.Wq > 0) {
+    m.Wsk = s3 / count / (m.Wq * m.Wq * m.Wq);
+    m.Wku = s4 / count / (m.Wq * m.Wq * m.Wq * m.Wq);
+  }
+  return m;
+}
+
+}  // namespace
+
+ProfileElements profile_elements(const std::vector<double>& w, double height_discrimination,
+                                 bool closed, double width_discrimination) {
+  ProfileElements out;
+  if (w.size() < 3) return out;
+  std::vector<double> y = w;
+  if (closed) {
+    // Start at the deepest valley and close the loop with it: every phase is then complete.
+    std::rotate(y.begin(), std::min_element(y.begin(), y.end()), y.end());
+    y.push_back(y.front());
+  }
+  const double h = height_discrimination;
+  std::vector<PhaseExtreme> phases;
+  std::size_t last_significant = 0;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    const Phase cls = y[i] > h ? Phase::peak : (y[i] < -h ? Phase::valley : Phase::none);
+    if (cls == Phase::none) continue;
+    if (phases.empty()) {
+      phases.push_back({cls, y[i], false, i, i, -1.0});
+    } else if (phases.back().kind == cls) {
+      PhaseExtreme& p = phases.back();
+      p.extreme = cls == Phase::peak ? std::max(p.extreme, y[i]) : std::min(p.extreme, y[i]);
+      p.last = i;
+    } else {
+      double crossing = -1.0;
+      if (cls == Phase::peak) {
+        // The mean-line up-crossing closest to this peak phase.
+        for (std::size_t j = i; j > last_significant; --j) {
+          if (y[j - 1] < 0 && y[j] >= 0) {
+            crossing = static_cast<double>(j - 1) + y[j - 1] / (y[j - 1] - y[j]);
+            break;
+          }
+        }
+      }
+      phases.push_back({cls, y[i], true, i, i, crossing});
+    }
+    last_significant = i;
+  }
+  // Width discrimination: a peak or valley narrower than the limit, between two others, is no
+  // element of its own: its neighbours (of the other kind) join across it.
+  std::vector<PhaseExtreme> kept;
+  for (const PhaseExtreme& p : phases) {
+    if (kept.size() >= 2 && kept.back().started_by_transition &&
+        static_cast<double>(kept.back().last - kept.back().first + 1) < width_discrimination) {
+      kept.pop_back();
+      PhaseExtreme& joined = kept.back();
+      joined.extreme = p.kind == Phase::peak ? std::max(joined.extreme, p.extreme)
+                                             : std::min(joined.extreme, p.extreme);
+      joined.last = p.last;
+      continue;
+    }
+    kept.push_back(p);
+  }
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    if (kept[k].kind == Phase::peak && kept[k].up_crossing >= 0)
+      out.up_crossings.push_back(kept[k].up_crossing);
+    if (k + 1 < kept.size() && kept[k].kind == Phase::peak && kept[k].started_by_transition)
+      out.wave_heights.push_back(kept[k].extreme - kept[k + 1].extreme);
+  }
+  return out;
+}
+
+double mean_of_five_largest(std::vector<double> heights) {
+  if (heights.empty()) return 0.0;
+  const std::size_t count = std::min<std::size_t>(5, heights.size());
+  std::partial_sort(heights.begin(), heights.begin() + static_cast<std::ptrdiff_t>(count),
+                    heights.end(), std::greater<>());
+  double sum = 0;
+  for (std::size_t i = 0; i < count; ++i) sum += heights[i];
+  return sum / static_cast<double>(count);
+}
+
+WavinessParameters waviness_parameters(const std::vector<double>& w, double spacing, bool closed,
+                                       int sampling_lengths, double width_discrimination) {
+  if (w.size() < 4) throw std::invalid_argument("waviness_parameters: fewer than 4 samples");
+  WavinessParameters p;
+  const std::size_t n = w.size();
+  const std::size_t parts = std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, sampling_lengths)), 1, n / 4);
+  for (std::size_t k = 0; k < parts; ++k) {
+    const std::size_t from = k * n / parts, to = (k + 1) * n / parts;
+    const AmplitudeMoments m = amplitude_moments(w.data() + from, to - from);
+    p.Wa += m.Wa;
+    p.Wq += m.Wq;
+    p.Wp += m.Wp;
+    p.Wv += m.Wv;
+    p.Wz += m.Wp + m.Wv;
+    p.Wsk += m.Wsk;
+    p.Wku += m.Wku;
+  }
+  const double count = static_cast<double>(parts);
+  for (double* v : {&p.Wa, &p.Wq, &p.Wp, &p.Wv, &p.Wz, &p.Wsk, &p.Wku}) *v /= count;
+  const auto [lo, hi] = std::minmax_element(w.begin(), w.end());
+  p.Wt = *hi - *lo;
+
+  const ProfileElements elements = profile_elements(w, 0.1 * p.Wz, closed, width_discrimination);
+  const auto& up = elements.up_crossings;
+  if (closed && !up.empty()) {
+    p.WSm = static_cast<double>(n) * spacing / static_cast<double>(up.size());
+  } else if (up.size() >= 2) {
+    p.WSm = (up.back() - up.front()) / static_cast<double>(up.size() - 1) * spacing;
+  }
+  p.wave_count = elements.wave_heights.size();
+  p.Wz_five = mean_of_five_largest(elements.wave_heights);
+  return p;
+}
+
+std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_speed_rpm,
+                                          std::size_t samples_per_rev) {
+  const double z = wheel_speed_rpm / work_speed_rpm;
+  const double nyquist = std::floor(static_cast<double>(samples_per_rev) / 2);
+  UprBand low{std::max(2.0, std::round(z / 2)), std::min(nyquist, std::round(1.5 * z))};
+  UprBand high{low.to_upr + 1, nyquist};
+  return {low, high};
+}
+
+std::vector<double> band_limited(const std::vector<double>& closed_profile, UprBand band) {
+  RealFft fft(closed_profile.size());
+  auto spectrum = fft.forward(closed_profile);
+  for (std::size_t k = 0; k < spectrum.size(); ++k) {
+    const double upr = static_cast<double>(k);
+    if (upr < std::max(2.0, band.from_upr) || upr > band.to_upr) spectrum[k] = 0.0;
+  }
+  return fft.inverse(spectrum);
+}
+
+BandWaviness band_waviness(const std::vector<double>& closed_profile, UprBand band,
+                           double work_speed_rpm) {
+  const std::size_t n = closed_profile.size();
+  BandWaviness out;
+  out.band = {std::max(2.0, band.from_upr),
+              std::min(band.to_upr, std::floor(static_cast<double>(n) / 2))};
+  const std::vector<double> limited = band_limited(closed_profile, out.band);
+  // Dominant bin: amplitude of a cosine of k lobes is 2 |X_k| / N (|X_k| / N at Nyquist).
+  RealFft fft(n);
+  const auto spectrum = fft.forward(limited);
+  for (std::size_t k = 0; k < spectrum.size(); ++k) {
+    const double scale = (2 * k == n ? 1.0 : 2.0) / static_cast<double>(n);
+    const double amplitude = scale * std::abs(spectrum[k]);
+    if (amplitude > out.dominant_amplitude) {
+      out.dominant_amplitude = amplitude;
+      out.dominant_upr = static_cast<double>(k);
+    }
+  }
+  out.dominant_frequency_hz = out.dominant_upr * work_speed_rpm / 60.0;
+  // Elements of the band-limited profile: 10 % of its peak-to-valley height as discrimination.
+  const auto [lo, hi] = std::minmax_element(limited.begin(), limited.end());
+  const ProfileElements elements = profile_elements(limited, 0.1 * (*hi - *lo), true);
+  out.wave_count = elements.wave_heights.size();
+  out.Wz = mean_of_five_largest(elements.wave_heights);
+  return out;
+}
+
+}  // namespace chatterlab::surface
