@@ -5,7 +5,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/planner/plan.hpp"
@@ -52,7 +54,11 @@ TEST(FeedPlanStudy, WritesAPlanThatReadsBack) {
   swept["plan"]["wear_sweep_amplitude_mm"] = 5.0;
   swept["plan"]["wear_sweep_period_mm"] = 20.0;
   instance->run_point(swept, context);
-  const auto sweep = sweep_function({"triangle", 5.0, 20.0, 5}, 0.0);
+  // The P6 triangle sweep written out: amplitude 5 mm, 20 mm of x per cycle, from 0 rising.
+  auto sweep = [](double x) {
+    const double phase = std::fmod(x / 20.0 + 0.25, 1.0);
+    return 5.0 * (phase < 0.5 ? 4 * phase - 1 : 3 - 4 * phase);
+  };
   for (bool with_segments_csv : {true, false}) {
     if (!with_segments_csv) fs::remove(context.artifact_dir / "segments.csv");
     const SavedPlan saved_swept = read_saved_plan(context.artifact_dir);
