@@ -35,8 +35,9 @@ awk -v f="$fitted" -v r="$root" 'BEGIN { d = f - r; if (d < 0) d = -d; exit !(f 
 expect_plots "$out" growth_along_x waviness_along_x amplification_over_time
 for f in segments.csv along_x.csv summary.json; do [ -s "$out/$f" ] || fail "$f missing"; done
 
-# ---- a second model with the process-conditions capability: plunge_with_penetration_damping.
-# kd = 0 is G1 (the same growth rate and ln A); kd = 2000 N s/m damps the work chain (slower growth).
+# ---- a second model with the process-conditions capability: plunge_with_penetration_damping
+# (roots only: it has no time-domain form). kd = 0 is G1 (the same growth rate and ln A to 1e-9);
+# kd = 2000 N s/m damps the work chain (slower growth).
 pd() {  # pd NAME KD
   sed -e 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' \
       -e "s/^wheel_regeneration = false/wheel_regeneration = false\npenetration_damping_n_s_per_m = $2/" \
@@ -134,6 +135,9 @@ without_plan_tables() { sed '/^\[machine\]/,/^thickness_mm/d' "$study"; }
 # A model whose parameters do not follow the process conditions (no ProcessConditionsModel).
 sed -e '/^\[model\]/,/^wheel_regeneration/c\[model]\ntype = "linear_dde"\na0 = [[0.0, 1.0], [-1.3, -0.1]]' "$study" >"$work/model_mismatch.toml"
 bad model_mismatch 'model.type = "linear_dde": feed_risk needs a model whose parameters follow the process conditions'
+# plunge_with_penetration_damping has roots but no time-domain form: the simulation must be off.
+sed 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' "$study" >"$work/pd_simulated.toml"
+bad pd_simulated 'the model has no time-domain form, so feed_risk cannot simulate along the plan'
 
 { without_plan_tables; echo "plan_dir = \"$work/no_such_plan\""; } >"$work/missing_plan.toml"
 bad missing_plan "cannot open (a saved feed plan needs summary.json)"

@@ -327,35 +327,3 @@ TEST(Wear, TriangleSweepDwellsUniformlySineAtTheEdges) {
 
 }  // namespace
 }  // namespace chatterlab::planner
-
-namespace chatterlab::planner {
-namespace {
-
-// [part] points_file: problem 1's parabola sampled every 10 mm; the natural spline through it
-// plans like the expression (3000 s, certified) and a table with x not increasing is refused.
-TEST(FeedPlanStudy, PointTableGeneratrix) {
-  TempDir dir;
-  std::string points = "x_mm,y_mm\n";
-  for (int i = 0; i <= 60; ++i) {
-    const double x = 10.0 * i;
-    points += fmt::format("{},{}\n", x, -7.0 / 18000 * (600 - x) * (600 - x) + 0.45 * (600 - x));
-  }
-  dir.write("points.csv", points);
-  std::string text = study_text;
-  text = replace(text, "generatrix = \"30*exp(-x/400)*sin((x + 25*_pi)/100) + 130\"\nx_range_mm = [0.0, 600.0]",
-                 "points_file = \"points.csv\"");
-  text = replace(text, "type = \"profiled\"", "type = \"cylindrical\"");
-  const Study study = chatterlab::testing::load_text(dir, text);
-  auto kind = study_kind_registry().at("feed_plan").create(ParamValues());
-  const auto values = kind->run_point(study.document, PointContext{0, 1, {}, false});
-  EXPECT_NEAR(values[0].get<double>(), 3000.0, 1e-6);
-  EXPECT_EQ(values.back(), Json(true));
-  EXPECT_LT(values[4].get<double>(), 0.005);
-  dir.write("points.csv", "x_mm,y_mm\n0,130\n10,131\n10,132\n20,133\n");
-  const std::string message = chatterlab::testing::load_error(dir, text);
-  EXPECT_NE(message.find("part.points_file"), std::string::npos) << message;
-  EXPECT_NE(message.find("x must increase strictly"), std::string::npos) << message;
-}
-
-}  // namespace
-}  // namespace chatterlab::planner

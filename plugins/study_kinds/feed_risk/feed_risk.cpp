@@ -45,19 +45,38 @@ void append_cells(const Json& v, double tolerance, std::vector<long long>& key) 
   }
 }
 
+// The [model] table: the model's type and its parameters.
+Json with_type(const Json& model_table, const Json& parameters) {
+  Json t = Json{{"type", model_table.at("type")}};
+  t.update(parameters);
+  return t;
+}
+
 Grouping group_items(const Json& model_table, const ProcessSettings& p, const std::vector<SegmentProcess>& items,
                      double tolerance) {
+  const ProcessConditionsModel& process = process_model(p);
+  const ProcessConditions reference = reference_conditions(p);
+  ProcessScaling scaling;
+  scaling.speed_dependent_stiffness = p.speed_scaling;
+  auto parameters_of = [&](std::size_t i) {
+    return process.parameters_at(reference, segment_conditions(p, items[i]), scaling);
+  };
+  // The keys in parallel (a plan's candidates rate ~10^5 segments; parameters_at is const), then
+  // the groups in item order, so the representatives are those of a serial pass.
+  std::vector<std::vector<long long>> keys(items.size());
+  const auto n = static_cast<long>(items.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    append_cells(parameters_of(u), tolerance, keys[u]);
+  }
   Grouping g;
   std::map<std::vector<long long>, std::size_t> cells;
-  std::vector<long long> key;
   for (std::size_t i = 0; i < items.size(); ++i) {
-    Json table = segment_model_table(model_table, p, items[i]);
-    key.clear();
-    append_cells(table, tolerance, key);
-    auto [it, inserted] = cells.emplace(key, g.representative.size());
+    auto [it, inserted] = cells.emplace(std::move(keys[i]), g.representative.size());
     if (inserted) {
       g.representative.push_back(i);
-      g.tables.push_back(std::move(table));
+      g.tables.push_back(with_type(model_table, parameters_of(i)));
     }
     g.group_of_item.push_back(it->second);
   }
@@ -177,9 +196,7 @@ namespace {
 Json model_table_at(const Json& model_table, const ProcessSettings& p, const ProcessConditions& conditions) {
   ProcessScaling scaling;
   scaling.speed_dependent_stiffness = p.speed_scaling;
-  Json t = Json{{"type", model_table.at("type")}};
-  t.update(process_model(p).parameters_at(reference_conditions(p), conditions, scaling));
-  return t;
+  return with_type(model_table, process_model(p).parameters_at(reference_conditions(p), conditions, scaling));
 }
 
 }  // namespace

@@ -440,16 +440,20 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
 
 // ------------------------------------------------------------------ validation steps
 
-// [model]: any model whose parameters follow the process conditions, with roots and a time-domain
-// form.
-Json validate_feed_risk_model(const Json& document, const SourceMap& sources) {
+// [model]: any model whose parameters follow the process conditions and that has roots; a
+// time-domain form too when the simulation along the plan is on.
+Json validate_feed_risk_model(const Json& document, bool simulate, const SourceMap& sources) {
   Json model = validate_component(document, "model", model_registry(), sources);
   auto built = kit::build_model(model);
-  if (!built->process_conditions() || !built->characteristic() || !built->time_domain())
+  if (!built->process_conditions() || !built->characteristic())
     throw InputError(fmt::format(
         "{}: model.type = \"{}\": feed_risk needs a model whose parameters follow the process conditions "
-        "(the ProcessConditionsModel capability: plunge_regenerative, plunge_with_penetration_damping), "
-        "with a characteristic function and a time-domain form",
+        "(the ProcessConditionsModel capability: plunge_regenerative, plunge_with_penetration_damping) "
+        "and a characteristic function", sources.locate("model.type").str(), model["type"].get<std::string>()));
+  if (simulate && !built->time_domain())
+    throw InputError(fmt::format(
+        "{}: model.type = \"{}\": the model has no time-domain form, so feed_risk cannot simulate along the "
+        "plan: set [feed_risk.simulation] enabled = false (the roots need none)",
         sources.locate("model.type").str(), model["type"].get<std::string>()));
   return model;
 }
@@ -864,15 +868,13 @@ PluginInfo FeedRiskKind::info() {
 }
 
 void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
-  Json model = validate_feed_risk_model(document, sources);
-  const kit::StabilitySettings stability =
-      kit::validate_settings(document, "stability", kit::stability_settings_table(), sources);
-  (void)stability;
   if (!document.contains("feed_risk") || !document["feed_risk"].is_object())
     throw InputError(fmt::format("{}: missing table [feed_risk] (the feed_risk study needs it)",
                                  sources.locate("study").str()));
   // Also [feed_risk.simulation] (defaults filled in) and [feed_risk.optimise] (null if absent).
   FeedRiskSettings fr = kit::validate_settings(document, "feed_risk", feed_risk_table(), sources);
+  Json model = validate_feed_risk_model(document, fr.simulation.enabled, sources);
+  kit::validate_settings(document, "stability", kit::stability_settings_table(), sources);
   // The plan: saved, or planned here from the feed_plan tables.
   const auto [machine, wheel] = fr.plan_dir ? validate_saved_plan(document, fr, sources)
                                             : validate_planned(document, sources);
