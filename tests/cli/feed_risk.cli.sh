@@ -136,7 +136,8 @@ without_plan_tables() { sed '/^\[machine\]/,/^thickness_mm/d' "$study"; }
 sed -e '/^\[model\]/,/^wheel_regeneration/c\[model]\ntype = "linear_dde"\na0 = [[0.0, 1.0], [-1.3, -0.1]]' "$study" >"$work/model_mismatch.toml"
 bad model_mismatch 'model.type = "linear_dde": feed_risk needs a model whose parameters follow the process conditions'
 # plunge_with_penetration_damping has roots but no time-domain form: the simulation must be off.
-sed 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' "$study" >"$work/pd_simulated.toml"
+sed -e 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' \
+    -e 's/^wheel_regeneration = false/wheel_regeneration = false\npenetration_damping_n_s_per_m = 0.0/' "$study" >"$work/pd_simulated.toml"
 bad pd_simulated 'the model has no time-domain form, so feed_risk cannot simulate along the plan'
 
 { without_plan_tables; echo "plan_dir = \"$work/no_such_plan\""; } >"$work/missing_plan.toml"
