@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "chatterlab/study.hpp"
-#include "feed_risk/feed_risk_kind.hpp"
+#include "study_kinds/feed_risk/feed_risk_kind.hpp"
 
 namespace {
 

@@ -35,6 +35,23 @@ awk -v f="$fitted" -v r="$root" 'BEGIN { d = f - r; if (d < 0) d = -d; exit !(f 
 expect_plots "$out" growth_along_x waviness_along_x amplification_over_time
 for f in segments.csv along_x.csv summary.json; do [ -s "$out/$f" ] || fail "$f missing"; done
 
+# ---- a second model with the process-conditions capability: plunge_with_penetration_damping
+# (roots only: it has no time-domain form). kd = 0 is G1 (the same growth rate and ln A to 1e-9);
+# kd = 2000 N s/m damps the work chain (slower growth).
+pd() {  # pd NAME KD
+  sed -e 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' \
+      -e "s/^wheel_regeneration = false/wheel_regeneration = false\npenetration_damping_n_s_per_m = $2/" \
+      "$src/studies/feed_risk_constant.toml" >"$work/$1.toml"
+  printf '[feed_risk.simulation]\nenabled = false\n' >>"$work/$1.toml"
+  expect_exit 0 "$work/$1" "$bin" run "$work/$1.toml" --out "$work/$1_out"
+}
+pd pd0 0.0
+close_to "$(csv_column "$work/pd0_out/results.csv" max_growth_rate_per_s)" "$root" 1e-9 || fail "kd = 0: growth vs G1 $root"
+close_to "$(csv_column "$work/pd0_out/results.csv" final_log_amplification)" "$log_a" 1e-9 || fail "kd = 0: ln A vs G1"
+pd pd2000 2000.0
+awk -v g="$(csv_column "$work/pd2000_out/results.csv" max_growth_rate_per_s)" -v r="$root" 'BEGIN { exit !(g < r - 1e-3) }' ||
+  fail "kd = 2000: growth not below G1's $root"
+
 # ---- saved plan (plan_dir) gives the same risk as the plan made in the study
 expect_exit 0 "$work/plan" "$bin" run <(sed -e 's/kind = "feed_risk"/kind = "feed_plan"/' -e '/^\[model\]/,/^wheel_regeneration/d' -e '/^\[feed_risk\]/,$d' "$src/studies/feed_risk_constant.toml") --out "$work/saved_plan"
 saved="$work/saved.toml"
@@ -101,7 +118,7 @@ grep -q '^notice: no stable candidate: every spindle speed in \[250, 300\] rpm' 
   fail "problem 2: no notice on the terminal: $(cat "$work/p2.out")"
 grep -q '"exact_speed_ratio": "5/1"' "$s" || fail "problem 2: 290 rpm's exact ratio not reported"
 grep -q '"plan_written": false' "$s" || fail "problem 2: plan_written"
-[ "$(grep -c '"lever":' "$s")" = 5 ] || fail "problem 2: not five levers"
+[ "$(grep -c '"lever":' "$s")" = 4 ] || fail "problem 2: not four levers (width, work speed, wheel speed, depth of cut)"
 grep -q 'Levers at the worst segment: width of cut' "$work/p2.out" || fail "problem 2: levers not on the terminal"
 grep -q '"speed_tolerance": 0.005' "$s" || fail "problem 2: speed tolerance not reported"
 expect_plots "$work/p2_out" growth_along_x waviness_along_x amplification_over_time optimisation before_after
@@ -115,9 +132,14 @@ bad() {  # bad NAME EXPECTED_TEXT: runs $work/NAME.toml
 }
 study="$src/studies/feed_risk_constant.toml"
 without_plan_tables() { sed '/^\[machine\]/,/^thickness_mm/d' "$study"; }
-# A model without the G1 parameters the process model writes.
+# A model whose parameters do not follow the process conditions (no ProcessConditionsModel).
 sed -e '/^\[model\]/,/^wheel_regeneration/c\[model]\ntype = "linear_dde"\na0 = [[0.0, 1.0], [-1.3, -0.1]]' "$study" >"$work/model_mismatch.toml"
-bad model_mismatch "plan/model mismatch: .* has no 'wheel_speed_rpm'"
+bad model_mismatch 'model.type = "linear_dde": feed_risk needs a model whose parameters follow the process conditions'
+# plunge_with_penetration_damping has roots but no time-domain form: the simulation must be off.
+sed -e 's/^type = "plunge_regenerative"/type = "plunge_with_penetration_damping"/' \
+    -e 's/^wheel_regeneration = false/wheel_regeneration = false\npenetration_damping_n_s_per_m = 0.0/' "$study" >"$work/pd_simulated.toml"
+bad pd_simulated 'the model has no time-domain form, so feed_risk cannot simulate along the plan'
+
 { without_plan_tables; echo "plan_dir = \"$work/no_such_plan\""; } >"$work/missing_plan.toml"
 bad missing_plan "cannot open (a saved feed plan needs summary.json)"
 mkdir -p "$work/half_plan" && cp "$work/saved_plan/summary.json" "$work/half_plan/"

@@ -48,9 +48,23 @@ struct ToolInPart {
   double x_mm = 0.0, y_mm = 0.0, radius_mm = 0.0;
 };
 
+// Capability of a machine that grinds cams (MODELS.md K2): the part turns on a rotary axis and a
+// slide keeps the wheel on the profile's tangent point, so the motors() are exactly two, in this
+// order: the rotary axis (positions in degrees, a plan unwraps them) and the slide (mm). The
+// cam_plan kind takes any machine that declares it (Kinematics::cam_grinding()), not a name.
+class CamGrindingMachine {
+ public:
+  virtual ~CamGrindingMachine() = default;
+  // Radius of the wheel disc (concave parts of a cam narrower than it are gouged).
+  virtual double wheel_radius_mm() const = 0;
+};
+
 class Kinematics {
  public:
   virtual ~Kinematics() = default;
+
+  // Typed capabilities (a plugin that has one derives from it and returns `this`).
+  virtual const CamGrindingMachine* cam_grinding() const { return nullptr; }
 
   // The motor-driven axes, in the order inverse()/forward() use.
   virtual std::vector<MotorAxis> motors() const = 0;

@@ -1,4 +1,4 @@
-#include "planner/parametric_spline.hpp"
+#include "chatterlab/planner/parametric_spline.hpp"
 
 #include <Eigen/Dense>
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
 // Cumulative-chord parametric cubic splines (MODELS.md K1) and the cam fit with adaptive point
 // insertion (K3) on the lift table of seed 002 (tests/data/planner/cam_lift_table.csv).
-#include "planner/parametric_spline.hpp"
+#include "chatterlab/planner/parametric_spline.hpp"
 
 #include <gtest/gtest.h>
 

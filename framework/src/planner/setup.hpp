@@ -10,6 +10,7 @@
 
 #include "chatterlab/kinematics.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/planner/feed_planning.hpp"
 #include "planner/scheduler.hpp"
 #include "planner/smoothing_spline.hpp"
 #include "planner/tolerance.hpp"
@@ -17,14 +18,6 @@
 #include "planner/wheel_limits.hpp"
 
 namespace chatterlab::planner {
-
-// A real parameter > 0 (the planner kinds' settings).
-inline ParamSpec positive_spec(std::string key, std::string unit, std::string description) {
-  ParamSpec spec = param_spec(std::move(key), ValueKind::real, std::move(unit), std::move(description));
-  spec.min = 0.0;
-  spec.min_exclusive = true;
-  return spec;
-}
 
 // Keys of [machine] that the planner (not the kinematics plugin) owns.
 inline constexpr const char* machine_constraint_keys[] = {
@@ -56,7 +49,6 @@ struct PartGeometry {
   std::optional<SmoothingSpline> fit;            // smoothed tables
 };
 PartGeometry build_part(const Json& part);
-std::unique_ptr<Generatrix> build_generatrix(const Json& part);  // build_part(part).generatrix
 FeedConstraints build_constraints(const Json& machine, const Json& plan,
                                   const Kinematics& kinematics);
 WheelSection build_wheel(const Json& wheel);

@@ -18,7 +18,7 @@
 #include "chatterlab/study_kind.hpp"
 #include "planner/controller_export.hpp"
 #include "planner/plan_io.hpp"
-#include "planner/planner_test_support.hpp"
+#include "unit/planner_test_support.hpp"
 #include "planner/setup.hpp"
 #include "planner/tolerance.hpp"
 #include "planner/wheel_limits.hpp"

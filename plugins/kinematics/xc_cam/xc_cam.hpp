@@ -14,7 +14,7 @@
 
 namespace chatterlab {
 
-class XcCam final : public Kinematics {
+class XcCam final : public Kinematics, public CamGrindingMachine {
  public:
   static PluginInfo info();
   explicit XcCam(const ParamValues& params);
@@ -24,6 +24,9 @@ class XcCam final : public Kinematics {
   void inverse(const CurvePoint& target, const ToolContact& contact,
                std::span<double> positions) const override;
   ToolInPart forward(std::span<const double> positions, const ToolContact& contact) const override;
+
+  const CamGrindingMachine* cam_grinding() const override { return this; }
+  double wheel_radius_mm() const override { return wheel_radius_mm_; }
 
  private:
   double wheel_radius_mm_;

@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "chatterlab/dynamics.hpp"
+#include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/process_conditions.hpp"
 #include "chatterlab/planner/generatrix.hpp"
 #include "chatterlab/planner/plan.hpp"
 
@@ -20,17 +22,15 @@ namespace chatterlab::feed_risk {
 
 // ------------------------------------------------------------------ process model (docs 1)
 
-// What the process model needs besides the plan. The [model]'s kc, kg, kw hold at the reference
-// contact width and the reference work surface speed (reference radius at the model's
-// work_speed_rpm, wheel at wheel_speed_rpm); structural modes do not change along the plan.
+// What the process model needs besides the plan. The [model]'s own parameters hold at its nominal
+// speeds (ProcessConditionsModel::nominal_conditions), the reference contact width and the
+// reference work radius; the model maps every segment's conditions to its parameters through its
+// process-conditions capability (chatterlab/process_conditions.hpp), so any model that declares it
+// works, and the structural modes do not change along the plan.
 struct ProcessSettings {
+  std::shared_ptr<const Model> model;  // built once from [model]; must have process_conditions()
   double reference_contact_width_mm = 0.0;
   double reference_work_radius_mm = 0.0;
-  double reference_work_speed_rpm = 0.0;   // [model] work_speed_rpm
-  double reference_wheel_speed_rpm = 0.0;  // [model] wheel_speed_rpm
-  double reference_contact_stiffness_n_per_m = 0.0;       // kc at the reference
-  double reference_wheel_wear_stiffness_n_per_m = 0.0;    // kg
-  double reference_work_removal_stiffness_n_per_m = 0.0;  // kw
   double wheel_speed_rpm = 0.0;    // along the plan (default: the model's)
   double wheel_diameter_mm = 0.0;  // [wheel] diameter_mm
   bool profiled_wheel = false;
@@ -41,7 +41,11 @@ struct ProcessSettings {
   bool speed_scaling = true;               // G4: kw ~ Kv/(1+Kv), kg ~ 1/(1+Kv)
 };
 
-// One segment's process quantities and G1 parameters.
+// The model's process-conditions capability; throws std::invalid_argument naming the model's
+// failing when it has none (the kind refuses such a model at validation).
+const ProcessConditionsModel& process_model(const ProcessSettings& p);
+
+// One segment's process quantities (its model parameters: segment_model_table).
 struct SegmentProcess {
   double x_mid_mm = 0.0, radius_mm = 0.0;
   double work_speed_rpm = 0.0;
@@ -52,8 +56,6 @@ struct SegmentProcess {
   double contact_width_mm = 0.0;            // engaged width on the wheel (axial)
   double axial_feed_per_rev_mm = 0.0;       // f_a = v_axial 60 / n_w
   double overlap_ratio = 0.0;               // 1 - f_a / b: regenerated share of the width
-  double contact_stiffness_n_per_m = 0.0, wheel_wear_stiffness_n_per_m = 0.0,
-         work_removal_stiffness_n_per_m = 0.0;
 };
 
 // Engaged axial width of the wheel section on the part: the chord where the section, tangent at
@@ -65,7 +67,12 @@ double contact_width_mm(const ProcessSettings& p, const planner::GeneratrixValue
 SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentConditions& c,
                            const planner::Generatrix& generatrix);
 
-// The [model] table with one segment's G1 parameters written in.
+// The reference conditions (at which the model's own parameters hold) and one segment's.
+ProcessConditions reference_conditions(const ProcessSettings& p);
+ProcessConditions segment_conditions(const ProcessSettings& p, const SegmentProcess& s);
+
+// The [model] table (with its type) at one segment's conditions: ProcessConditionsModel::
+// parameters_at of the study's model.
 Json segment_model_table(const Json& model_table, const ProcessSettings& p, const SegmentProcess& s);
 
 // ------------------------------------------------------------------ risk along the plan (2a)
@@ -236,24 +243,26 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
 
 // ------------------------------------------------------------------ levers (issue 19: true advice)
 
-// What would make one segment's conditions stable: the growth rate's sensitivity to a process or
-// machine quantity, the relative change that a linear extrapolation says reaches the target
-// growth rate, and the growth rate actually computed at that change (stability lobes make the
-// speeds' response anything but linear, so the check decides, not the extrapolation).
+// What would make one segment's conditions stable: the growth rate's sensitivity to a process
+// condition, the relative change that a linear extrapolation says reaches the target growth rate,
+// and the growth rate actually computed at that change (stability lobes make the speeds' response
+// anything but linear, so the check decides, not the extrapolation).
 struct Lever {
   std::string name;        // e.g. "width of cut"
-  std::string acts_on;     // the G1 quantities it scales
+  std::string acts_on;     // the process condition it changes
   double growth_per_unit_log = 0.0;  // d Re s / d ln(quantity) [1/s]
   std::optional<double> change_percent;  // the change tried (none: no effect in the model)
   double growth_rate_after_per_s = 0.0;  // rightmost root with that change
   bool reaches_target = false;
 };
 
-// The levers at a segment's G1 table (segment_model_table): width of cut (kc, kg, kw together),
-// contact stiffness, structural damping, work speed and wheel speed, each tried up to a factor
-// max_factor either way. target_growth_per_s < 0 is the growth rate to reach; growth rates are the
-// worst over work speeds n (1 +- speed_tolerance), as the re-plan rates its candidates.
-std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
-                                    double speed_tolerance, double max_factor = 3.0);
+// The levers at a segment's conditions: width of cut, work speed, wheel speed and depth of cut,
+// each changed through the model's process-conditions capability (what the model's parameters
+// do with it is the model's business) up to a factor max_factor either way. target_growth_per_s
+// < 0 is the growth rate to reach; growth rates are the worst over work speeds n (1 +-
+// speed_tolerance), as the re-plan rates its candidates.
+std::vector<Lever> stability_levers(const Json& model_table, const ProcessSettings& p, const SegmentProcess& segment,
+                                    const RootSettings& roots, double target_growth_per_s, double speed_tolerance,
+                                    double max_factor = 3.0);
 
 }  // namespace chatterlab::feed_risk

@@ -2,7 +2,7 @@
 // Study kind `cam_plan` ([study] kind = "cam_plan"): X-C grinding of a cam from its lift table
 // (MODELS.md K): closed cumulative-chord spline through chosen table rows (K1), adaptive insertion
 // of rows until every row is fitted within a target (K3), tangent-point tracking on an X-C machine
-// (K2, kinematics plugin xc_cam), integer pulses per motor per segment, replayed profile error.
+// (K2, on any machine that declares the cam-grinding capability, e.g. xc_cam), integer pulses per motor per segment, replayed profile error.
 // User documentation: docs/planner.md, section "Cams".
 #include <filesystem>
 #include <string>

@@ -1,15 +1,12 @@
-#include "planner/feed_plan.hpp"
+#include "chatterlab/planner/feed_planning.hpp"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "chatterlab/errors.hpp"
-#include "chatterlab/output_files.hpp"
-#include "chatterlab/plot.hpp"
+#include "chatterlab/study_kind.hpp"
 #include "planner/plan_io.hpp"
 #include "planner/replay.hpp"
 #include "planner/setup.hpp"
@@ -17,8 +14,6 @@
 namespace chatterlab::planner {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 ParamSpec positive(std::string key, std::string unit, std::string description) {
   return positive_spec(std::move(key), std::move(unit), std::move(description));
@@ -228,19 +223,9 @@ void check_wheel_fits(const Json& wheel, const Json& part, const SourceMap& sour
         hit.contacts_with_interference));
 }
 
-constexpr const char* columns[] = {"total_time_s", "lower_bound_s", "gap_percent", "segments",
-                                   "max_profile_error_mm", "rms_profile_error_mm",
-                                   "max_edge_radius_mm", "certified"};
-
 }  // namespace
 
-PluginInfo FeedPlanKind::info() {
-  PluginInfo info;
-  info.name = "feed_plan";
-  info.description =
-      "certified time-optimal stepper pulse schedule for a solid of revolution, with replayed "
-      "profile error, wheel limits and wear distribution";
-  info.models_md_ids = "P1-P8";
+std::vector<ParamSpec> feed_plan_settings_specs() {
   ParamSpec length = positive("segment_length_mm", "mm",
                               "longest plan segment along x; shorter where the tolerance needs "
                               "(default: 1 s at the axial-speed bound)");
@@ -268,17 +253,14 @@ PluginInfo FeedPlanKind::info() {
   steps.min = 2;
   steps.max = 1000;
   steps.default_value = 5;
-  info.params = {length, tolerance, shortest, start_stop, sweep, amplitude, period, steps, tick};
-  info.thread_safety = ThreadSafety::copy_per_thread;
-  info.example_params = {{"segment_length_mm", 0.2}};
-  return info;
+  return {length, tolerance, shortest, start_stop, sweep, amplitude, period, steps, tick};
 }
 
-void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
+void validate_feed_plan_tables(Json& document, const SourceMap& sources) {
   Json machine = validate_machine(document, sources);
   Json part = validate_part(document, sources);
   Json wheel = validate_params(require_table(document, "wheel", sources), wheel_specs(), "wheel", sources);
-  Json plan = validate_params(table_or_empty(document, "plan", sources), info().params, "plan", sources);
+  Json plan = validate_params(table_or_empty(document, "plan", sources), feed_plan_settings_specs(), "plan", sources);
   check_wheel_fits(wheel, part, sources);
   if (plan["wear_sweep"] != "none") {
     const WheelSection section = build_wheel(wheel);
@@ -310,35 +292,69 @@ void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
   document["plan"] = std::move(plan);
 }
 
-std::vector<std::string> FeedPlanKind::output_columns(const Json& /*document*/) const {
-  return {std::begin(columns), std::end(columns)};
+std::pair<double, double> spindle_range_rpm(const Json& machine) {
+  const Json& v = machine.at("spindle_speed_rpm");
+  if (v.is_object()) return {v.at("from").get<double>(), v.at("to").get<double>()};
+  return {v.get<double>(), v.get<double>()};
 }
 
-std::vector<Json> FeedPlanKind::run_point(const Json& doc, const PointContext& context) const {
+FeedPlanFigures plan_and_report(const Json& document, const std::filesystem::path& dir, bool plots) {
   PlanRun run;
-  compute_plan(doc, run);
-  if (!context.artifact_dir.empty()) write_plan_files(run, doc, context.artifact_dir, context.plots);
-  // A plan that breaks a rule, misses the tolerance or lets the wheel cut in is never "ok": its
-  // files are written (for inspection, `certified` false in summary.json) and the point fails.
-  if (!run.certified)
-    throw PointFailure(fmt::format("plan not certified: {}", fmt::join(run.certification_failures, "; ")));
+  compute_plan(document, run);
+  if (!dir.empty()) write_plan_files(run, document, dir, plots);
   const Schedule& s = run.schedule;
-  const double total = s.plan.total_time_s();
-  return {total,
-          s.lower_bound_s,
-          100.0 * (total - s.lower_bound_s) / s.lower_bound_s,
-          static_cast<double>(s.plan.segments.size()),
-          run.errors.total.max_abs_mm,
-          run.errors.total.rms_mm,
-          run.max_edge_radius_mm,
-          s.certificate.ok};
+  FeedPlanFigures f;
+  f.total_time_s = s.plan.total_time_s();
+  f.lower_bound_s = s.lower_bound_s;
+  f.segments = s.plan.segments.size();
+  f.max_profile_error_mm = run.errors.total.max_abs_mm;
+  f.rms_profile_error_mm = run.errors.total.rms_mm;
+  f.max_edge_radius_mm = run.max_edge_radius_mm;
+  f.schedule_certified = s.certificate.ok;
+  f.certified = run.certified;
+  f.certification_failures = run.certification_failures;
+  return f;
 }
 
-void FeedPlanKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                   const fs::path& /*out_dir*/) const {
-  // Every figure belongs to one plan and is drawn by run_point into its artefact directory.
+namespace {
+
+std::vector<SegmentConditions> conditions_of(const Schedule& s, const Generatrix& generatrix) {
+  std::vector<SegmentConditions> out;
+  for (std::size_t k = 0; k < s.plan.segments.size(); ++k) {
+    SegmentConditions c;
+    c.start_s = s.plan.segments[k].start_s;
+    c.duration_s = s.plan.segments[k].duration_s;
+    c.x_start_mm = s.knots_mm[k];
+    c.x_end_mm = s.knots_mm[k + 1];
+    c.radius_mm = generatrix.evaluate(0.5 * (c.x_start_mm + c.x_end_mm)).f;
+    c.axial_speed_mm_per_s = (c.x_end_mm - c.x_start_mm) / c.duration_s;
+    c.spindle_speed_rpm = s.plan.spindle_speed_rpm;
+    c.contact_on_wheel_mm = 0.5 * (s.contact_on_tool_mm[k] + s.contact_on_tool_mm[k + 1]);
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
+PlannedFeed plan_feed_at(const PlanTables& tables, double spindle_rpm) {
+  auto generatrix = build_generatrix(tables.part);
+  auto kinematics = build_kinematics(tables.machine);
+  FeedConstraints constraints = build_constraints(tables.machine, tables.plan, *kinematics);
+  constraints.spindle_speed_rpm = spindle_rpm;
+  const WearSweep sweep = build_sweep(tables.plan, tables.wheel);
+  Schedule schedule;
+  try {
+    schedule = plan_feed(*generatrix, *kinematics, constraints, segment_length_mm(tables.plan, constraints),
+                         sweep_function(sweep, generatrix->x_min_mm()), true,
+                         wheel_contact(build_wheel(tables.wheel)));
+  } catch (const std::exception& e) {
+    throw PointFailure(fmt::format("no plan at {} rpm: {}", spindle_rpm, e.what()));
+  }
+  PlannedFeed out;
+  out.segments = conditions_of(schedule, *generatrix);
+  out.plan = std::move(schedule.plan);
+  return out;
 }
 
 }  // namespace chatterlab::planner
-
-CHATTERLAB_REGISTER_STUDY_KIND(chatterlab::planner::FeedPlanKind);

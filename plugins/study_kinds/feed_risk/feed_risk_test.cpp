@@ -1,7 +1,7 @@
 // feed_risk (issue 5): the process model's known answers, the roots along a constant plan against
 // stability_map at the same conditions, amplification = integral of the growth rate, the
 // simulation along a constant plan against the root, validation of bad input.
-#include "feed_risk/feed_risk.hpp"
+#include "study_kinds/feed_risk/feed_risk.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,10 +11,9 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
-#include "feed_risk/feed_risk_kind.hpp"
+#include "study_kinds/feed_risk/feed_risk_kind.hpp"
 #include "chatterlab/kit/model.hpp"
-#include "study_kinds/stability_map/stability_map.hpp"
-#include "planner/setup.hpp"
+#include "chatterlab/planner/feed_planning.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::feed_risk {
@@ -44,6 +43,17 @@ Json model_table() {
   return s.document["model"];
 }
 
+// The test model as plunge_with_penetration_damping with kd = `kd` (G4's dynamic force).
+Json penetration_damping_table(double kd) {
+  TempDir dir;
+  std::string toml = model_toml;
+  toml.replace(toml.find("plunge_regenerative"), std::string("plunge_regenerative").size(),
+               "plunge_with_penetration_damping");
+  toml += "penetration_damping_n_s_per_m = " + std::to_string(kd) + "\n";
+  Study s = load_study(dir.write("m.toml", std::string("[study]\nkind = \"stability_map\"\n") + toml));
+  return s.document["model"];
+}
+
 Json stability_table() {
   TempDir dir;
   Study s = load_study(dir.write("m.toml", std::string("[study]\nkind = \"stability_map\"\n") + model_toml));
@@ -53,13 +63,9 @@ Json stability_table() {
 // The reference conditions: width 10 mm, radius 100 mm, 300 rpm (= the model's), wheel 400 mm.
 ProcessSettings reference_process() {
   ProcessSettings p;
+  p.model = kit::build_model(model_table());
   p.reference_contact_width_mm = 10.0;
   p.reference_work_radius_mm = 100.0;
-  p.reference_work_speed_rpm = 300.0;
-  p.reference_wheel_speed_rpm = 1450.0;
-  p.reference_contact_stiffness_n_per_m = 2.0e7;
-  p.reference_wheel_wear_stiffness_n_per_m = 2.0e9;
-  p.reference_work_removal_stiffness_n_per_m = 1.6e6;
   p.wheel_speed_rpm = 1450.0;
   p.wheel_diameter_mm = 400.0;
   p.wheel_thickness_mm = 10.0;
@@ -126,9 +132,11 @@ TEST(FeedRiskProcess, ReferenceConditionsGiveTheModelAndWidthScalesStiffnesses) 
   auto part = cylinder(100.0, 600.0);
   const auto plan = constant_plan(1, 1.0, 100.0, 300.0);
   SegmentProcess s = map_segment(p, plan[0], *part);
-  EXPECT_NEAR(s.contact_stiffness_n_per_m, 2.0e7, 1e-6);
-  EXPECT_NEAR(s.work_removal_stiffness_n_per_m, 1.6e6, 1e-6);
-  EXPECT_NEAR(s.wheel_wear_stiffness_n_per_m, 2.0e9, 1e-3);
+  const Json at_reference = segment_model_table(model_table(), p, s);
+  EXPECT_EQ(at_reference.at("type"), "plunge_regenerative");
+  EXPECT_NEAR(at_reference.at("contact_stiffness_n_per_m").get<double>(), 2.0e7, 1e-6);
+  EXPECT_NEAR(at_reference.at("work_removal_stiffness_n_per_m").get<double>(), 1.6e6, 1e-6);
+  EXPECT_NEAR(at_reference.at("wheel_wear_stiffness_n_per_m").get<double>(), 2.0e9, 1e-3);
   EXPECT_NEAR(s.work_surface_speed_m_per_s, std::numbers::pi * 0.2 * 5.0, 1e-12);
   EXPECT_NEAR(s.equivalent_diameter_mm, 200.0 * 400.0 / 600.0, 1e-12);
   EXPECT_NEAR(s.contact_length_mm, std::sqrt(0.01 * 200.0 * 400.0 / 600.0), 1e-12);
@@ -139,17 +147,20 @@ TEST(FeedRiskProcess, ReferenceConditionsGiveTheModelAndWidthScalesStiffnesses) 
   auto faster = plan;
   faster[0].spindle_speed_rpm = 600.0;
   const SegmentProcess w = map_segment(p, faster[0], *part);
-  EXPECT_NEAR(w.contact_stiffness_n_per_m, 4.0e7, 1e-6);
+  const Json at_w = segment_model_table(model_table(), p, w);
+  EXPECT_NEAR(at_w.at("contact_stiffness_n_per_m").get<double>(), 4.0e7, 1e-6);
+  EXPECT_EQ(at_w.at("work_speed_rpm").get<double>(), 600.0);
   const double kv = s.speed_ratio;
-  EXPECT_NEAR(w.work_removal_stiffness_n_per_m, 3.2e6 * (2 * kv / (1 + 2 * kv)) / (kv / (1 + kv)), 1e-3);
-  EXPECT_NEAR(w.wheel_wear_stiffness_n_per_m, 4.0e9 * (1 + kv) / (1 + 2 * kv), 1.0);
+  EXPECT_NEAR(at_w.at("work_removal_stiffness_n_per_m").get<double>(),
+              3.2e6 * (2 * kv / (1 + 2 * kv)) / (kv / (1 + kv)), 1e-3);
+  EXPECT_NEAR(at_w.at("wheel_wear_stiffness_n_per_m").get<double>(), 4.0e9 * (1 + kv) / (1 + 2 * kv), 1.0);
 }
 
 TEST(FeedRisk, ConstantPlanGivesTheStabilityMapRoot) {
   // stability_map at the model's own conditions.
   TempDir dir;
   Study map = load_study(dir.write("m.toml", std::string("[study]\nkind = \"stability_map\"\n") + model_toml));
-  const std::vector<Json> row = StabilityMap().run_point(map.point_document(0), {});
+  const std::vector<Json> row = study_kind_registry().at("stability_map").create(ParamValues())->run_point(map.point_document(0), {});
   const double map_growth = row[0].get<double>(), map_frequency = row[1].get<double>();
   ASSERT_GT(map_growth, 0.0) << "the test model must chatter";
 
@@ -166,6 +177,42 @@ TEST(FeedRisk, ConstantPlanGivesTheStabilityMapRoot) {
   // Amplification: the integral of a constant growth rate over 50 s; above 10: chatter.
   EXPECT_NEAR(risk.final_log_amplification, 50.0 * map_growth, 1e-9 * 50.0 * map_growth);
   EXPECT_EQ(risk.worst, Risk::chatter);
+}
+
+TEST(FeedRisk, AnyModelWithProcessConditionsWorks) {
+  // plunge_with_penetration_damping declares the process-conditions capability too: feed_risk
+  // rates a plan with it unchanged. A plan over 280..320 rpm on the reference cylinder.
+  auto part = cylinder(100.0, 600.0);
+  auto plan = constant_plan(9, 1.0, 100.0, 300.0);
+  for (std::size_t k = 0; k < plan.size(); ++k) plan[k].spindle_speed_rpm = 280.0 + 5.0 * static_cast<double>(k);
+  const RootSettings roots{stability_table(), 1e-9};
+  const PlanRisk g1 = evaluate_roots(model_table(), reference_process(), plan, *part, roots, {});
+  ASSERT_GT(g1.max_growth_rate_per_s, 0.0) << "the G1 test model must chatter";
+  auto rate = [&](double kd) {
+    ProcessSettings p = reference_process();
+    p.model = kit::build_model(penetration_damping_table(kd));
+    return std::pair{evaluate_roots(penetration_damping_table(kd), p, plan, *part, roots, {}), p};
+  };
+  // kd = 0 is G1 (MODELS.md G4 -> G1): the same roots at every segment.
+  const PlanRisk zero = rate(0.0).first;
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    EXPECT_NEAR(zero.segments[k].growth_rate_per_s, g1.segments[k].growth_rate_per_s,
+                1e-9 * std::abs(g1.segments[k].growth_rate_per_s)) << "segment " << k;
+  EXPECT_EQ(zero.groups, g1.groups);
+  // kd > 0 damps the work chain: every segment grows more slowly than with G1. At 300 rpm (segment
+  // 4) the conditions are the reference, so the root is the model's own rightmost root.
+  const double kd = 2.0e3;
+  const auto [damped, p] = rate(kd);
+  for (std::size_t k = 0; k < plan.size(); ++k)
+    EXPECT_LT(damped.segments[k].growth_rate_per_s, g1.segments[k].growth_rate_per_s - 1e-3) << "segment " << k;
+  const double own = kit::rightmost_root(*kit::build_model(penetration_damping_table(kd)),
+                                         kit::stability_settings_table().read(stability_table())).root.real();
+  EXPECT_NEAR(damped.segments[4].growth_rate_per_s, own, 1e-9 * std::abs(own));
+  // kd follows G4 (kd ~ kw sqrt(de u0) / v_w): on the cylinder only the work speed changes, so at
+  // n rpm kd = kd_ref (kw(n)/kw_ref) (300/n).
+  const Json at_280 = segment_model_table(penetration_damping_table(kd), p, damped.process[0]);
+  const double kw_ratio = at_280.at("work_removal_stiffness_n_per_m").get<double>() / 1.6e6;
+  EXPECT_NEAR(at_280.at("penetration_damping_n_s_per_m").get<double>(), kd * kw_ratio * 300.0 / 280.0, 1e-9 * kd);
 }
 
 TEST(FeedRisk, AmplificationIsTheIntegralOfTheGrowthRate) {

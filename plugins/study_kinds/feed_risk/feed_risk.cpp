@@ -1,4 +1,4 @@
-#include "feed_risk/feed_risk.hpp"
+#include "study_kinds/feed_risk/feed_risk.hpp"
 
 #include <fmt/format.h>
 
@@ -24,29 +24,60 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double surface_speed_m_per_s(double diameter_mm, double rpm) { return kPi * diameter_mm * 1e-3 * rpm / 60.0; }
 
-// G4: the static grinding stiffness ks = psi b Kv/(1+Kv); the wheel wear stiffness of the same
-// force over a wheel surface passing v_s/v_w times faster, G kw v_s/v_w = G psi b/(1+Kv)
-// (studies/default.toml's derivation of kg).
-double removal_speed_factor(double kv) { return kv / (1.0 + kv); }
-double wear_speed_factor(double kv) { return 1.0 / (1.0 + kv); }
-
-// Groups of G1 parameter sets equal within a relative tolerance (cells of a log grid).
+// Groups of segments whose model parameters are equal within a relative tolerance (every number
+// of the parameter table on a log grid), with the representative's parameter table.
 struct Grouping {
   std::vector<std::size_t> group_of_item;
   std::vector<std::size_t> representative;  // item index per group
+  std::vector<Json> tables;                 // the representative's model table per group
 };
 
-Grouping group_items(const std::vector<SegmentProcess>& items, double tolerance) {
+// The cells of every number in a parameter table (positive ones on the log grid; others, and
+// anything that is not a number, exactly), in the table's order.
+void append_cells(const Json& v, double tolerance, std::vector<long long>& key) {
+  if (v.is_object() || v.is_array()) {
+    for (const Json& e : v) append_cells(e, tolerance, key);
+  } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
+    key.push_back(std::llround(std::log(v.get<double>()) / std::max(tolerance, 1e-15)));
+  } else {
+    key.push_back(std::numeric_limits<long long>::min());
+    key.push_back(static_cast<long long>(std::hash<std::string>{}(v.dump())));
+  }
+}
+
+// The [model] table: the model's type and its parameters.
+Json with_type(const Json& model_table, const Json& parameters) {
+  Json t = Json{{"type", model_table.at("type")}};
+  t.update(parameters);
+  return t;
+}
+
+Grouping group_items(const Json& model_table, const ProcessSettings& p, const std::vector<SegmentProcess>& items,
+                     double tolerance) {
+  const ProcessConditionsModel& process = process_model(p);
+  const ProcessConditions reference = reference_conditions(p);
+  ProcessScaling scaling;
+  scaling.speed_dependent_stiffness = p.speed_scaling;
+  auto parameters_of = [&](std::size_t i) {
+    return process.parameters_at(reference, segment_conditions(p, items[i]), scaling);
+  };
+  // The keys in parallel (a plan's candidates rate ~10^5 segments; parameters_at is const), then
+  // the groups in item order, so the representatives are those of a serial pass.
+  std::vector<std::vector<long long>> keys(items.size());
+  const auto n = static_cast<long>(items.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    append_cells(parameters_of(u), tolerance, keys[u]);
+  }
   Grouping g;
-  std::map<std::array<long long, 4>, std::size_t> cells;
-  auto cell = [&](double v) { return std::llround(std::log(v) / std::max(tolerance, 1e-15)); };
+  std::map<std::vector<long long>, std::size_t> cells;
   for (std::size_t i = 0; i < items.size(); ++i) {
-    const SegmentProcess& s = items[i];
-    const std::array<long long, 4> key{cell(s.work_speed_rpm), cell(s.contact_stiffness_n_per_m),
-                                       cell(s.wheel_wear_stiffness_n_per_m),
-                                       cell(s.work_removal_stiffness_n_per_m)};
-    auto [it, inserted] = cells.emplace(key, g.representative.size());
-    if (inserted) g.representative.push_back(i);
+    auto [it, inserted] = cells.emplace(std::move(keys[i]), g.representative.size());
+    if (inserted) {
+      g.representative.push_back(i);
+      g.tables.push_back(with_type(model_table, parameters_of(i)));
+    }
     g.group_of_item.push_back(it->second);
   }
   return g;
@@ -59,8 +90,7 @@ struct RootValue {
 };
 
 // One certified rightmost root per group (OpenMP over groups; each thread builds its own model).
-std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettings& p,
-                                    const std::vector<SegmentProcess>& items, const Grouping& g,
+std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, const Grouping& g,
                                     const RootSettings& settings) {
   std::vector<RootValue> values(g.representative.size());
   const auto n = static_cast<long>(values.size());
@@ -68,7 +98,7 @@ std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettin
   for (long i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     try {
-      auto model = kit::build_model(segment_model_table(model_table, p, items[g.representative[u]]));
+      auto model = kit::build_model(g.tables[u]);
       const RightmostRoot root = kit::rightmost_root(*model, kit::stability_settings_table().read(settings.stability));
       values[u].growth_rate_per_s = root.root.real();
       values[u].frequency_hz = std::abs(root.root.imag()) / (2 * kPi);
@@ -79,9 +109,9 @@ std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettin
   }
   for (std::size_t i = 0; i < values.size(); ++i)
     if (!values[i].error.empty())
-      throw PointFailure(fmt::format("root search failed at x = {:.4g} mm (work {:.4g} rpm, kc = {:.4g} N/m): {}",
+      throw PointFailure(fmt::format("root search failed at x = {:.4g} mm (work {:.4g} rpm, contact width {:.4g} mm): {}",
                                      items[g.representative[i]].x_mid_mm, items[g.representative[i]].work_speed_rpm,
-                                     items[g.representative[i]].contact_stiffness_n_per_m, values[i].error));
+                                     items[g.representative[i]].contact_width_mm, values[i].error));
   return values;
 }
 
@@ -132,28 +162,47 @@ SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentCondi
   s.axial_feed_per_rev_mm = std::abs(c.axial_speed_mm_per_s) * 60.0 / c.spindle_speed_rpm;
   s.overlap_ratio = std::max(0.0, 1.0 - s.axial_feed_per_rev_mm / s.contact_width_mm);
 
-  const double width = s.contact_width_mm / p.reference_contact_width_mm;
-  double removal = 1.0, wear = 1.0;
-  if (p.speed_scaling) {
-    const double kv_ref = surface_speed_m_per_s(2.0 * p.reference_work_radius_mm, p.reference_work_speed_rpm) /
-                          surface_speed_m_per_s(d_s, p.reference_wheel_speed_rpm);
-    removal = removal_speed_factor(s.speed_ratio) / removal_speed_factor(kv_ref);
-    wear = wear_speed_factor(s.speed_ratio) / wear_speed_factor(kv_ref);
-  }
-  s.contact_stiffness_n_per_m = p.reference_contact_stiffness_n_per_m * width;
-  s.work_removal_stiffness_n_per_m = p.reference_work_removal_stiffness_n_per_m * width * removal;
-  s.wheel_wear_stiffness_n_per_m = p.reference_wheel_wear_stiffness_n_per_m * width * wear;
   return s;
 }
 
+const ProcessConditionsModel& process_model(const ProcessSettings& p) {
+  const ProcessConditionsModel* process = p.model ? p.model->process_conditions() : nullptr;
+  if (!process)
+    throw std::invalid_argument("the model's parameters do not follow the process conditions (no "
+                                "ProcessConditionsModel capability)");
+  return *process;
+}
+
+ProcessConditions reference_conditions(const ProcessSettings& p) {
+  ProcessConditions c = process_model(p).nominal_conditions();
+  c.contact_width_mm = p.reference_contact_width_mm;
+  c.work_radius_mm = p.reference_work_radius_mm;
+  c.wheel_diameter_mm = p.wheel_diameter_mm;
+  return c;
+}
+
+ProcessConditions segment_conditions(const ProcessSettings& p, const SegmentProcess& s) {
+  ProcessConditions c;
+  c.wheel_speed_rpm = p.wheel_speed_rpm;
+  c.work_speed_rpm = s.work_speed_rpm;
+  c.contact_width_mm = s.contact_width_mm;
+  c.work_radius_mm = s.radius_mm;
+  c.wheel_diameter_mm = p.wheel_diameter_mm;
+  return c;
+}
+
+namespace {
+
+Json model_table_at(const Json& model_table, const ProcessSettings& p, const ProcessConditions& conditions) {
+  ProcessScaling scaling;
+  scaling.speed_dependent_stiffness = p.speed_scaling;
+  return with_type(model_table, process_model(p).parameters_at(reference_conditions(p), conditions, scaling));
+}
+
+}  // namespace
+
 Json segment_model_table(const Json& model_table, const ProcessSettings& p, const SegmentProcess& s) {
-  Json t = model_table;
-  t["wheel_speed_rpm"] = p.wheel_speed_rpm;
-  t["work_speed_rpm"] = s.work_speed_rpm;
-  t["contact_stiffness_n_per_m"] = s.contact_stiffness_n_per_m;
-  t["wheel_wear_stiffness_n_per_m"] = s.wheel_wear_stiffness_n_per_m;
-  t["work_removal_stiffness_n_per_m"] = s.work_removal_stiffness_n_per_m;
-  return t;
+  return model_table_at(model_table, p, segment_conditions(p, s));
 }
 
 // ------------------------------------------------------------------ risk
@@ -207,8 +256,8 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
       c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / phase_count);
       items.push_back(phase_count == 1 ? risk.process[k] : map_segment(p, c, generatrix));
     }
-  const Grouping g = group_items(items, roots.condition_tolerance);
-  const std::vector<RootValue> values = solve_groups(model_table, p, items, g, roots);
+  const Grouping g = group_items(model_table, p, items, roots.condition_tolerance);
+  const std::vector<RootValue> values = solve_groups(items, g, roots);
   risk.groups = values.size();
   risk.segments.resize(plan.size());
   for (std::size_t k = 0; k < plan.size(); ++k) {
@@ -334,7 +383,7 @@ std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const
                                                   const PlanRisk& risk) {
   // Own grouping of the segments' parameters (exact to 1e-9): the risk's groups may merge
   // segments within the root tolerance or come from averaged phases.
-  const Grouping g = group_items(risk.process, 1e-9);
+  const Grouping g = group_items(model_table, p, risk.process, 1e-9);
   std::map<std::size_t, std::size_t> model_of_group;
   std::vector<std::unique_ptr<TimeDomainModel>> models;
   std::vector<std::size_t> model_of_segment;
@@ -343,7 +392,7 @@ std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const
   for (std::size_t k = 0; k < plan.size(); ++k) {
     auto [it, inserted] = model_of_group.emplace(g.group_of_item[k], models.size());
     if (inserted) {
-      auto model = kit::build_model(segment_model_table(model_table, p, risk.process[k]));
+      auto model = kit::build_model(g.tables[g.group_of_item[k]]);
       auto td = model->time_domain();
       if (!td) throw std::invalid_argument("the model has no time-domain form");
       models.push_back(std::move(td));
@@ -389,6 +438,90 @@ std::shared_ptr<const SpeedLaw> plan_spindle_speed(const std::vector<planner::Se
   return make_scheduled_speed(std::move(times), std::move(rpm));
 }
 
+namespace {
+
+// Per work revolution: extremes of the displacement and of the work surface generated (surface
+// one revolution ago at the contact + this pass's removal), reduced from the streamed samples.
+class RevolutionReducer {
+ public:
+  RevolutionReducer(const std::vector<planner::SegmentConditions>& plan, std::shared_ptr<const SpeedLaw> work,
+                    std::vector<RevolutionRow>& rows)
+      : plan_(plan), work_(std::move(work)), rows_(rows), t0_(plan.front().start_s) {}
+
+  void add(const OutputSample& sample) {
+    const long rev = static_cast<long>(std::floor(work_->angle_rad(sample.t_s) / (2 * kPi)));
+    if (rev != revolution_) {
+      flush();
+      revolution_ = rev;
+    }
+    const double surface = sample.surface_at_contact_m[static_cast<std::size_t>(Rotor::work)] + sample.depth_of_cut_m;
+    if (count_ == 0) {
+      x_min_ = x_max_ = sample.displacement_m;
+      w_min_ = w_max_ = surface;
+      t_sum_ = 0;
+    }
+    x_min_ = std::min(x_min_, sample.displacement_m);
+    x_max_ = std::max(x_max_, sample.displacement_m);
+    w_min_ = std::min(w_min_, surface);
+    w_max_ = std::max(w_max_, surface);
+    t_sum_ += sample.t_s;
+    ++count_;
+  }
+
+  void flush() {
+    if (count_ == 0) return;
+    RevolutionRow row;
+    row.t_s = t_sum_ / static_cast<double>(count_);
+    row.x_mm = x_at(row.t_s);
+    row.vibration_amplitude_m = 0.5 * (x_max_ - x_min_);
+    row.work_waviness_m = 0.5 * (w_max_ - w_min_);
+    row.growth_rate_per_s = kNaN;
+    rows_.push_back(row);
+    count_ = 0;
+  }
+
+ private:
+  // x at time t from the plan's start: linear inside each segment.
+  double x_at(double t) const {
+    auto it = std::upper_bound(plan_.begin(), plan_.end(), t + t0_,
+                               [](double v, const planner::SegmentConditions& c) { return v < c.start_s; });
+    const std::size_t k = it == plan_.begin() ? 0 : static_cast<std::size_t>(it - plan_.begin()) - 1;
+    const auto& c = plan_[k];
+    const double u = std::clamp((t + t0_ - c.start_s) / c.duration_s, 0.0, 1.0);
+    return c.x_start_mm + u * (c.x_end_mm - c.x_start_mm);
+  }
+
+  const std::vector<planner::SegmentConditions>& plan_;
+  std::shared_ptr<const SpeedLaw> work_;
+  std::vector<RevolutionRow>& rows_;
+  double t0_;
+  long revolution_ = 0;
+  double x_min_ = 0, x_max_ = 0, w_min_ = 0, w_max_ = 0, t_sum_ = 0;
+  long count_ = 0;
+};
+
+// The engine's settings for the whole plan: bilateral (linear, as the roots) contact, streamed.
+SimulationSettings along_plan_engine_settings(const AlongPlanSettings& settings, double duration_s,
+                                              std::shared_ptr<const SpeedLaw> work) {
+  SimulationSettings s;
+  s.duration_s = duration_s;
+  s.sample_rate_hz = settings.sample_rate_hz;
+  s.disturbance = {settings.initial_waviness_m, 0.0};
+  s.initial_waviness_m = settings.random_initial_surfaces ? settings.initial_waviness_m : 0.0;
+  s.seed = settings.seed;
+  s.one_sided_contact = false;  // the linear model of the roots (perturbation about the steady cut)
+  s.speed[static_cast<std::size_t>(Rotor::work)] = std::move(work);
+  s.integrator = settings.integrator;
+  s.fixed_steps_per_wave = settings.fixed_steps_per_wave;
+  s.relative_tolerance = settings.relative_tolerance;
+  s.samples_per_wave = settings.samples_per_wave;
+  s.store_samples = false;
+  s.divergence_limit_m = settings.divergence_limit_m;
+  return s;
+}
+
+}  // namespace
+
 AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSettings& p,
                                         const std::vector<planner::SegmentConditions>& plan,
                                         const PlanRisk& risk, const AlongPlanSettings& settings) {
@@ -398,74 +531,19 @@ AlongPlanSimulation simulate_along_plan(const Json& model_table, const ProcessSe
   const double duration = plan.back().start_s + plan.back().duration_s - t0;
   std::shared_ptr<const SpeedLaw> work = settings.work_speed;
   if (!work) work = plan_spindle_speed(plan);
-  // x at time t: linear inside each segment.
-  auto x_at = [&](double t) {
-    auto it = std::upper_bound(plan.begin(), plan.end(), t + t0,
-                               [](double v, const planner::SegmentConditions& c) { return v < c.start_s; });
-    const std::size_t k = it == plan.begin() ? 0 : static_cast<std::size_t>(it - plan.begin()) - 1;
-    const auto& c = plan[k];
-    const double u = std::clamp((t + t0 - c.start_s) / c.duration_s, 0.0, 1.0);
-    return c.x_start_mm + u * (c.x_end_mm - c.x_start_mm);
-  };
-  // Per work revolution: extremes of the displacement and of the work surface generated
-  // (surface one revolution ago at the contact + this pass's removal).
-  long revolution = 0;
-  double x_min = 0, x_max = 0, w_min = 0, w_max = 0, t_sum = 0;
-  long count = 0;
-  auto flush = [&]() {
-    if (count == 0) return;
-    RevolutionRow row;
-    row.t_s = t_sum / static_cast<double>(count);
-    row.x_mm = x_at(row.t_s);
-    row.vibration_amplitude_m = 0.5 * (x_max - x_min);
-    row.work_waviness_m = 0.5 * (w_max - w_min);
-    row.growth_rate_per_s = kNaN;
-    out.revolutions.push_back(row);
-    count = 0;
-  };
-  SimulationSettings s;
-  s.duration_s = duration;
-  s.sample_rate_hz = settings.sample_rate_hz;
-  s.disturbance = {settings.initial_waviness_m, 0.0};
-  s.initial_waviness_m = settings.random_initial_surfaces ? settings.initial_waviness_m : 0.0;
-  s.seed = settings.seed;
-  s.one_sided_contact = false;  // the linear model of the roots (perturbation about the steady cut)
-  s.speed[static_cast<std::size_t>(Rotor::work)] = work;
-  s.integrator = settings.integrator;
-  s.fixed_steps_per_wave = settings.fixed_steps_per_wave;
-  s.relative_tolerance = settings.relative_tolerance;
-  s.samples_per_wave = settings.samples_per_wave;
-  s.store_samples = false;
-  s.divergence_limit_m = settings.divergence_limit_m;
-  s.on_sample = [&](const OutputSample& sample) {
-    const long rev = static_cast<long>(std::floor(work->angle_rad(sample.t_s) / (2 * kPi)));
-    if (rev != revolution) {
-      flush();
-      revolution = rev;
-    }
-    const double surface = sample.surface_at_contact_m[static_cast<std::size_t>(Rotor::work)] + sample.depth_of_cut_m;
-    if (count == 0) {
-      x_min = x_max = sample.displacement_m;
-      w_min = w_max = surface;
-      t_sum = 0;
-    }
-    x_min = std::min(x_min, sample.displacement_m);
-    x_max = std::max(x_max, sample.displacement_m);
-    w_min = std::min(w_min, surface);
-    w_max = std::max(w_max, surface);
-    t_sum += sample.t_s;
-    ++count;
-  };
+  RevolutionReducer reducer(plan, work, out.revolutions);
+  SimulationSettings s = along_plan_engine_settings(settings, duration, work);
+  s.on_sample = [&](const OutputSample& sample) { reducer.add(sample); };
   try {
     auto model = along_plan_model(model_table, p, plan, risk);
     const SimulationResult r = simulate(*model, s);
-    flush();
+    reducer.flush();
     out.status = r.status;
     out.diverged = r.diverged;
     out.end_time_s = r.end_time_s + t0;
     out.steps = r.steps;
   } catch (const std::exception& e) {
-    flush();
+    reducer.flush();
     out.status = fmt::format("simulation failed: {}", e.what());
     out.failed = true;
   }
@@ -568,34 +646,25 @@ namespace {
 struct LeverDefinition {
   const char* name;
   const char* acts_on;
-  void (*scale)(Json& table, double factor);
+  void (*scale)(ProcessConditions& conditions, double factor);
 };
 
-void scale_key(Json& t, const char* key, double f) { t[key] = t[key].get<double>() * f; }
-
 const LeverDefinition lever_definitions[] = {
-    {"width of cut", "contact, wheel-wear and work-removal stiffness (all proportional to the width b)",
-     [](Json& t, double f) {
-       for (const char* k : {"contact_stiffness_n_per_m", "wheel_wear_stiffness_n_per_m", "work_removal_stiffness_n_per_m"})
-         scale_key(t, k, f);
-     }},
-    {"contact stiffness", "kc b", [](Json& t, double f) { scale_key(t, "contact_stiffness_n_per_m", f); }},
-    {"structural damping", "every mode's damping ratio",
-     [](Json& t, double f) {
-       for (Json& m : t["modes"]) m["damping_ratio"] = std::min(m["damping_ratio"].get<double>() * f, 0.99);
-     }},
-    {"work speed", "work_speed_rpm", [](Json& t, double f) { scale_key(t, "work_speed_rpm", f); }},
-    {"wheel speed", "wheel_speed_rpm", [](Json& t, double f) { scale_key(t, "wheel_speed_rpm", f); }},
+    {"width of cut", "engaged contact width b", [](ProcessConditions& c, double f) { c.contact_width_mm *= f; }},
+    {"work speed", "work spindle speed", [](ProcessConditions& c, double f) { c.work_speed_rpm *= f; }},
+    {"wheel speed", "wheel spindle speed", [](ProcessConditions& c, double f) { c.wheel_speed_rpm *= f; }},
+    {"depth of cut", "depth of cut per work revolution", [](ProcessConditions& c, double f) { c.depth_of_cut_ratio *= f; }},
 };
 
 // The worst growth rate over the work-speed tolerance band, as the candidates are rated: a lever
 // evaluated at an exact speed ratio alone would start from the ratio's artefact.
-double growth_at(const Json& table, const RootSettings& roots, double speed_tolerance) {
+double growth_at(const Json& model_table, const ProcessSettings& p, const ProcessConditions& conditions,
+                 const RootSettings& roots, double speed_tolerance) {
   double worst = -std::numeric_limits<double>::infinity();
   for (double factor : {1.0 - speed_tolerance, 1.0, 1.0 + speed_tolerance}) {
-    Json at = table;
-    at["work_speed_rpm"] = table["work_speed_rpm"].get<double>() * factor;
-    auto model = kit::build_model(at);
+    ProcessConditions at = conditions;
+    at.work_speed_rpm *= factor;
+    auto model = kit::build_model(model_table_at(model_table, p, at));
     worst = std::max(worst, kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real());
     if (!(speed_tolerance > 0.0)) break;
   }
@@ -604,28 +673,29 @@ double growth_at(const Json& table, const RootSettings& roots, double speed_tole
 
 }  // namespace
 
-std::vector<Lever> stability_levers(const Json& segment_model, const RootSettings& roots, double target_growth_per_s,
-                                    double speed_tolerance, double max_factor) {
-  auto worst_growth = [&](const Json& table) { return growth_at(table, roots, speed_tolerance); };
-  const double growth0 = worst_growth(segment_model);
+std::vector<Lever> stability_levers(const Json& model_table, const ProcessSettings& p, const SegmentProcess& segment,
+                                    const RootSettings& roots, double target_growth_per_s, double speed_tolerance,
+                                    double max_factor) {
+  const ProcessConditions conditions = segment_conditions(p, segment);
+  auto worst_growth = [&](const LeverDefinition& d, double factor) {
+    ProcessConditions changed = conditions;
+    d.scale(changed, factor);
+    return growth_at(model_table, p, changed, roots, speed_tolerance);
+  };
+  const double growth0 = growth_at(model_table, p, conditions, roots, speed_tolerance);
   constexpr double step = 0.05;  // central difference in ln(quantity)
   std::vector<Lever> levers;
   for (const LeverDefinition& d : lever_definitions) {
     Lever lever;
     lever.name = d.name;
     lever.acts_on = d.acts_on;
-    Json up = segment_model, down = segment_model;
-    d.scale(up, std::exp(step));
-    d.scale(down, std::exp(-step));
-    lever.growth_per_unit_log = (worst_growth(up) - worst_growth(down)) / (2 * step);
+    lever.growth_per_unit_log = (worst_growth(d, std::exp(step)) - worst_growth(d, std::exp(-step))) / (2 * step);
     if (lever.growth_per_unit_log != 0.0) {
       const double limit = std::log(max_factor);
       const double log_change =
           std::clamp((target_growth_per_s - growth0) / lever.growth_per_unit_log, -limit, limit);
-      Json changed = segment_model;
-      d.scale(changed, std::exp(log_change));
       lever.change_percent = 100.0 * (std::exp(log_change) - 1.0);
-      lever.growth_rate_after_per_s = worst_growth(changed);
+      lever.growth_rate_after_per_s = worst_growth(d, std::exp(log_change));
       lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
     } else {
       lever.growth_rate_after_per_s = growth0;
