@@ -32,6 +32,7 @@
 #include "chatterlab/study_kind.hpp"
 #include "runner/input_watch.hpp"
 #include "runner/journal_writer.hpp"
+#include "runner/mpi_scheduler.hpp"
 #include "runner/mpi_exchange.hpp"
 #include "runner/output_dir.hpp"
 #include "runner/point_compute.hpp"
@@ -39,6 +40,7 @@
 #include "runner/results_io.hpp"
 #include "runner/resume.hpp"
 #include "runner/run_meta.hpp"
+#include "runner/shards.hpp"
 #include "runner/worker_pool.hpp"
 
 namespace chatterlab {
@@ -351,6 +353,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   });
   check_ranks_read_the_same_inputs(study);
   const std::size_t n = study.point_count();
+  if (options.shard) runner::check_shard(*options.shard, n, study.file.string());
   const std::string fingerprint = runner::study_fingerprint(study, columns);
   const JournalHeader header{fingerprint, n, columns, runner::result_inputs(study)};
 
@@ -383,35 +386,32 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       prepare(options, header, study, runner::meta_with_state(meta_in, runner::state_running));
   std::unique_ptr<JournalWriter> journal = open_journal(options, prep, header);
 
-  std::vector<std::size_t> todo;
-  for (std::size_t p = static_cast<std::size_t>(rank); p < n; p += static_cast<std::size_t>(ranks))
-    if (prep.done[p] == '0') todo.push_back(p);
-
+  // Every rank lists the same points; the scheduler hands out blocks of the list (rank 0
+  // coordinates under MPI), and `mine` holds this rank's points in the order it got them.
+  const std::vector<std::size_t> todo = runner::points_to_compute(prep.done, options.shard);
   runner::ProgressBar progress(rank == 0 && options.progress.value_or(runner::stderr_is_terminal()),
                                todo.size());
-  std::vector<PointResult> mine(todo.size());
+  runner::PointScheduler scheduler(todo.size(), threads,
+                                   [&](std::size_t elsewhere) { progress.points_done(elsewhere); });
+  std::vector<std::size_t> my_points;
+  std::vector<PointResult> mine;
   double compute_s = 0.0;
   std::atomic<std::size_t> points_done{0};
   if (options.on_point_done) options.on_point_done(0, todo.size());
   std::atomic<std::size_t> output_failures{0};
   runner::InputWatch watch(study.inputs);
   auto keep = [&](std::size_t k, ComputedPoint&& computed) {
-    journal->append(runner::journal_line(todo[k], computed.result));
+    journal->append(runner::journal_line(my_points[k], computed.result));
     if (computed.output_failed) ++output_failures;
     mine[k] = std::move(computed.result);
     progress.point_done();
     if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   };
-  if (pool) {
-    pool->run(todo, [&](std::size_t k, ComputedPoint&& computed) {
-      compute_s += computed.compute_s;
-      keep(k, std::move(computed));
-    }, watch.changed());
-    pool.reset();
-  } else {
-    // A plugin that crashes or calls exit() here takes the process with it: the guard says which
-    // point did it, and records an exit() in meta.json.
-    runner::InProcessGuard guard(
+  // A plugin that crashes or calls exit() here takes the process with it: the guard says which
+  // point did it, and records an exit() in meta.json.
+  std::optional<runner::InProcessGuard> guard;
+  if (!pool)
+    guard.emplace(
         threads,
         [&](const std::string& message) {
           journal->flush();
@@ -423,19 +423,37 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         },
         [](void* writer) { static_cast<JournalWriter*>(writer)->flush_before_dying(); },
         journal.get());
-    const auto count = static_cast<std::ptrdiff_t>(todo.size());
+  while (auto block = scheduler.next(points_done.load())) {
+    const std::size_t base = my_points.size();
+    my_points.insert(my_points.end(), todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
+                     todo.begin() + static_cast<std::ptrdiff_t>(block->end));
+    mine.resize(my_points.size());
+    if (pool) {
+      const std::vector<std::size_t> points(my_points.begin() + static_cast<std::ptrdiff_t>(base),
+                                            my_points.end());
+      pool->run(points, [&](std::size_t k, ComputedPoint&& computed) {
+        compute_s += computed.compute_s;
+        keep(base + k, std::move(computed));
+        scheduler.serve();
+      }, watch.changed());
+      continue;
+    }
+    const auto count = static_cast<std::ptrdiff_t>(block->size());
 #pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (watch.changed().load()) continue;  // stopped: the inputs are not what they were
-      const auto index = static_cast<std::size_t>(k);
-      guard.started(omp_get_thread_num(), todo[index]);
-      ComputedPoint computed =
-          runner::compute_point(*kind, study, todo[index], columns, options.out_dir, options.plots);
-      guard.finished(omp_get_thread_num());
+      const std::size_t index = base + static_cast<std::size_t>(k);
+      guard->started(omp_get_thread_num(), my_points[index]);
+      ComputedPoint computed = runner::compute_point(*kind, study, my_points[index], columns,
+                                                     options.out_dir, options.plots);
+      guard->finished(omp_get_thread_num());
       compute_s += computed.compute_s;
       keep(index, std::move(computed));
+      scheduler.serve();  // rank 0's main thread answers the other ranks between its points
     }
   }
+  pool.reset();
+  guard.reset();
   journal->flush();
   progress.finish();
 
@@ -454,8 +472,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
                   {"input_changes", changes}};
   if (rank != 0) {
     std::string records;
-    for (std::size_t k = 0; k < todo.size(); ++k)
-      if (mine[k].done) records += runner::journal_line(todo[k], mine[k]);
+    for (std::size_t k = 0; k < my_points.size(); ++k)
+      if (mine[k].done) records += runner::journal_line(my_points[k], mine[k]);
     payload["records"] = std::move(records);
   }
   journal.reset();
@@ -467,7 +485,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     try {
       std::vector<PointResult> results(n);
       for (auto& [p, r] : prep.resumed.records) results[p] = std::move(r);
-      for (std::size_t k = 0; k < todo.size(); ++k) results[todo[k]] = std::move(mine[k]);
+      for (std::size_t k = 0; k < my_points.size(); ++k) results[my_points[k]] = std::move(mine[k]);
       ComputeStats stats;
       for (std::size_t r = 0; r < payloads.size(); ++r) {
         Json from = Json::parse(payloads[r]);
@@ -490,6 +508,17 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       }
       if (!stats.input_changes.empty()) {
         result["input_error"] = input_changed(meta_in, stats.input_changes);
+      } else if (options.shard) {
+        runner::ShardRun shard_run{prep.session, prep.resumed.records.size(), stats.computed,
+                                   stats.compute_s, seconds_since(start), stats.journal_errors,
+                                   stats.output_failures > 0
+                                       ? fmt::format("{} point(s) could not write their files",
+                                                     stats.output_failures)
+                                       : ""};
+        runner::ShardOutcome written = runner::write_shard_meta(meta_in, results, shard_run);
+        result["failed"] = written.failed;
+        result["timed_out"] = written.timed_out;
+        result["output_error"] = written.output_error;
       } else {
         OutputsWritten written =
             write_outputs(*kind, meta_in, prep, std::move(results), stats, start);
@@ -511,7 +540,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   if (result.contains("error")) throw std::runtime_error(result["error"].get<std::string>());
 
   RunSummary summary;
-  summary.points = n;
+  summary.points = options.shard ? runner::shard_point_count(n, *options.shard) : n;
   summary.failed = result["failed"].get<std::size_t>();
   summary.timed_out = result["timed_out"].get<std::size_t>();
   summary.output_error = result["output_error"].get<std::string>();
