@@ -211,7 +211,22 @@ struct ComputeStats {
   std::size_t output_failures = 0;  // points that could not write their files
   std::vector<std::string> journal_errors;
   std::vector<std::string> input_changes;
+  // Per rank: points computed, compute_s, and loop_s (wall time from its first block request to
+  // its last point): what the load balance is judged by.
+  Json per_rank = Json::array();
 };
+
+// Of the thread time the ranks spent in their point loops (ranks x threads x the longest loop),
+// the share spent computing points: 1 when every thread was busy until the last point ended.
+double load_balance(const Json& per_rank, int threads) {
+  double busy = 0.0, longest = 0.0;
+  for (const Json& rank : per_rank) {
+    busy += rank["compute_s"].get<double>();
+    longest = std::max(longest, rank["loop_s"].get<double>());
+  }
+  const double available = static_cast<double>(per_rank.size()) * threads * longest;
+  return available > 0.0 ? busy / available : 0.0;
+}
 
 struct OutputsWritten {
   std::size_t failed = 0, timed_out = 0;
@@ -295,7 +310,9 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   if (stats.computed > 0) {
     timings["point_mean_s"] = stats.compute_s / static_cast<double>(stats.computed);
     timings["points_per_s"] = static_cast<double>(stats.computed) / wall;
+    timings["load_balance"] = load_balance(stats.per_rank, in.threads);
   }
+  timings["ranks"] = stats.per_rank;
   meta["timings"] = std::move(timings);
   meta["plot_errors"] = std::move(plot_errors);
   // The reserve goes first: its space is what lets meta.json be written on a full disk.
@@ -423,6 +440,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         },
         [](void* writer) { static_cast<JournalWriter*>(writer)->flush_before_dying(); },
         journal.get());
+  const Clock::time_point loop_start = Clock::now();
   while (auto block = scheduler.next(points_done.load())) {
     const std::size_t base = my_points.size();
     my_points.insert(my_points.end(), todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
@@ -452,6 +470,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       scheduler.serve();  // rank 0's main thread answers the other ranks between its points
     }
   }
+  const double loop_s = seconds_since(loop_start);
   pool.reset();
   guard.reset();
   journal->flush();
@@ -467,6 +486,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   for (const PointResult& r : mine) computed += r.done ? 1 : 0;
   Json payload = {{"computed", computed},
                   {"compute_s", compute_s},
+                  {"loop_s", loop_s},
                   {"output_failures", output_failures.load()},
                   {"journal_error", journal->error()},
                   {"input_changes", changes}};
@@ -492,6 +512,9 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         std::string().swap(payloads[r]);  // rank 0 holds every rank's results: one copy at a time
         stats.computed += from["computed"].get<std::size_t>();
         stats.compute_s += from["compute_s"].get<double>();
+        stats.per_rank.push_back({{"points", from["computed"]},
+                                  {"compute_s", from["compute_s"]},
+                                  {"loop_s", from["loop_s"]}});
         stats.output_failures += from["output_failures"].get<std::size_t>();
         if (auto error = from["journal_error"].get<std::string>(); !error.empty())
           stats.journal_errors.push_back(error);
