@@ -8,102 +8,73 @@
 
 namespace chatterlab::runner {
 
-namespace {
-// Tags of the scheduler's messages: a request carries {points the rank finished, its threads},
-// an answer {begin, end} (begin == end: no work left).
-constexpr int tag_request = 2301;
-constexpr int tag_block = 2302;
-}  // namespace
-
 std::size_t guided_block_size(std::size_t remaining, int ranks, int threads) {
   const std::size_t share = remaining / (4 * static_cast<std::size_t>(std::max(ranks, 1)));
   return std::min(remaining, std::max(share, static_cast<std::size_t>(std::max(threads, 1))));
 }
 
 PointScheduler::PointScheduler(std::size_t points, int threads,
-                               std::function<void(std::size_t)> remote_points_done)
+                               std::function<void(std::size_t)> points_done_elsewhere)
     : points_(points),
       threads_(threads),
       rank_(mpi_rank()),
       ranks_(mpi_size()),
       owner_(std::this_thread::get_id()),
-      remote_points_done_(std::move(remote_points_done)),
-      reported_done_(static_cast<std::size_t>(ranks_), 0) {}
+      points_done_elsewhere_(std::move(points_done_elsewhere)) {
+  if (ranks_ == 1) return;
+  auto* window = new MPI_Win;
+  const MPI_Aint bytes = rank_ == 0 ? 2 * sizeof(std::uint64_t) : 0;
+  MPI_Win_allocate(bytes, sizeof(std::uint64_t), MPI_INFO_NULL, MPI_COMM_WORLD, &counters_,
+                   window);
+  window_ = window;
+  if (rank_ == 0) {
+    MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, *window);
+    counters_[0] = counters_[1] = 0;
+    MPI_Win_unlock(0, *window);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);  // nobody claims before the counters are zero
+}
 
 PointScheduler::~PointScheduler() {
-  // A run that stops early (an exception between blocks) leaves an answer in flight.
-  if (pending_ && reply_request_ != nullptr) {
-    auto* request = static_cast<MPI_Request*>(reply_request_);
-    MPI_Cancel(request);
-    MPI_Request_free(request);
-  }
-  delete static_cast<MPI_Request*>(reply_request_);
-}
-
-PointBlock PointScheduler::take(int threads) {
-  const std::size_t size = guided_block_size(points_ - next_, ranks_, threads);
-  PointBlock block{next_, next_ + size};
-  next_ = block.end;
-  return block;
-}
-
-void PointScheduler::answer(int rank, const std::uint64_t request[2]) {
-  auto& before = reported_done_[static_cast<std::size_t>(rank)];
-  if (remote_points_done_ && request[0] > before) remote_points_done_(request[0] - before);
-  before = std::max(before, request[0]);
-  PointBlock block = take(static_cast<int>(request[1]));
-  if (block.size() == 0) ++ranks_finished_;
-  std::uint64_t reply[2] = {block.begin, block.end};
-  MPI_Send(reply, 2, MPI_UINT64_T, rank, tag_block, MPI_COMM_WORLD);
+  if (window_ == nullptr) return;
+  auto* window = static_cast<MPI_Win*>(window_);
+  if (mpi_active()) MPI_Win_free(window);
+  delete window;
 }
 
 void PointScheduler::serve() {
   if (rank_ != 0 || ranks_ == 1 || std::this_thread::get_id() != owner_) return;
-  for (;;) {
-    int arrived = 0;
-    MPI_Status status;
-    MPI_Iprobe(MPI_ANY_SOURCE, tag_request, MPI_COMM_WORLD, &arrived, &status);
-    if (!arrived) return;
-    std::uint64_t request[2];
-    MPI_Recv(request, 2, MPI_UINT64_T, status.MPI_SOURCE, tag_request, MPI_COMM_WORLD,
-             MPI_STATUS_IGNORE);
-    answer(status.MPI_SOURCE, request);
-  }
+  int ignored = 0;
+  MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &ignored, MPI_STATUS_IGNORE);
 }
 
 std::optional<PointBlock> PointScheduler::next(std::size_t points_done) {
   if (ranks_ == 1) {
-    if (next_ == points_) return std::nullopt;
-    next_ = points_;
+    if (claimed_ == points_) return std::nullopt;
+    claimed_ = points_;
     return PointBlock{0, points_};
   }
-  if (rank_ == 0) {
-    serve();
-    if (next_ < points_) return take(threads_);
-    // Own work done: answer until every other rank has heard that nothing is left.
-    while (ranks_finished_ < ranks_ - 1) {
-      std::uint64_t request[2];
-      MPI_Status status;
-      MPI_Recv(request, 2, MPI_UINT64_T, MPI_ANY_SOURCE, tag_request, MPI_COMM_WORLD, &status);
-      answer(status.MPI_SOURCE, request);
-    }
-    return std::nullopt;
+  auto& window = *static_cast<MPI_Win*>(window_);
+  // The size is judged from what was unclaimed at this rank's last claim: a little large when
+  // others claimed since, which the guided shrinking absorbs.
+  const std::uint64_t size = std::max<std::size_t>(
+      1, guided_block_size(points_ - std::min(claimed_, points_), ranks_, threads_));
+  const std::uint64_t newly_done = points_done - reported_done_;
+  std::uint64_t start = 0, done_before = 0;
+  MPI_Win_lock(MPI_LOCK_SHARED, 0, 0, window);
+  MPI_Fetch_and_op(&size, &start, MPI_UINT64_T, 0, 0, MPI_SUM, window);
+  MPI_Fetch_and_op(&newly_done, &done_before, MPI_UINT64_T, 0, 1, MPI_SUM, window);
+  MPI_Win_unlock(0, window);
+  reported_done_ = points_done;
+  if (rank_ == 0 && points_done_elsewhere_) {
+    // Everyone's finished points, less rank 0's own (its bar counts those itself).
+    const std::uint64_t everywhere = done_before + newly_done - points_done;
+    if (everywhere > seen_done_) points_done_elsewhere_(everywhere - seen_done_);
+    seen_done_ = std::max(seen_done_, everywhere);
   }
-  if (reply_request_ == nullptr) reply_request_ = new MPI_Request;
-  auto* request = static_cast<MPI_Request*>(reply_request_);
-  auto ask = [&] {
-    std::uint64_t message[2] = {points_done, static_cast<std::uint64_t>(threads_)};
-    MPI_Irecv(reply_, 2, MPI_UINT64_T, 0, tag_block, MPI_COMM_WORLD, request);
-    MPI_Send(message, 2, MPI_UINT64_T, 0, tag_request, MPI_COMM_WORLD);
-    pending_ = true;
-  };
-  if (!pending_) ask();
-  MPI_Wait(request, MPI_STATUS_IGNORE);
-  pending_ = false;
-  const PointBlock block{reply_[0], reply_[1]};
-  if (block.size() == 0) return std::nullopt;
-  ask();  // the next block travels while this one is computed
-  return block;
+  claimed_ = static_cast<std::size_t>(std::min<std::uint64_t>(start + size, points_));
+  if (start >= points_) return std::nullopt;
+  return PointBlock{static_cast<std::size_t>(start), claimed_};
 }
 
 }  // namespace chatterlab::runner

@@ -467,7 +467,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       guard->finished(omp_get_thread_num());
       compute_s += computed.compute_s;
       keep(index, std::move(computed));
-      scheduler.serve();  // rank 0's main thread answers the other ranks between its points
+      scheduler.serve();  // rank 0's main thread lets MPI progress the other ranks' claims
     }
   }
   const double loop_s = seconds_since(loop_start);
