@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `mpirun -np 2 chatterlab run` writes a results.csv byte-identical to a single-process run (and
-# exits the same way), whichever rank computes which point (rank 0 hands out blocks of points on
-# request, runner/mpi_scheduler.hpp). Usage: mpi_equivalence.sh CHATTERLAB MPIEXEC WORK_DIR
+# exits the same way), whichever rank computes which point (ranks claim blocks of points from a
+# shared counter, runner/mpi_scheduler.hpp). Usage: mpi_equivalence.sh CHATTERLAB MPIEXEC WORK_DIR
 source "$(dirname "$0")/lib.sh"
 bin=$1 mpiexec=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
