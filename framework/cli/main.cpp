@@ -28,6 +28,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/input_files.hpp"
 #include "chatterlab/runner.hpp"
+#include "chatterlab/shards.hpp"
 #include "chatterlab/study.hpp"
 #include "sdk_commands.hpp"
 
@@ -131,8 +132,42 @@ struct Arguments {
   bool allow_large = false;
   bool progress = false;
   bool no_progress = false;
+  std::string shard;                          // run --shard I/N
+  std::vector<std::filesystem::path> shard_dirs;  // merge OUT SHARD_DIRS...
   std::vector<std::string> plugin_libraries;  // list/describe: out-of-tree libraries to include
 };
+
+// What a run (or a merge) says on stdout, from rank 0.
+void print_run_summary(const chatterlab::RunSummary& summary, const chatterlab::RunOptions& options) {
+  if (is_root()) {
+    std::cout << fmt::format("{} points: {} ok, {} failed", summary.points,
+                             summary.points - summary.failed, summary.failed);
+    if (summary.timed_out > 0) std::cout << fmt::format(" ({} of them timed out)", summary.timed_out);
+    if (summary.resumed > 0) std::cout << fmt::format(" ({} taken over from the earlier run)", summary.resumed);
+    if (summary.output_error.empty() && options.shard)
+      std::cout << fmt::format("; shard {}/{} in {} (combine the shards with chatterlab merge)\n",
+                               options.shard->index, options.shard->count, options.out_dir.string());
+    else if (summary.output_error.empty())
+      std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
+    else
+      std::cout << '\n';
+    if (summary.failed > 0)
+      std::cout << (options.shard ? "failed points: reasons in meta.json\n"
+                                  : "failed points: status column of results.csv, reasons in meta.json\n");
+    if (!summary.output_error.empty())
+      std::cerr << fmt::format(
+          "chatterlab: error: output could not be written: {} (meta.json: state output_failed); "
+          "make room and run again with --resume\n",
+          summary.output_error);
+    constexpr std::size_t shown = 5;
+    for (std::size_t i = 0; i < summary.notices.size() && i < shown; ++i)
+      std::cout << fmt::format("notice{}: {}\n",
+                               summary.points > 1 ? fmt::format(" (point {})", summary.notices[i].point) : "",
+                               summary.notices[i].text);
+    if (summary.notices.size() > shown)
+      std::cout << fmt::format("... {} more notices in meta.json\n", summary.notices.size() - shown);
+  }
+}
 
 int run(CLI::App& app, const Arguments& args) {
   // A study names its libraries itself; list and describe read no study, so they take --plugin.
@@ -146,6 +181,17 @@ int run(CLI::App& app, const Arguments& args) {
     std::string text = chatterlab::describe_plugin(args.name);
     if (is_root()) std::cout << text;
     return 0;
+  }
+  if (app.got_subcommand("merge")) {
+    chatterlab::RunOptions options;
+    options.threads = args.threads;
+    if (args.progress || args.no_progress) options.progress = args.progress;
+    const chatterlab::RunSummary summary = chatterlab::merge_shards(args.out_dir, args.shard_dirs, options);
+    options.out_dir = args.out_dir;
+    chatterlab::RunSummary shown = summary;
+    shown.resumed = 0;  // every point comes from the shards, which is what merge means
+    print_run_summary(shown, options);
+    return summary.exit_code();
   }
   chatterlab::Study study = chatterlab::load_study(args.study_file, {.allow_large = args.allow_large});
   chatterlab::cli::record_command_line_plugins(study, args.plugin_libraries);
@@ -163,31 +209,9 @@ int run(CLI::App& app, const Arguments& args) {
   options.isolate = args.isolate;
   options.point_timeout_s = args.point_timeout_s;
   if (args.progress || args.no_progress) options.progress = args.progress;
-  chatterlab::RunSummary summary = chatterlab::run_study(study, options);
-  if (is_root()) {
-    std::cout << fmt::format("{} points: {} ok, {} failed", summary.points,
-                             summary.points - summary.failed, summary.failed);
-    if (summary.timed_out > 0) std::cout << fmt::format(" ({} of them timed out)", summary.timed_out);
-    if (summary.resumed > 0) std::cout << fmt::format(" ({} taken over from the earlier run)", summary.resumed);
-    if (summary.output_error.empty())
-      std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
-    else
-      std::cout << '\n';
-    if (summary.failed > 0)
-      std::cout << "failed points: status column of results.csv, reasons in meta.json\n";
-    if (!summary.output_error.empty())
-      std::cerr << fmt::format(
-          "chatterlab: error: output could not be written: {} (meta.json: state output_failed); "
-          "make room and run again with --resume\n",
-          summary.output_error);
-    constexpr std::size_t shown = 5;
-    for (std::size_t i = 0; i < summary.notices.size() && i < shown; ++i)
-      std::cout << fmt::format("notice{}: {}\n",
-                               summary.points > 1 ? fmt::format(" (point {})", summary.notices[i].point) : "",
-                               summary.notices[i].text);
-    if (summary.notices.size() > shown)
-      std::cout << fmt::format("... {} more notices in meta.json\n", summary.notices.size() - shown);
-  }
+  if (!args.shard.empty()) options.shard = chatterlab::parse_shard(args.shard);
+  const chatterlab::RunSummary summary = chatterlab::run_study(study, options);
+  print_run_summary(summary, options);
   return summary.exit_code();
 }
 
@@ -248,6 +272,18 @@ int main(int argc, char** argv) {
                                          "Show a progress bar (default: only on a terminal)");
   run_command->add_flag("--no-progress", args.no_progress, "Never show a progress bar")
       ->excludes(progress);
+  run_command->add_option("--shard", args.shard,
+                          "Compute only shard I of N of the grid (I/N, 1 <= I <= N; points p "
+                          "with p % N = I - 1), e.g. one task of a Slurm array; combine the "
+                          "shards with `chatterlab merge`");
+  auto* merge = app.add_subcommand(
+      "merge", "Combine the output directories of `run --shard I/N` into the single run's result");
+  merge->add_option("OUT", args.out_dir, "Output directory of the merged result")->required();
+  merge->add_option("SHARD_DIRS", args.shard_dirs, "The output directories of the N shards")
+      ->required()
+      ->expected(1, -1);
+  merge->add_option("--threads", args.threads, "OpenMP threads (plots)");
+  merge->add_flag("--no-progress", args.no_progress, "Never show a progress bar");
   for (auto* command : {validate, run_command})
     command->add_option("--plugin", args.plugin_libraries,
                         "Also load this out-of-tree plugin library (repeatable)");

@@ -16,7 +16,7 @@ _chatterlab_names() {
 
 _chatterlab() {
   local cur="${COMP_WORDS[COMP_CWORD]}" prev="${COMP_WORDS[COMP_CWORD - 1]}"
-  local commands="list describe validate run new-plugin check-plugin init completion"
+  local commands="list describe validate run merge new-plugin check-plugin init completion"
   COMPREPLY=()
   if ((COMP_CWORD == 1)); then
     mapfile -t COMPREPLY < <(compgen -W "$commands --help --version" -- "$cur")
@@ -29,14 +29,15 @@ _chatterlab() {
     --model) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names model)" -- "$cur"); return ;;
     --machine) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names kinematics)" -- "$cur"); return ;;
     --suppression) mapfile -t COMPREPLY < <(compgen -W "$(_chatterlab_names suppression)" -- "$cur"); return ;;
-    --threads | --name | --example | --point-timeout) return ;;
+    --threads | --name | --example | --point-timeout | --shard) return ;;
   esac
   local options
   case "${COMP_WORDS[1]}" in
     list) options="--plugin --help" ;;
     describe) options="--plugin --help $(_chatterlab_names '')" ;;
     validate) options="--plugin --allow-large --help" ;;
-    run) options="--plugin --allow-large --out --threads --resume --retry-failed --isolate --point-timeout --progress --no-progress --help" ;;
+    run) options="--plugin --allow-large --out --threads --resume --retry-failed --isolate --point-timeout --progress --no-progress --shard --help" ;;
+    merge) options="--threads --no-progress --help" ;;
     new-plugin) options="--kind --help" ;;
     check-plugin) options="--quick --threads --help" ;;
     init) options="--output --force --name --example --model --machine --suppression --plugin --help $(_chatterlab_names 'study kind')" ;;
@@ -51,6 +52,7 @@ _chatterlab() {
   case "${COMP_WORDS[1]}" in
     validate | run) mapfile -t COMPREPLY < <(compgen -f -X '!*.toml' -- "$cur"; compgen -d -- "$cur") ;;
     check-plugin) mapfile -t COMPREPLY < <(compgen -f -X '!*.so' -- "$cur"; compgen -d -- "$cur") ;;
+    merge) mapfile -t COMPREPLY < <(compgen -d -- "$cur") ;;
     *) mapfile -t COMPREPLY < <(compgen -f -- "$cur") ;;
   esac
 }

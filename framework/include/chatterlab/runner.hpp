@@ -15,6 +15,14 @@
 
 namespace chatterlab {
 
+// One of N slices of a grid (`--shard I/N`, I from 1): the points p with p % N == I - 1, so a
+// cost that varies along the grid spreads evenly over the shards. `chatterlab merge` combines
+// the N output directories into the single run's result (chatterlab/shards.hpp).
+struct ShardSpec {
+  std::size_t index = 1;
+  std::size_t count = 1;
+};
+
 struct RunOptions {
   std::filesystem::path out_dir;        // default chosen by the CLI: out/<study file stem>
   int threads = 0;                      // 0: OpenMP default
@@ -31,9 +39,12 @@ struct RunOptions {
   // The executable started as a worker process (`<it> __worker ...`, which must call
   // run_point_worker). Default: this process's own executable.
   std::filesystem::path worker_executable = "/proc/self/exe";
+  // Only this shard of the grid: the output directory then holds its journal and a meta.json
+  // (state shard_complete), no results.csv or plots, until `chatterlab merge`.
+  std::optional<ShardSpec> shard;
   // Called after each point this process computes, from whichever thread computed it (so it must
-  // be thread-safe and quick), with the points done so far and the points this process computes;
-  // once with (0, total) before the first. The Python API's progress display polls it.
+  // be thread-safe and quick), with the points it has done so far and the points the run
+  // computes (all MPI ranks together); once with (0, total) before the first. The Python API's progress display polls it.
   std::function<void(std::size_t points_done, std::size_t points_total)> on_point_done;
 };
 

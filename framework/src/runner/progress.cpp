@@ -47,10 +47,12 @@ void ProgressBar::draw(std::size_t done, double elapsed_s) {
   std::fflush(stderr);
 }
 
-void ProgressBar::point_done() {
+void ProgressBar::point_done() { points_done(1); }
+
+void ProgressBar::points_done(std::size_t n) {
   if (!enabled_) return;
   std::lock_guard lock(mutex_);
-  ++done_;
+  done_ += n;
   auto now = std::chrono::steady_clock::now();
   if (now - last_draw_ < redraw_interval && done_ != total_) return;
   last_draw_ = now;

@@ -12,9 +12,10 @@ namespace chatterlab::runner {
 
 class ProgressBar {
  public:
-  // `total`: points this process computes. Disabled bars print nothing at all.
+  // `total`: points of the run still to compute (all ranks). Disabled bars print nothing at all.
   ProgressBar(bool enabled, std::size_t total);
   void point_done();
+  void points_done(std::size_t n);  // n points finished elsewhere (other MPI ranks)
   void finish();  // final state and a newline
 
   // The text of one bar, for a given state (no terminal codes): unit-testable.

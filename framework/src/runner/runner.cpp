@@ -32,6 +32,7 @@
 #include "chatterlab/study_kind.hpp"
 #include "runner/input_watch.hpp"
 #include "runner/journal_writer.hpp"
+#include "runner/mpi_scheduler.hpp"
 #include "runner/mpi_exchange.hpp"
 #include "runner/output_dir.hpp"
 #include "runner/point_compute.hpp"
@@ -39,6 +40,7 @@
 #include "runner/results_io.hpp"
 #include "runner/resume.hpp"
 #include "runner/run_meta.hpp"
+#include "runner/shards.hpp"
 #include "runner/worker_pool.hpp"
 
 namespace chatterlab {
@@ -209,7 +211,22 @@ struct ComputeStats {
   std::size_t output_failures = 0;  // points that could not write their files
   std::vector<std::string> journal_errors;
   std::vector<std::string> input_changes;
+  // Per rank: points computed, compute_s, and loop_s (wall time from its first block request to
+  // its last point): what the load balance is judged by.
+  Json per_rank = Json::array();
 };
+
+// Of the thread time the ranks spent in their point loops (ranks x threads x the longest loop),
+// the share spent computing points: 1 when every thread was busy until the last point ended.
+double load_balance(const Json& per_rank, int threads) {
+  double busy = 0.0, longest = 0.0;
+  for (const Json& rank : per_rank) {
+    busy += rank["compute_s"].get<double>();
+    longest = std::max(longest, rank["loop_s"].get<double>());
+  }
+  const double available = static_cast<double>(per_rank.size()) * threads * longest;
+  return available > 0.0 ? busy / available : 0.0;
+}
 
 struct OutputsWritten {
   std::size_t failed = 0, timed_out = 0;
@@ -293,7 +310,9 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   if (stats.computed > 0) {
     timings["point_mean_s"] = stats.compute_s / static_cast<double>(stats.computed);
     timings["points_per_s"] = static_cast<double>(stats.computed) / wall;
+    timings["load_balance"] = load_balance(stats.per_rank, in.threads);
   }
+  timings["ranks"] = stats.per_rank;
   meta["timings"] = std::move(timings);
   meta["plot_errors"] = std::move(plot_errors);
   // The reserve goes first: its space is what lets meta.json be written on a full disk.
@@ -351,6 +370,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   });
   check_ranks_read_the_same_inputs(study);
   const std::size_t n = study.point_count();
+  if (options.shard) runner::check_shard(*options.shard, n, study.file.string());
   const std::string fingerprint = runner::study_fingerprint(study, columns);
   const JournalHeader header{fingerprint, n, columns, runner::result_inputs(study)};
 
@@ -383,35 +403,32 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       prepare(options, header, study, runner::meta_with_state(meta_in, runner::state_running));
   std::unique_ptr<JournalWriter> journal = open_journal(options, prep, header);
 
-  std::vector<std::size_t> todo;
-  for (std::size_t p = static_cast<std::size_t>(rank); p < n; p += static_cast<std::size_t>(ranks))
-    if (prep.done[p] == '0') todo.push_back(p);
-
+  // Every rank lists the same points; the scheduler hands out blocks of the list (rank 0
+  // coordinates under MPI), and `mine` holds this rank's points in the order it got them.
+  const std::vector<std::size_t> todo = runner::points_to_compute(prep.done, options.shard);
   runner::ProgressBar progress(rank == 0 && options.progress.value_or(runner::stderr_is_terminal()),
                                todo.size());
-  std::vector<PointResult> mine(todo.size());
+  runner::PointScheduler scheduler(todo.size(), threads,
+                                   [&](std::size_t elsewhere) { progress.points_done(elsewhere); });
+  std::vector<std::size_t> my_points;
+  std::vector<PointResult> mine;
   double compute_s = 0.0;
   std::atomic<std::size_t> points_done{0};
   if (options.on_point_done) options.on_point_done(0, todo.size());
   std::atomic<std::size_t> output_failures{0};
   runner::InputWatch watch(study.inputs);
   auto keep = [&](std::size_t k, ComputedPoint&& computed) {
-    journal->append(runner::journal_line(todo[k], computed.result));
+    journal->append(runner::journal_line(my_points[k], computed.result));
     if (computed.output_failed) ++output_failures;
     mine[k] = std::move(computed.result);
     progress.point_done();
     if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   };
-  if (pool) {
-    pool->run(todo, [&](std::size_t k, ComputedPoint&& computed) {
-      compute_s += computed.compute_s;
-      keep(k, std::move(computed));
-    }, watch.changed());
-    pool.reset();
-  } else {
-    // A plugin that crashes or calls exit() here takes the process with it: the guard says which
-    // point did it, and records an exit() in meta.json.
-    runner::InProcessGuard guard(
+  // A plugin that crashes or calls exit() here takes the process with it: the guard says which
+  // point did it, and records an exit() in meta.json.
+  std::optional<runner::InProcessGuard> guard;
+  if (!pool)
+    guard.emplace(
         threads,
         [&](const std::string& message) {
           journal->flush();
@@ -423,19 +440,39 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         },
         [](void* writer) { static_cast<JournalWriter*>(writer)->flush_before_dying(); },
         journal.get());
-    const auto count = static_cast<std::ptrdiff_t>(todo.size());
+  const Clock::time_point loop_start = Clock::now();
+  while (auto block = scheduler.next(points_done.load())) {
+    const std::size_t base = my_points.size();
+    my_points.insert(my_points.end(), todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
+                     todo.begin() + static_cast<std::ptrdiff_t>(block->end));
+    mine.resize(my_points.size());
+    if (pool) {
+      const std::vector<std::size_t> points(my_points.begin() + static_cast<std::ptrdiff_t>(base),
+                                            my_points.end());
+      pool->run(points, [&](std::size_t k, ComputedPoint&& computed) {
+        compute_s += computed.compute_s;
+        keep(base + k, std::move(computed));
+        scheduler.serve();
+      }, watch.changed());
+      continue;
+    }
+    const auto count = static_cast<std::ptrdiff_t>(block->size());
 #pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (watch.changed().load()) continue;  // stopped: the inputs are not what they were
-      const auto index = static_cast<std::size_t>(k);
-      guard.started(omp_get_thread_num(), todo[index]);
-      ComputedPoint computed =
-          runner::compute_point(*kind, study, todo[index], columns, options.out_dir, options.plots);
-      guard.finished(omp_get_thread_num());
+      const std::size_t index = base + static_cast<std::size_t>(k);
+      guard->started(omp_get_thread_num(), my_points[index]);
+      ComputedPoint computed = runner::compute_point(*kind, study, my_points[index], columns,
+                                                     options.out_dir, options.plots);
+      guard->finished(omp_get_thread_num());
       compute_s += computed.compute_s;
       keep(index, std::move(computed));
+      scheduler.serve();  // rank 0's main thread lets MPI progress the other ranks' claims
     }
   }
+  const double loop_s = seconds_since(loop_start);
+  pool.reset();
+  guard.reset();
   journal->flush();
   progress.finish();
 
@@ -449,13 +486,14 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   for (const PointResult& r : mine) computed += r.done ? 1 : 0;
   Json payload = {{"computed", computed},
                   {"compute_s", compute_s},
+                  {"loop_s", loop_s},
                   {"output_failures", output_failures.load()},
                   {"journal_error", journal->error()},
                   {"input_changes", changes}};
   if (rank != 0) {
     std::string records;
-    for (std::size_t k = 0; k < todo.size(); ++k)
-      if (mine[k].done) records += runner::journal_line(todo[k], mine[k]);
+    for (std::size_t k = 0; k < my_points.size(); ++k)
+      if (mine[k].done) records += runner::journal_line(my_points[k], mine[k]);
     payload["records"] = std::move(records);
   }
   journal.reset();
@@ -467,13 +505,16 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     try {
       std::vector<PointResult> results(n);
       for (auto& [p, r] : prep.resumed.records) results[p] = std::move(r);
-      for (std::size_t k = 0; k < todo.size(); ++k) results[todo[k]] = std::move(mine[k]);
+      for (std::size_t k = 0; k < my_points.size(); ++k) results[my_points[k]] = std::move(mine[k]);
       ComputeStats stats;
       for (std::size_t r = 0; r < payloads.size(); ++r) {
         Json from = Json::parse(payloads[r]);
         std::string().swap(payloads[r]);  // rank 0 holds every rank's results: one copy at a time
         stats.computed += from["computed"].get<std::size_t>();
         stats.compute_s += from["compute_s"].get<double>();
+        stats.per_rank.push_back({{"points", from["computed"]},
+                                  {"compute_s", from["compute_s"]},
+                                  {"loop_s", from["loop_s"]}});
         stats.output_failures += from["output_failures"].get<std::size_t>();
         if (auto error = from["journal_error"].get<std::string>(); !error.empty())
           stats.journal_errors.push_back(error);
@@ -490,6 +531,17 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       }
       if (!stats.input_changes.empty()) {
         result["input_error"] = input_changed(meta_in, stats.input_changes);
+      } else if (options.shard) {
+        runner::ShardRun shard_run{prep.session, prep.resumed.records.size(), stats.computed,
+                                   stats.compute_s, seconds_since(start), stats.journal_errors,
+                                   stats.output_failures > 0
+                                       ? fmt::format("{} point(s) could not write their files",
+                                                     stats.output_failures)
+                                       : ""};
+        runner::ShardOutcome written = runner::write_shard_meta(meta_in, results, shard_run);
+        result["failed"] = written.failed;
+        result["timed_out"] = written.timed_out;
+        result["output_error"] = written.output_error;
       } else {
         OutputsWritten written =
             write_outputs(*kind, meta_in, prep, std::move(results), stats, start);
@@ -511,7 +563,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   if (result.contains("error")) throw std::runtime_error(result["error"].get<std::string>());
 
   RunSummary summary;
-  summary.points = n;
+  summary.points = options.shard ? runner::shard_point_count(n, *options.shard) : n;
   summary.failed = result["failed"].get<std::size_t>();
   summary.timed_out = result["timed_out"].get<std::size_t>();
   summary.output_error = result["output_error"].get<std::string>();
