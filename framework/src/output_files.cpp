@@ -31,50 +31,69 @@ std::filesystem::path temporary_path_for(const std::filesystem::path& path) {
   return tmp;
 }
 
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
-  const std::filesystem::path tmp = temporary_path_for(path);
-  if (path.has_parent_path()) {
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path path)
+    : path_(std::move(path)), tmp_(temporary_path_for(path_)) {
+  if (path_.has_parent_path()) {
     std::error_code ec;
-    std::filesystem::create_directories(path.parent_path(), ec);
+    std::filesystem::create_directories(path_.parent_path(), ec);
     if (ec) {
       note_failed_output_write();
       throw OutputError(fmt::format("cannot create directory {}: {}",
-                                    path.parent_path().string(), ec.message()));
+                                    path_.parent_path().string(), ec.message()));
     }
   }
-  auto fail = [&](const char* what) {
-    int err = errno;
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) fail("create", errno);
+}
+
+AtomicFileWriter::~AtomicFileWriter() { abandon(); }
+
+void AtomicFileWriter::abandon() noexcept {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  if (!tmp_.empty()) {
     std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    note_failed_output_write();
-    throw OutputError(fmt::format("cannot {} {}: {}", what, path.string(), std::strerror(err)));
-  };
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail("create");
+    std::filesystem::remove(tmp_, ignored);
+    tmp_.clear();
+  }
+}
+
+void AtomicFileWriter::fail(const char* what, int err) {
+  abandon();
+  note_failed_output_write();
+  throw OutputError(fmt::format("cannot {} {}: {}", what, path_.string(), std::strerror(err)));
+}
+
+void AtomicFileWriter::write(std::string_view content) {
+  if (fd_ < 0) throw std::logic_error("AtomicFileWriter: write after commit or failure");
   std::size_t written = 0;
   while (written < content.size()) {
-    ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    ssize_t n = ::write(fd_, content.data() + written, content.size() - written);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      int err = errno;
-      ::close(fd);
-      errno = err;
-      fail("write");
-    }
+    if (n < 0) fail("write", errno);
     written += static_cast<std::size_t>(n);
   }
+}
+
+void AtomicFileWriter::commit() {
+  if (fd_ < 0) throw std::logic_error("AtomicFileWriter: commit after commit or failure");
   // fsync before rename: after a crash the new name never points at unwritten blocks.
-  bool synced = ::fsync(fd) == 0;
+  bool synced = ::fsync(fd_) == 0;
   int err = errno;
-  if (::close(fd) != 0 && synced) {
+  if (::close(fd_) != 0 && synced) {
     synced = false;
     err = errno;
   }
-  if (!synced) {
-    errno = err;
-    fail("write");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("replace");
+  fd_ = -1;
+  if (!synced) fail("write", err);
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) fail("replace", errno);
+  tmp_.clear();
+}
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+  AtomicFileWriter file(path);
+  file.write(content);
+  file.commit();
 }
 
 std::string csv_text(const std::vector<std::string>& header,

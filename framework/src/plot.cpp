@@ -542,6 +542,20 @@ void render(const Curves& figure, const fs::path& out_dir, const std::string& st
   produce(out_dir, stem, data, gp);
 }
 
+// Above this many cells a map is drawn as a raster image (gnuplot `with image`: one embedded
+// picture in the SVG, whatever the cell count) instead of one box per cell; below it boxes keep
+// exact cell edges on uneven axes. A uniform axis is needed for an image.
+constexpr std::size_t kMaxBoxCells = 20000;
+
+bool evenly_spaced(const std::vector<double>& sorted_values) {
+  if (sorted_values.size() < 3) return true;
+  const double step = (sorted_values.back() - sorted_values.front()) /
+                      static_cast<double>(sorted_values.size() - 1);
+  for (std::size_t i = 1; i < sorted_values.size(); ++i)
+    if (std::abs(sorted_values[i] - sorted_values[i - 1] - step) > 1e-6 * std::abs(step)) return false;
+  return true;
+}
+
 void render(const Heatmap& figure, const fs::path& out_dir, const std::string& stem) {
   check_axis(figure.x, figure.log_x, "x");
   check_axis(figure.y, figure.log_y, "y");
@@ -555,10 +569,12 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
   for (std::size_t i = 0; i < nx; ++i) xs[i] = figure.x[x_order[i]];
   for (std::size_t j = 0; j < ny; ++j) ys[j] = figure.y[y_order[j]];
   const auto x_cells = cell_edges(xs, figure.log_x), y_cells = cell_edges(ys, figure.log_y);
+  const bool raster = nx * ny > kMaxBoxCells && !figure.log_x && !figure.log_y &&
+                      evenly_spaced(xs) && evenly_spaced(ys);
 
   // One block per y row (blank line between), the layout gnuplot's splot needs for contouring.
-  std::string data = fmt::format("# {}\n# x y z x_low x_high y_low y_high  (z: {}; NaN = failed)\n",
-                                 figure.title, figure.z_label);
+  std::string data = fmt::format("# {}\n# x y z{}  (z: {}; NaN = failed)\n", figure.title,
+                                 raster ? "" : " x_low x_high y_low y_high", figure.z_label);
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
   bool any_failed = false;
   for (std::size_t j = 0; j < ny; ++j) {
@@ -571,9 +587,12 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
       } else {
         any_failed = true;
       }
-      data += fmt::format("{} {} {} {} {} {} {}\n", number(xs[i]), number(ys[j]), number(z),
-                          number(x_cells[i].low), number(x_cells[i].high), number(y_cells[j].low),
-                          number(y_cells[j].high));
+      if (raster)
+        data += fmt::format("{} {} {}\n", number(xs[i]), number(ys[j]), number(z));
+      else
+        data += fmt::format("{} {} {} {} {} {} {}\n", number(xs[i]), number(ys[j]), number(z),
+                            number(x_cells[i].low), number(x_cells[i].high),
+                            number(y_cells[j].low), number(y_cells[j].high));
     }
   }
   const bool any_finite = std::isfinite(z_min);
@@ -604,19 +623,30 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
   // without it anti-aliasing leaves hairline seams between neighbouring cells. A failed cell
   // (z written as NaN) gets an undefined x and is skipped here (gnuplot would paint it with an
   // arbitrary palette colour), then drawn grey by its own plot.
-  std::vector<std::string> plots{fmt::format(
-      "'{}.dat' using (strcol(3) eq 'NaN' ? NaN : $1):2:4:5:6:7:3 with boxxyerror lc palette lw 1 "
-      "fillstyle solid 1.0 border notitle",
-      stem)};
+  // A raster map paints the same cells as one image per layer: palette colours, then a layer
+  // that is opaque only where a cell is failed (grey) or exactly at the level (neutral).
+  auto rgb_layer = [&](std::string_view colour, const std::string& where, const std::string& title) {
+    const unsigned rgb = static_cast<unsigned>(std::stoul(std::string(colour.substr(1)), nullptr, 16));
+    const std::string alpha = fmt::format("({} ? 255 : 0)", where);
+    return fmt::format("'{}.dat' using 1:2:({}):({}):({}):{} with rgbalpha title {}", stem,
+                       rgb >> 16, (rgb >> 8) & 255u, rgb & 255u, alpha, title);
+  };
+  std::vector<std::string> plots{
+      raster ? fmt::format("'{}.dat' using 1:2:3 with image notitle", stem)
+             : fmt::format("'{}.dat' using (strcol(3) eq 'NaN' ? NaN : $1):2:4:5:6:7:3 with "
+                           "boxxyerror lc palette lw 1 fillstyle solid 1.0 border notitle",
+                           stem)};
   // A diverging palette jumps from blue to red at the level, so a value exactly at it (no effect,
   // e.g. a modulation of amplitude 0) would take one side's colour: such cells are drawn neutral.
   if (figure.diverging && figure.contour_level &&
       std::any_of(figure.z.begin(), figure.z.end(), [&](double z) { return z == *figure.contour_level; }))
-    plots.push_back(fmt::format(
-        "'{}.dat' using ($3 == {} ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
-        "fillstyle solid 1.0 border title {}",
-        stem, number(*figure.contour_level), kNeutralWhite,
-        gp_string(fmt::format("exactly {}", number(*figure.contour_level)))));
+    plots.push_back(
+        raster ? rgb_layer(kNeutralWhite, fmt::format("$3 == {}", number(*figure.contour_level)),
+                           gp_string(fmt::format("exactly {}", number(*figure.contour_level))))
+               : fmt::format("'{}.dat' using ($3 == {} ? $1 : NaN):2:4:5:6:7 with boxxyerror lc "
+                             "rgb '{}' lw 1 fillstyle solid 1.0 border title {}",
+                             stem, number(*figure.contour_level), kNeutralWhite,
+                             gp_string(fmt::format("exactly {}", number(*figure.contour_level)))));
   if (figure.contour_level && nx >= 2 && ny >= 2 && crosses_level(figure, *figure.contour_level)) {
     // gnuplot computes the contour itself (set table into a datablock), from the same data file.
     // The table is written with the axes' tick formats: full precision while it is computed, or
@@ -637,10 +667,11 @@ void render(const Heatmap& figure, const fs::path& out_dir, const std::string& s
                                 gp_string(label)));
   }
   if (any_failed)
-    plots.push_back(fmt::format(
-        "'{}.dat' using (strcol(3) eq 'NaN' ? $1 : NaN):2:4:5:6:7 with boxxyerror lc rgb '{}' lw 1 "
-        "fillstyle solid 1.0 border title {}",
-        stem, kFailedGrey, gp_string(figure.missing_label)));
+    plots.push_back(
+        raster ? rgb_layer(kFailedGrey, "strcol(3) eq 'NaN'", gp_string(figure.missing_label))
+               : fmt::format("'{}.dat' using (strcol(3) eq 'NaN' ? $1 : NaN):2:4:5:6:7 with "
+                             "boxxyerror lc rgb '{}' lw 1 fillstyle solid 1.0 border title {}",
+                             stem, kFailedGrey, gp_string(figure.missing_label)));
   // Curves over the map, as inline data blocks (the map's data file is read whole).
   if (!figure.overlays.empty()) gp += line_styles();
   for (std::size_t i = 0; i < figure.overlays.size(); ++i) {

@@ -26,6 +26,7 @@
 #include "runner/output_dir.hpp"
 #include "runner/progress.hpp"
 #include "runner/results_io.hpp"
+#include "runner/result_writer.hpp"
 #include "runner/resume.hpp"
 #include "runner/worker_protocol.hpp"
 
@@ -236,6 +237,74 @@ TEST(RunnerGridOrder, RowsFollowGridOrderWithLastAxisFastest) {
 
   results[3].done = false;
   EXPECT_THROW(runner::assemble_results(study, {"out"}, results), std::logic_error);
+}
+
+// results.csv streamed in completion order has the bytes of the table assembled at the end.
+TEST(RunnerStreaming, ScrambledArrivalsGiveTheAssembledCsv) {
+  Study study = two_axis_study();
+  const fs::path dir = fresh_dir("streaming");
+  std::vector<PointResult> results(6);
+  for (std::size_t p = 0; p < 6; ++p)
+    results[p] = p == 2 ? PointResult{true, {Json()}, runner::failure_status("no root")}
+                        : ok({p == 4 ? Json("a, \"quoted\" text") : Json(0.1 * static_cast<double>(p))});
+  const std::string expected = runner::format_csv(runner::assemble_results(study, {"out"}, results));
+  {
+    runner::GridOrderWriter writer(study, {"out"}, dir / "results.csv");
+    for (std::size_t p : {4, 0, 5, 2, 1, 3}) {
+      PointResult copy = results[p];
+      writer.add(p, std::move(copy));
+      EXPECT_FALSE(fs::exists(dir / "results.csv"));  // only complete, at commit()
+    }
+    writer.commit();
+    const Json failed = writer.failed_points();
+    ASSERT_EQ(failed.size(), 1u);
+    EXPECT_EQ(failed[0]["point"], 2);
+    EXPECT_EQ(failed[0]["grid"], Json({{"a", 10.0}, {"model.b", 3.0}}));
+    EXPECT_EQ(failed[0]["reason"], "no root");
+    const ResultTable plot = writer.take_plot_table();
+    EXPECT_FALSE(plot.decimated());
+    EXPECT_EQ(plot.rows.size(), 6u);
+  }
+  EXPECT_EQ(runner::read_file(dir / "results.csv"), expected);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}
+
+TEST(RunnerStreaming, AbandonedOrIncompleteWritesNoCsv) {
+  Study study = two_axis_study();
+  const fs::path dir = fresh_dir("streaming_abandoned");
+  runner::GridOrderWriter writer(study, {"out"}, dir / "results.csv");
+  writer.add(0, ok({1.0}));
+  EXPECT_THROW(writer.commit(), std::logic_error);  // 5 points missing
+  writer.abandon();
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+// A large grid's plots get every k-th value of each axis: at most max_rows rows, the longest
+// axis thinned first, and the study handed with them describes exactly those rows.
+TEST(RunnerStreaming, PlotTableOfALargeGridIsDecimatedAndFlagged) {
+  Study study;
+  study.file = "big.toml";
+  std::vector<Json> a, b;
+  for (int i = 0; i < 1000; ++i) a.push_back(static_cast<double>(i));
+  for (int i = 0; i < 30; ++i) b.push_back(static_cast<double>(100 + i));
+  study.grid = {GridAxis{"a", "model.a", a, {}}, GridAxis{"b", "model.b", b, {}}};
+  EXPECT_EQ(runner::plot_strides(study, 65536), (std::vector<std::size_t>{1, 1}));
+  EXPECT_EQ(runner::plot_strides(study, 1000), (std::vector<std::size_t>{31, 1}));  // 33 x 30
+  const fs::path dir = fresh_dir("streaming_decimated");
+  runner::GridOrderWriter writer(study, {"out"}, dir / "results.csv", 1000);
+  for (std::size_t p = study.point_count(); p-- > 0;) writer.add(p, ok({static_cast<double>(p)}));
+  writer.commit();
+  const ResultTable plot = writer.take_plot_table();
+  ASSERT_TRUE(plot.decimated());
+  EXPECT_EQ(plot.strides, (std::vector<std::size_t>{31, 1}));
+  EXPECT_EQ(plot.full_point_count, 30000u);
+  const Study& thin = writer.plot_study();
+  ASSERT_EQ(thin.grid[0].values.size(), 33u);
+  EXPECT_EQ(thin.grid[0].values[1], 31.0);
+  ASSERT_EQ(plot.rows.size(), 990u);
+  // Row 31 = a index 1 (value 31), b index 1: point 31 * 30 + 1 of the whole grid.
+  EXPECT_EQ(plot.rows[31], (std::vector<Json>{31.0, 101.0, 31.0 * 30 + 1}));
+  EXPECT_EQ(lines_of(runner::read_file(dir / "results.csv")).size(), 30001u);
 }
 
 TEST(RunnerJournal, FingerprintChangesWithTheComputation) {

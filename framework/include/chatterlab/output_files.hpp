@@ -17,6 +17,27 @@ namespace chatterlab {
 // (chatterlab/errors.hpp) naming the file and the reason.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
 
+// write_file_atomically for a file written piece by piece (results.csv of a large grid, streamed
+// in grid order): the pieces go to a temporary file, commit() flushes it to disk and renames it
+// over `path`. Destroyed or abandoned without commit(), it removes the temporary file and leaves
+// `path` as it was. Failures throw OutputError (and count as failed output writes).
+class AtomicFileWriter {
+ public:
+  explicit AtomicFileWriter(std::filesystem::path path);
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  void write(std::string_view content);
+  void commit();
+  void abandon() noexcept;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  [[noreturn]] void fail(const char* what, int err);
+  std::filesystem::path path_, tmp_;
+  int fd_ = -1;
+};
+
 // A temporary name next to `path`, unique per process and call ("<path>.tmp<pid>.<n>"): for
 // files written by another program (gnuplot) and renamed into place.
 std::filesystem::path temporary_path_for(const std::filesystem::path& path);

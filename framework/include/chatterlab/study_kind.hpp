@@ -30,6 +30,13 @@ struct ResultTable {
   // "failed: <reason>". Cells are numbers, booleans or short strings.
   std::vector<std::vector<Json>> rows;
   std::vector<std::string> status;
+  // Plots of a large grid get a bounded table (docs/architecture.md, "Streaming results"): the
+  // points on every strides[a]-th value of grid axis a, out of full_point_count points, and the
+  // Study handed to write_artifacts with it has exactly those axis values, so a kind draws it as
+  // it would draw the whole grid. results.csv always holds every point. Empty: every point.
+  std::vector<std::size_t> strides;
+  std::size_t full_point_count = 0;
+  bool decimated() const { return !strides.empty(); }
 };
 
 // Where a point may put its own files. A study without [grid] has one point, whose artefact

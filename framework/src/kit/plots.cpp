@@ -175,14 +175,36 @@ double cell(const ResultTable& results, std::size_t row, std::size_t column) {
   return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
 }
 
+std::string decimation_note(const std::vector<PlotAxis>& axes, const ResultTable& results) {
+  if (!results.decimated()) return {};
+  auto ordinal = [](std::size_t n) {
+    const std::size_t tens = n % 100, ones = n % 10;
+    const char* suffix = tens >= 11 && tens <= 13 ? "th"
+                         : ones == 1              ? "st"
+                         : ones == 2              ? "nd"
+                         : ones == 3              ? "rd"
+                                                  : "th";
+    return std::to_string(n) + suffix;
+  };
+  std::vector<std::string> strides;
+  bool same = true;
+  for (const PlotAxis& axis : axes) {
+    strides.push_back(ordinal(results.strides[axis.grid_index]));
+    same = same && strides.back() == strides.front();
+  }
+  if (same && !strides.empty()) strides.resize(1);
+  return fmt::format(" (every {} value)", fmt::join(strides, " x "));
+}
+
 void plot_column(const std::vector<PlotAxis>& axes, const ResultTable& results,
                  const ColumnFigure& figure, const fs::path& out_dir, const std::string& stem,
                  Figures& figures) {
   const std::size_t column = column_index(results, figure.column);
+  const std::string title = figure.title + decimation_note(axes, results);
   if (axes.size() == 1) {
     const PlotAxis& axis = axes[0];
     plot::Curves curves;
-    curves.title = figure.title;
+    curves.title = title;
     curves.x_label = axis.label;
     curves.y_label = figure.value_label;
     curves.log_x = axis.log;
@@ -211,7 +233,7 @@ void plot_column(const std::vector<PlotAxis>& axes, const ResultTable& results,
     const PlotAxis& x = axes[1];
     const PlotAxis& y = axes[0];
     plot::Heatmap h;
-    h.title = figure.title;
+    h.title = title;
     h.x_label = x.label;
     h.y_label = y.label;
     h.z_label = figure.value_label;

@@ -57,22 +57,20 @@ Json meta_with_state(const MetaInputs& in, const std::string& state) {
   return meta;
 }
 
-Json failed_points(const Study& study, const ResultTable& table,
-                   const std::vector<double>& elapsed_s) {
-  Json failed = Json::array();
-  for (std::size_t p = 0; p < table.status.size(); ++p) {
-    const PointOutcome outcome = outcome_of(table.status[p]);
-    if (outcome == PointOutcome::ok) continue;
-    Json grid = Json::object();
-    for (std::size_t a = 0; a < study.grid.size(); ++a) grid[study.grid[a].key] = table.rows[p][a];
-    Json entry = {{"point", p},
-                  {"grid", std::move(grid)},
-                  {"status", outcome == PointOutcome::timeout ? "timeout" : "failed"},
-                  {"reason", std::string(reason_of(table.status[p]))}};
-    if (outcome == PointOutcome::timeout) entry["elapsed_s"] = elapsed_s[p];
-    failed.push_back(std::move(entry));
-  }
-  return failed;
+Json failed_point(const Study& study, std::size_t point, std::string_view status,
+                  double elapsed_s) {
+  const PointOutcome outcome = outcome_of(status);
+  if (outcome == PointOutcome::ok) return nullptr;
+  Json grid = Json::object();
+  const std::vector<std::size_t> index = study.point_indices(point);
+  for (std::size_t a = 0; a < study.grid.size(); ++a)
+    grid[study.grid[a].key] = study.grid[a].values[index[a]];
+  Json entry = {{"point", point},
+                {"grid", std::move(grid)},
+                {"status", outcome == PointOutcome::timeout ? "timeout" : "failed"},
+                {"reason", std::string(reason_of(status))}};
+  if (outcome == PointOutcome::timeout) entry["elapsed_s"] = elapsed_s;
+  return entry;
 }
 
 }  // namespace chatterlab::runner

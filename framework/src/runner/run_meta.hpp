@@ -1,6 +1,8 @@
 #pragma once
 // meta.json: what it says while a run goes and after it ends (docs/studies.md, "meta.json").
+#include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "chatterlab/params.hpp"
@@ -35,9 +37,8 @@ Json meta_header(const MetaInputs& in);
 Json run_description(const MetaInputs& in);
 // meta.json of a run that has not finished: header, `state`, and `run`.
 Json meta_with_state(const MetaInputs& in, const std::string& state);
-// The points whose status is not ok: index, grid values, status (failed | timeout), reason,
-// elapsed_s for timeouts.
-Json failed_points(const Study& study, const ResultTable& table,
-                   const std::vector<double>& elapsed_s);
+// meta.json's entry of a point whose status is not ok (null for ok): index, grid values, status
+// (failed | timeout), reason, elapsed_s for timeouts.
+Json failed_point(const Study& study, std::size_t point, std::string_view status, double elapsed_s);
 
 }  // namespace chatterlab::runner

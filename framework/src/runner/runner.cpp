@@ -4,9 +4,11 @@
 // ranks balanced when cost varies smoothly across the grid); inside a rank OpenMP threads take
 // points dynamically, or, with --isolate or a time limit per point, worker processes do
 // (runner/worker_pool.hpp). Each point's result is queued for this rank's journal as soon as it
-// is known (a writer thread puts it on disk within 0.1 s), then sent to rank 0 at the end; rank 0
-// alone writes results.csv (in grid order, numbers in round-trip form, no timings or ranks),
-// meta.json and the plots. So the bytes of results.csv depend only on the study, never on ranks,
+// is known (a writer thread puts it on disk within 0.1 s). Rank 0 alone writes results.csv (in
+// grid order, numbers in round-trip form, no timings or ranks), meta.json and the plots: its own
+// points stream into results.csv as they finish (runner/result_writer.hpp: memory bounded by the
+// rows that finish ahead of an earlier one, not by the grid), the other ranks' points arrive at
+// the end. So the bytes of results.csv depend only on the study, never on ranks,
 // threads, worker processes or interruptions.
 //
 // Order of a run, so that exit code 2 means "nothing was written": everything that can reject the
@@ -38,6 +40,7 @@
 #include "runner/point_compute.hpp"
 #include "runner/progress.hpp"
 #include "runner/results_io.hpp"
+#include "runner/result_writer.hpp"
 #include "runner/resume.hpp"
 #include "runner/run_meta.hpp"
 #include "runner/shards.hpp"
@@ -234,33 +237,17 @@ struct OutputsWritten {
   Json notices = Json::array();  // [{point, notice}]
 };
 
-// The kind's `notice` column (study_kind.hpp): what the user must read even when every point
-// completed, e.g. "no stable candidate".
-Json point_notices(const ResultTable& table) {
-  Json notices = Json::array();
-  const auto column = std::find(table.output_columns.begin(), table.output_columns.end(), "notice");
-  if (column == table.output_columns.end()) return notices;
-  const std::size_t c = table.grid_columns.size() + static_cast<std::size_t>(column - table.output_columns.begin());
-  for (std::size_t p = 0; p < table.rows.size(); ++p)
-    if (c < table.rows[p].size() && table.rows[p][c].is_string() && !table.rows[p][c].get<std::string>().empty())
-      notices.push_back({{"point", p}, {"notice", table.rows[p][c]}});
-  return notices;
-}
-
 // Rank 0 after all points: results.csv, plots, meta.json. An output that cannot be written (disk
 // full, I/O error) is reported, not thrown: meta.json then says so (state output_failed), using
 // the space reserved for it, and the run exits 3.
 OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const Preparation& prep,
-                             std::vector<PointResult> results, const ComputeStats& stats,
+                             runner::GridOrderWriter& results, const ComputeStats& stats,
                              Clock::time_point start) {
   const fs::path& out = in.options.out_dir;
-  std::vector<double> elapsed(results.size());
-  for (std::size_t p = 0; p < results.size(); ++p) elapsed[p] = results[p].elapsed_s;
-  ResultTable table = runner::assemble_results(in.study, in.columns, std::move(results));
   OutputsWritten written;
   try {
-    runner::write_file_atomically(out / "results.csv", runner::format_csv(table, in.threads));
-  } catch (const std::exception& e) {
+    results.commit();
+  } catch (const OutputError& e) {
     written.output_error = e.what();
   }
 
@@ -270,7 +257,8 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
     // a plot that cannot be written (the disk) is an output failure.
     const std::size_t failed_writes = failed_output_writes_on_this_thread();
     try {
-      kind.write_artifacts(in.study, table, out);
+      const ResultTable table = results.take_plot_table();
+      kind.write_artifacts(results.plot_study(), table, out);
     } catch (const std::exception& e) {
       if (failed_output_writes_on_this_thread() != failed_writes)
         written.output_error = std::string("plots: ") + e.what();
@@ -284,7 +272,7 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
         "--retry-failed once the disk has room){}{}",
         stats.output_failures, written.output_error.empty() ? "" : "; ", written.output_error);
 
-  Json failed = runner::failed_points(in.study, table, elapsed);
+  Json failed = results.failed_points();
   written.failed = failed.size();
   for (const auto& f : failed) written.timed_out += f["status"] == "timeout" ? 1 : 0;
   Json meta = runner::meta_header(in);
@@ -292,12 +280,12 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   if (!written.output_error.empty()) meta["output_error"] = written.output_error;
   meta["points_failed"] = written.failed;
   meta["points_timed_out"] = written.timed_out;
-  written.notices = point_notices(table);
+  written.notices = results.notices();
   meta["notices"] = written.notices;
   meta["failed_points"] = std::move(failed);
   Json run = runner::run_description(in);
   run["journal_session"] = prep.session;
-  run["points_resumed"] = prep.resumed.records.size();
+  run["points_resumed"] = static_cast<std::size_t>(std::count(prep.done.begin(), prep.done.end(), '1'));
   run["points_computed"] = stats.computed;
   run["journal_lines_ignored"] = {{"truncated", prep.resumed.truncated_lines},
                                   {"invalid", prep.resumed.invalid_lines}};
@@ -410,8 +398,27 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
                                todo.size());
   runner::PointScheduler scheduler(todo.size(), threads,
                                    [&](std::size_t elsewhere) { progress.points_done(elsewhere); });
+  // Rank 0 streams its points (and the resumed ones) into results.csv as they finish; another
+  // rank keeps its own points for rank 0 (docs/architecture.md, "Streaming results"). A shard
+  // writes no results.csv (`chatterlab merge` does, from the shards' journals), so its rank 0
+  // keeps its points too, for meta.json's failed points.
+  std::unique_ptr<runner::GridOrderWriter> writer;
+  try {
+    collectively([&] {
+      if (rank == 0 && !options.shard)
+        writer = std::make_unique<runner::GridOrderWriter>(study, columns, options.out_dir / "results.csv");
+    });
+  } catch (const InputError&) {
+    undo_prepare(options);
+    throw;
+  }
+  if (writer) {
+    for (auto& [p, r] : prep.resumed.records) writer->add(p, std::move(r));
+    prep.resumed.records = {};  // their count is in prep.done
+  }
   std::vector<std::size_t> my_points;
-  std::vector<PointResult> mine;
+  std::vector<PointResult> mine;  // this rank's points when it has no writer, as my_points
+  std::atomic<std::size_t> computed_points{0};
   double compute_s = 0.0;
   std::atomic<std::size_t> points_done{0};
   if (options.on_point_done) options.on_point_done(0, todo.size());
@@ -420,7 +427,11 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   auto keep = [&](std::size_t k, ComputedPoint&& computed) {
     journal->append(runner::journal_line(my_points[k], computed.result));
     if (computed.output_failed) ++output_failures;
-    mine[k] = std::move(computed.result);
+    ++computed_points;
+    if (writer)
+      writer->add(my_points[k], std::move(computed.result));
+    else
+      mine[k] = std::move(computed.result);
     progress.point_done();
     if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   };
@@ -438,14 +449,14 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
           runner::write_file_atomically(options.out_dir / "meta.json",
                                         runner::json_text(meta, 2) + "\n");
         },
-        [](void* writer) { static_cast<JournalWriter*>(writer)->flush_before_dying(); },
+        [](void* journal_writer) { static_cast<JournalWriter*>(journal_writer)->flush_before_dying(); },
         journal.get());
   const Clock::time_point loop_start = Clock::now();
   while (auto block = scheduler.next(points_done.load())) {
     const std::size_t base = my_points.size();
     my_points.insert(my_points.end(), todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
                      todo.begin() + static_cast<std::ptrdiff_t>(block->end));
-    mine.resize(my_points.size());
+    if (!writer) mine.resize(my_points.size());
     if (pool) {
       const std::vector<std::size_t> points(my_points.begin() + static_cast<std::ptrdiff_t>(base),
                                             my_points.end());
@@ -482,9 +493,7 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   if (changes.empty() && study.inputs) changes = study.inputs->changes();
 
   // Every rank's new points to rank 0, in the journal's round-trip format.
-  std::size_t computed = 0;
-  for (const PointResult& r : mine) computed += r.done ? 1 : 0;
-  Json payload = {{"computed", computed},
+  Json payload = {{"computed", computed_points.load()},
                   {"compute_s", compute_s},
                   {"loop_s", loop_s},
                   {"output_failures", output_failures.load()},
@@ -503,9 +512,13 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   if (rank == 0) {
     Json result = Json::object();
     try {
-      std::vector<PointResult> results(n);
-      for (auto& [p, r] : prep.resumed.records) results[p] = std::move(r);
-      for (std::size_t k = 0; k < my_points.size(); ++k) results[my_points[k]] = std::move(mine[k]);
+      std::vector<PointResult> shard_results;  // a shard's points, by grid index
+      if (!writer) {
+        shard_results.resize(n);
+        for (auto& [p, r] : prep.resumed.records) shard_results[p] = std::move(r);
+        for (std::size_t k = 0; k < my_points.size(); ++k)
+          shard_results[my_points[k]] = std::move(mine[k]);
+      }
       ComputeStats stats;
       for (std::size_t r = 0; r < payloads.size(); ++r) {
         Json from = Json::parse(payloads[r]);
@@ -527,9 +540,16 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
             runner::parse_journal_records(from["records"].get<std::string>(), n, columns.size());
         if (records.invalid_lines + records.truncated_lines > 0)
           throw std::logic_error(fmt::format("runner: garbled results from rank {}", r));
-        for (auto& [p, record] : records.records) results[p] = std::move(record);
+        if (!stats.input_changes.empty()) continue;
+        for (auto& [p, record] : records.records) {
+          if (writer)
+            writer->add(p, std::move(record));
+          else
+            shard_results[p] = std::move(record);
+        }
       }
       if (!stats.input_changes.empty()) {
+        if (writer) writer->abandon();
         result["input_error"] = input_changed(meta_in, stats.input_changes);
       } else if (options.shard) {
         runner::ShardRun shard_run{prep.session, prep.resumed.records.size(), stats.computed,
@@ -538,13 +558,13 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
                                        ? fmt::format("{} point(s) could not write their files",
                                                      stats.output_failures)
                                        : ""};
-        runner::ShardOutcome written = runner::write_shard_meta(meta_in, results, shard_run);
+        runner::ShardOutcome written = runner::write_shard_meta(meta_in, shard_results, shard_run);
         result["failed"] = written.failed;
         result["timed_out"] = written.timed_out;
         result["output_error"] = written.output_error;
       } else {
         OutputsWritten written =
-            write_outputs(*kind, meta_in, prep, std::move(results), stats, start);
+            write_outputs(*kind, meta_in, prep, *writer, stats, start);
         result["failed"] = written.failed;
         result["timed_out"] = written.timed_out;
         result["output_error"] = written.output_error;

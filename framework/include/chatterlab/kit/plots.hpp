@@ -72,6 +72,11 @@ std::size_t column_index(const ResultTable& results, const std::string& name);
 // A numeric cell; NaN for a failed point or a non-number (a grey cell / gap in plots).
 double cell(const ResultTable& results, std::size_t row, std::size_t column);
 
+// A large grid's plots draw a decimated table (ResultTable::strides): the words a title gets
+// for it, short enough for a title line: " (every 4th value)", " (every 4th x 2nd value)";
+// empty for a whole table.
+std::string decimation_note(const std::vector<PlotAxis>& axes, const ResultTable& results);
+
 // One result column drawn over the grid.
 struct ColumnFigure {
   ColumnFigure(std::string column_name, std::string figure_title, std::string label)

@@ -1,0 +1,81 @@
+#pragma once
+// Streaming results (docs/architecture.md, "Streaming results"). Rank 0 hands every finished
+// point to a GridOrderWriter in whatever order points finish; the writer appends its results.csv
+// row as soon as every earlier point is in, so it holds only the formatted rows of points that
+// finished ahead of an earlier one, never the whole grid. It keeps what the end of the run needs:
+// one entry per failed point and per notice, and the bounded table the plots draw (every point of
+// a small grid; the points on a lattice of every k-th axis value of a large one).
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/study.hpp"
+#include "chatterlab/study_kind.hpp"
+#include "runner/results_io.hpp"
+
+namespace chatterlab::runner {
+
+// The most rows a plot table holds: 2^16 = 256 x 256 cells of a two-axis map, a raster finer than
+// a plot's cells on screen, and a few MB of plot data and memory whatever the grid size.
+inline constexpr std::size_t max_plot_rows = std::size_t{1} << 16;
+
+// Per-axis strides so that the thinned grid (every stride-th value of each axis, first value
+// included) has at most max_rows points; the axis with the most remaining values is thinned
+// first. All ones when the grid already fits.
+std::vector<std::size_t> plot_strides(const Study& study, std::size_t max_rows);
+
+// The study with each grid axis reduced to every strides[a]-th value: what write_artifacts gets
+// with a decimated table, so varying_axes() and point_indices() describe the table's rows.
+Study decimated_study(const Study& study, const std::vector<std::size_t>& strides);
+
+class GridOrderWriter {
+ public:
+  // Creates `csv` (a temporary name until commit()) and writes its header line.
+  GridOrderWriter(const Study& study, std::vector<std::string> output_columns,
+                  const std::filesystem::path& csv, std::size_t plot_rows = max_plot_rows);
+
+  // One finished point (each exactly once, from any thread). An output error is kept and thrown
+  // by commit(): a grid loop must not unwind from a worker thread.
+  void add(std::size_t point, PointResult&& result);
+
+  // After every point was added: results.csv into place. Throws OutputError.
+  void commit();
+  // The run is not valid after all (an input file changed): no results.csv.
+  void abandon() noexcept;
+
+  // meta.json's failed_points (in grid order) and notices ([{point, notice}], in grid order).
+  Json failed_points() const;
+  Json notices() const;
+
+  // What write_artifacts gets: the study (grid axes thinned when the table is decimated) and
+  // the table. Call once, after commit().
+  const Study& plot_study() const { return *plot_study_; }
+  ResultTable take_plot_table();
+
+ private:
+  void write_ready();  // appends every row whose predecessors are all written; under mutex_
+  std::string format_row(std::size_t point, const PointResult& result) const;
+
+  const Study& study_;
+  std::vector<std::string> columns_;
+  std::ptrdiff_t notice_column_ = -1;
+  std::unique_ptr<AtomicFileWriter> file_;
+  std::string error_;  // first output error
+
+  mutable std::mutex mutex_;
+  std::size_t next_ = 0;                    // the next point to write
+  std::map<std::size_t, std::string> early_;  // formatted rows ahead of next_
+  std::string buffer_;                       // rows written in blocks
+  std::map<std::size_t, Json> failed_, notices_;
+
+  std::vector<std::size_t> strides_;  // empty: every point is a plot row
+  std::unique_ptr<Study> plot_study_;
+  ResultTable plot_table_;
+};
+
+}  // namespace chatterlab::runner
