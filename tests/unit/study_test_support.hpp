@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/registry.hpp"
 #include "chatterlab/study.hpp"
 
 namespace chatterlab::testing {
@@ -103,6 +104,15 @@ inline std::string fake_study(const std::string& tail = "") {
          "          { frequency_hz = 480.0, damping_ratio = 0.02 } ]\n"
          "\n" +
          tail;
+}
+
+// A `[model]` table of TOML text with the registered model's example parameters (what `chatterlab
+// describe <type>` shows), one `key = value` line each.
+inline std::string example_model_toml(const std::string& type) {
+  std::string text = "[model]\ntype = \"" + type + "\"\n";
+  for (const auto& [key, value] : model_registry().at(type).info.example_params.items())
+    text += key + " = " + value.dump() + "\n";
+  return text;
 }
 
 }  // namespace chatterlab::testing

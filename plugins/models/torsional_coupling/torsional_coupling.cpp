@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "chatterlab/param_table.hpp"
+#include "shared/plunge_dynamics/process_scaling.hpp"
 
 namespace chatterlab {
 
@@ -139,7 +140,41 @@ const ParamTable<TorsionalCouplingParameters>& parameters_table() {
 }  // namespace
 
 TorsionalCoupling::TorsionalCoupling(const ParamValues& values)
-    : DerivedModel(TorsionalCouplingEquations(parameters_table().read(values))) {}
+    : TorsionalCoupling(parameters_table().read(values)) {}
+
+ProcessConditions TorsionalCoupling::nominal_conditions() const {
+  ProcessConditions c;
+  c.wheel_speed_rpm = parameters_.wheel_speed_rpm;
+  c.work_speed_rpm = parameters_.work_speed_rpm;
+  c.contact_width_mm = 1e3 * parameters_.grinding_width_m;
+  c.work_radius_mm = 1e3 * parameters_.work_radius_m;
+  c.wheel_diameter_mm = 2e3 * parameters_.wheel_radius_m;
+  return c;
+}
+
+Json TorsionalCoupling::parameters_at(const ProcessConditions& reference_given,
+                                      const ProcessConditions& conditions_given,
+                                      const ProcessScaling& scaling) const {
+  // A condition not given (0) is the model's own, in the reference and in the conditions.
+  const ProcessConditions own = nominal_conditions();
+  const auto completed = [&](ProcessConditions c) {
+    for (auto field : {&ProcessConditions::wheel_speed_rpm, &ProcessConditions::work_speed_rpm,
+                       &ProcessConditions::contact_width_mm, &ProcessConditions::work_radius_mm,
+                       &ProcessConditions::wheel_diameter_mm})
+      if (!(c.*field > 0.0)) c.*field = own.*field;
+    return c;
+  };
+  const ProcessConditions ref = completed(reference_given), at = completed(conditions_given);
+  const plunge_dynamics::ProcessFactors f = plunge_dynamics::process_factors(ref, at, scaling);
+  TorsionalCouplingParameters p = parameters_;
+  p.wheel_speed_rpm = at.wheel_speed_rpm;
+  p.work_speed_rpm = at.work_speed_rpm;
+  p.grinding_width_m = parameters_.grinding_width_m * f.width;
+  p.work_radius_m = parameters_.work_radius_m * at.work_radius_mm / ref.work_radius_mm;
+  p.wheel_radius_m = parameters_.wheel_radius_m * at.wheel_diameter_mm / ref.wheel_diameter_mm;
+  p.removal_coefficient_n_per_m2 = parameters_.removal_coefficient_n_per_m2 * f.removal;
+  return parameters_table().write(p);
+}
 
 PluginInfo TorsionalCoupling::info() {
   PluginInfo info;

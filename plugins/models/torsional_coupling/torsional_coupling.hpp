@@ -28,6 +28,7 @@
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/process_conditions.hpp"
 #include "chatterlab/registry.hpp"
 
 namespace chatterlab {
@@ -127,11 +128,28 @@ struct TorsionalCouplingEquations {
 // The dynamics engine's view of G5 (S = double).
 using TorsionalCouplingTimeDomain = EquationsTimeDomain<TorsionalCouplingEquations>;
 
-class TorsionalCoupling final : public DerivedModel<TorsionalCouplingEquations> {
+class TorsionalCoupling final : public DerivedModel<TorsionalCouplingEquations>,
+                                public ProcessConditionsModel {
  public:
   explicit TorsionalCoupling(const ParamValues& values);
-  explicit TorsionalCoupling(const TorsionalCouplingParameters& p) : DerivedModel(TorsionalCouplingEquations(p)) {}
+  explicit TorsionalCoupling(const TorsionalCouplingParameters& p)
+      : DerivedModel(TorsionalCouplingEquations(p)), parameters_(p) {}
+
   static PluginInfo info();
+
+  // Process conditions (feed_risk, suppression_map): the speeds, the width b and the radii are
+  // G5's own parameters and take the conditions' values (scaled by conditions/reference where the
+  // reference gives them); lambda_w follows G4's removal law Kv/(1+Kv) like G1's kw
+  // (shared/plunge_dynamics/process_scaling.hpp), and lambda_g = lambda_w Gr Rg0 n_g/(Rw0 n_w)
+  // follows through the speeds and radii. G5 has no separate contact or wear stiffness, so S1's
+  // depth-of-cut law (thickness exponent) has nothing to rescale.
+  const ProcessConditionsModel* process_conditions() const override { return this; }
+  ProcessConditions nominal_conditions() const override;
+  Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                     const ProcessScaling& scaling) const override;
+
+ private:
+  TorsionalCouplingParameters parameters_;
 };
 
 }  // namespace chatterlab

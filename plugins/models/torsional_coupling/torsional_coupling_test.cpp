@@ -12,6 +12,7 @@
 
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/params.hpp"
+#include "chatterlab/process_conditions.hpp"
 #include "chatterlab/roots.hpp"
 #include "chatterlab/spectrum.hpp"
 #include "shared/plunge_dynamics/plunge_characteristic.hpp"
@@ -239,6 +240,55 @@ TEST(TorsionalCoupling, DerivedRootIsTheProjectedG1Root) {
     EXPECT_NEAR(root.root.real(), reference.root.real(), 1e-4 * std::abs(reference.root)) << alpha_deg;
     EXPECT_NEAR(root.root.imag(), reference.root.imag(), 1e-5 * std::abs(reference.root)) << alpha_deg;
   }
+}
+
+// The process-conditions capability (feed_risk, suppression_map): at its own conditions the model
+// is unchanged; a doubled width doubles b only; the removal coefficient follows G4's Kv/(1+Kv)
+// computed here from the surface speeds by hand; the conditions' speeds and geometry are taken;
+// and moving there and back returns the model (to rounding).
+TEST(TorsionalCoupling, ProcessConditionsFollowG4AndRoundTrip) {
+  const TorsionalCoupling g5(example());
+  const ProcessConditionsModel* process = g5.process_conditions();
+  ASSERT_NE(process, nullptr);
+  const ProcessConditions own = process->nominal_conditions();
+  EXPECT_DOUBLE_EQ(own.contact_width_mm, 35.0);
+  EXPECT_DOUBLE_EQ(own.work_radius_mm, 50.0);
+  EXPECT_DOUBLE_EQ(own.wheel_diameter_mm, 400.0);
+  const Json example_table = TorsionalCoupling::info().example_params;
+  const Json same = process->parameters_at(own, own, ProcessScaling{});
+  for (const auto& [key, value] : example_table.items())
+    EXPECT_DOUBLE_EQ(same.at(key).get<double>(), value.get<double>()) << key;
+
+  ProcessConditions wider = own;
+  wider.contact_width_mm *= 2.0;
+  const Json w = process->parameters_at(own, wider, ProcessScaling{});
+  EXPECT_DOUBLE_EQ(w.at("grinding_width_m").get<double>(), 0.07);
+  EXPECT_DOUBLE_EQ(w.at("removal_coefficient_n_per_m2").get<double>(), 1.5e9);
+
+  ProcessConditions at = own;
+  at.work_speed_rpm = 110.0;
+  at.wheel_speed_rpm = 1200.0;
+  at.work_radius_mm = 40.0;
+  const Json moved = process->parameters_at(own, at, ProcessScaling{});
+  const auto kv = [](double work_radius_mm, double work_rpm, double wheel_diameter_mm, double wheel_rpm) {
+    return (2.0 * work_radius_mm * work_rpm) / (wheel_diameter_mm * wheel_rpm);  // pi d n / 60 cancels
+  };
+  const double kv_own = kv(50.0, 55.0, 400.0, 1450.0), kv_at = kv(40.0, 110.0, 400.0, 1200.0);
+  EXPECT_NEAR(moved.at("removal_coefficient_n_per_m2").get<double>(),
+              1.5e9 * (kv_at / (1.0 + kv_at)) / (kv_own / (1.0 + kv_own)), 1e-12 * 1.5e9);
+  EXPECT_DOUBLE_EQ(moved.at("work_speed_rpm").get<double>(), 110.0);
+  EXPECT_DOUBLE_EQ(moved.at("wheel_speed_rpm").get<double>(), 1200.0);
+  EXPECT_DOUBLE_EQ(moved.at("work_radius_m").get<double>(), 0.04);
+  EXPECT_DOUBLE_EQ(moved.at("wheel_radius_m").get<double>(), 0.2);
+  // Without the speed law only the width would scale lambda_w.
+  ProcessScaling width_only;
+  width_only.speed_dependent_stiffness = false;
+  EXPECT_DOUBLE_EQ(process->parameters_at(own, at, width_only).at("removal_coefficient_n_per_m2").get<double>(), 1.5e9);
+
+  const TorsionalCoupling there{ParamValues(moved)};
+  const Json back = there.process_conditions()->parameters_at(at, own, ProcessScaling{});
+  for (const auto& [key, value] : example_table.items())
+    EXPECT_NEAR(back.at(key).get<double>(), value.get<double>(), 1e-12 * std::abs(value.get<double>())) << key;
 }
 
 // The example machine of `chatterlab describe torsional_coupling`: a certified root.

@@ -35,32 +35,35 @@ ProcessConditions nominal_conditions(const PlungeRegenerativeParameters& p) {
   return c;
 }
 
+ProcessFactors process_factors(const ProcessConditions& ref, const ProcessConditions& at,
+                               const ProcessScaling& scaling) {
+  ProcessFactors f;
+  if (given(ref.contact_width_mm, at.contact_width_mm)) f.width = at.contact_width_mm / ref.contact_width_mm;
+  if (scaling.speed_dependent_stiffness && given(ref.work_radius_mm, at.work_radius_mm) &&
+      given(ref.wheel_diameter_mm, at.wheel_diameter_mm)) {
+    const double kv = speed_ratio(at), kv_ref = speed_ratio(ref);
+    f.removal = gp::removal_speed_factor(kv) / gp::removal_speed_factor(kv_ref);
+    f.wear = gp::wear_speed_factor(kv) / gp::wear_speed_factor(kv_ref);
+  }
+  if (scaling.thickness_exponent != 0.0) {
+    const double relative_change = at.depth_of_cut_ratio / ref.depth_of_cut_ratio - 1.0;
+    f.thickness = 1.0 - 0.5 * scaling.thickness_exponent * relative_change;
+  }
+  return f;
+}
+
 PlungeRegenerativeParameters parameters_at(const PlungeRegenerativeParameters& own,
                                            const ProcessConditions& reference_given,
                                            const ProcessConditions& conditions_given,
                                            const ProcessScaling& scaling) {
-  const ProcessConditions ref = completed(reference_given, own);
   const ProcessConditions at = completed(conditions_given, own);
-  const double width =
-      given(ref.contact_width_mm, at.contact_width_mm) ? at.contact_width_mm / ref.contact_width_mm : 1.0;
-  double removal = 1.0, wear = 1.0;
-  if (scaling.speed_dependent_stiffness && given(ref.work_radius_mm, at.work_radius_mm) &&
-      given(ref.wheel_diameter_mm, at.wheel_diameter_mm)) {
-    const double kv = speed_ratio(at), kv_ref = speed_ratio(ref);
-    removal = gp::removal_speed_factor(kv) / gp::removal_speed_factor(kv_ref);
-    wear = gp::wear_speed_factor(kv) / gp::wear_speed_factor(kv_ref);
-  }
-  double thickness = 1.0;
-  if (scaling.thickness_exponent != 0.0) {
-    const double relative_change = at.depth_of_cut_ratio / ref.depth_of_cut_ratio - 1.0;
-    thickness = 1.0 - 0.5 * scaling.thickness_exponent * relative_change;
-  }
+  const ProcessFactors f = process_factors(completed(reference_given, own), at, scaling);
   PlungeRegenerativeParameters p = own;
   p.wheel_speed_rpm = at.wheel_speed_rpm;
   p.work_speed_rpm = at.work_speed_rpm;
-  p.contact_stiffness_n_per_m = own.contact_stiffness_n_per_m * width * thickness;
-  p.work_removal_stiffness_n_per_m = own.work_removal_stiffness_n_per_m * width * removal;
-  p.wheel_wear_stiffness_n_per_m = own.wheel_wear_stiffness_n_per_m * width * wear * thickness;
+  p.contact_stiffness_n_per_m = own.contact_stiffness_n_per_m * f.width * f.thickness;
+  p.work_removal_stiffness_n_per_m = own.work_removal_stiffness_n_per_m * f.width * f.removal;
+  p.wheel_wear_stiffness_n_per_m = own.wheel_wear_stiffness_n_per_m * f.width * f.wear * f.thickness;
   return p;
 }
 

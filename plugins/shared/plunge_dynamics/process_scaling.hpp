@@ -18,6 +18,16 @@
 
 namespace chatterlab::plunge_dynamics {
 
+// The factors of the table above from `reference` to `conditions`, whose speeds are both given:
+// width b/b_ref, removal [Kv/(1+Kv)]/[Kv_ref/(1+Kv_ref)], wear (1+Kv_ref)/(1+Kv) and thickness
+// 1 - eps/2 (da/a); 1 where a condition they need is not given (or the scaling switches them off).
+// Any model whose process stiffnesses follow G4's and S1's laws uses them (G1, G4, G5).
+struct ProcessFactors {
+  double width = 1.0, removal = 1.0, wear = 1.0, thickness = 1.0;
+};
+ProcessFactors process_factors(const ProcessConditions& reference, const ProcessConditions& conditions,
+                               const ProcessScaling& scaling);
+
 // The speeds the parameters describe (the rest "not given").
 ProcessConditions nominal_conditions(const PlungeRegenerativeParameters& parameters);
 

@@ -176,10 +176,7 @@ TEST(StabilityMap, DdeBiftoolPointMatchesTheReferenceRoot) {
 // torsional_coupling` as a stability_map point gets a certified root from the derived route.
 TEST(StabilityMap, TorsionalCouplingExampleIsCertifiedThroughTheDerivedRoute) {
   TempDir dir;
-  const PluginInfo& info = model_registry().at("torsional_coupling").info;
-  std::string model = "[model]\ntype = \"torsional_coupling\"\n";
-  for (const auto& [key, value] : info.example_params.items()) model += key + " = " + value.dump() + "\n";
-  Study study = load(dir, model);
+  Study study = load(dir, testing::example_model_toml("torsional_coupling"));
   std::vector<std::string> columns = kind.output_columns(study.document);
   std::vector<Json> out = kind.run_point(study.point_document(0), {});
   ASSERT_EQ(out.size(), columns.size());

@@ -538,6 +538,16 @@ void check_combination(const Model& model, const Json& model_table, const Suppre
                        "(chatterlab/process_conditions.hpp), which the suppression_map study needs to "
                        "freeze the modulated speeds or feed",
                        type));
+  if (target != SuppressionTarget::feed) {
+    // A model that integrates a rotor's speed as a state (G5's torsion) has no speed law to modulate.
+    const Rotor rotor = target == SuppressionTarget::wheel_speed ? Rotor::wheel : Rotor::work;
+    if (auto td = model.time_domain(); td && td->angle_state(rotor))
+      refuse(sources, "suppression.target",
+             fmt::format("suppression.target = \"{}\": model.type = \"{}\" integrates the {} speed as a "
+                         "state (its torsional motion), so a speed law cannot modulate it; modulate the "
+                         "feed (target = \"feed\") or use a model whose speeds are laws",
+                         to_string(target), type, to_string(rotor)));
+  }
   if (target == SuppressionTarget::feed && !(s.infeed_rate_m_per_s > 0.0))
     refuse(sources, "suppression_map.infeed_rate_m_per_s",
            fmt::format("suppression_map.infeed_rate_m_per_s = {}: feed modulation needs a mean infeed "

@@ -143,6 +143,42 @@ TEST(SuppressionMap, ChatteringRootsLieInTheExcitingZoneOf545) {
   }
 }
 
+// A second model that declares process conditions: G5 (torsional_coupling, its example machine).
+// Its speeds are states, so only the feed can be modulated; zero modulation is the constant run,
+// and a modulated feed gives a finite amplitude ratio beside the growth-rate averaging of 5-37
+// (on G5's derived roots, which the feed does not move without a thickness law: S2 = 0).
+std::string torsional_model() { return testing::example_model_toml("torsional_coupling"); }
+
+TEST(SuppressionMap, RunsTheTorsionalModelWithFeedModulation) {
+  const std::string settings =
+      "revolutions = 8\ninfeed_rate_m_per_s = 15e-6\none_sided_contact = true\nthickness_exponent = 0.0";
+  const PointResult still = run(study_text(
+      torsional_model(), "target = \"feed\"\nshape = \"sinusoidal\"\namplitude_ratio = 0.0\nfrequency_hz = 3.0",
+      settings));
+  EXPECT_EQ(still.outcome, "completed");
+  EXPECT_EQ(still.ratio.get<double>(), 0.0);
+  const PointResult modulated = run(study_text(
+      torsional_model(), "target = \"feed\"\nshape = \"square\"\namplitude_ratio = 0.3\nfrequency_hz = 3.0",
+      settings));
+  EXPECT_EQ(modulated.outcome, "completed");
+  ASSERT_TRUE(modulated.ratio.is_number());
+  EXPECT_TRUE(std::isfinite(modulated.ratio.get<double>()));
+  EXPECT_NE(modulated.ratio.get<double>(), 0.0);  // the feed steps force the structure
+  EXPECT_EQ(modulated.s2.get<double>(), 0.0);
+}
+
+TEST(SuppressionMap, RefusesASpeedTargetOnAModelWhoseSpeedIsAState) {
+  TempDir dir;
+  const std::string e = testing::input_error_of([&] {
+    load_study(dir.write("g5.toml", study_text(torsional_model(), "target = \"wheel_speed\"", "revolutions = 5")));
+  });
+  EXPECT_NE(e.find("g5.toml:"), std::string::npos) << e;
+  EXPECT_NE(e.find("suppression.target = \"wheel_speed\": model.type = \"torsional_coupling\" integrates the "
+                   "wheel speed as a state"),
+            std::string::npos)
+      << e;
+}
+
 TEST(SuppressionMap, BadInputNamesFileLineKeyValueAndLimit) {
   TempDir dir;
   auto error_of = [&](const std::string& suppression, const std::string& settings = "revolutions = 5") {
