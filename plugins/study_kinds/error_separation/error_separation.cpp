@@ -396,11 +396,17 @@ Separation separate_frequency(std::span<const std::vector<double>> probes,
   return out;
 }
 
-Separation separate_time_recursion(std::span<const std::vector<double>> probes,
-                                   const ProbeLayout& layout, const SeparationOptions& options) {
-  const std::size_t n = common_length(probes);
-  if (probes.size() != 3 || layout.angles_rad.size() != 3)
-    throw std::invalid_argument("time recursion needs exactly three probes");
+namespace {
+
+// The sample offsets of a time-recursion layout (0, p, 2p after the first probe's p0), checked:
+// whole samples, equally spaced, and gcd(p, N) = 1 so that the chain k -> k p visits every sample.
+struct RecursionOffsets {
+  long first = 0;    // p0
+  long spacing = 0;  // p
+  long chain = 0;    // p mod N, the step of the recursion's chain
+};
+
+RecursionOffsets recursion_offsets(const ProbeLayout& layout, std::size_t n) {
   const double samples_per_rad = static_cast<double>(n) / two_pi;
   auto whole_samples = [&](double angle) {
     const double p = angle * samples_per_rad;
@@ -409,32 +415,32 @@ Separation separate_time_recursion(std::span<const std::vector<double>> probes,
           "time recursion: probe offset {:.6g} samples is not a whole number of samples", p));
     return static_cast<long>(std::llround(p));
   };
-  const long p0 = whole_samples(layout.angles_rad[0]);
-  const long p = whole_samples(layout.angles_rad[1] - layout.angles_rad[0]);
+  RecursionOffsets o;
+  o.first = whole_samples(layout.angles_rad[0]);
+  o.spacing = whole_samples(layout.angles_rad[1] - layout.angles_rad[0]);
   const long p2 = whole_samples(layout.angles_rad[2] - layout.angles_rad[0]);
   const long nl = static_cast<long>(n);
-  if (p2 != 2 * p)
+  if (p2 != 2 * o.spacing)
     throw std::invalid_argument(fmt::format(
-        "time recursion: probes must be equally spaced (offsets 0, p, 2p); got 0, {}, {}", p, p2));
-  const long pm = ((p % nl) + nl) % nl;
-  if (std::gcd(pm, nl) != 1)
+        "time recursion: probes must be equally spaced (offsets 0, p, 2p); got 0, {}, {}", o.spacing, p2));
+  o.chain = ((o.spacing % nl) + nl) % nl;
+  if (std::gcd(o.chain, nl) != 1)
     throw std::invalid_argument(fmt::format(
         "time recursion: probe offset p = {} and N = {} share the factor {} (need gcd(p, N) = 1)",
-        p, n, std::gcd(pm, nl)));
+        o.spacing, n, std::gcd(o.chain, nl)));
+  return o;
+}
 
-  // Weights (1, -2 cos phi, 1) of the layout (0, phi, 2 phi), phi = 2 pi p / N (E4).
-  const double phi = two_pi * static_cast<double>(pm) / static_cast<double>(n);
-  const double two_cos = 2.0 * std::cos(phi);
-  Separation out;
-  std::vector<double> s = combine(probes, std::vector<double>{1.0, -two_cos, 1.0});
-  out.first_harmonic = check_first_harmonic(s, options.validity_fraction);
-  // S has no first harmonic in theory; a measured one would drive the marginally stable
-  // recursion at resonance (a drift growing with every step), so it is removed first.
-  s = remove_first_harmonic(s);
-
+// r'(k + 2) = S(k) + 2 cos(phi) r'(k + 1) - r'(k) along the chain k -> k p (E4), restarted from
+// its own end values until it closes on itself (the recursion is periodic with period N).
+// Returns r'(i) = r(i + p0).
+std::vector<double> close_recursion(const std::vector<double>& s, double two_cos, long chain,
+                                    const SeparationOptions& options, Separation& out) {
+  const std::size_t n = s.size();
+  const long nl = static_cast<long>(n);
   const double tolerance = 1e-13 * static_cast<double>(n) * std::max(range_of(s), 1e-300);
-  std::vector<double> rp(n, 0.0);                                             // r'(i) = r(i + p0)
-  auto at = [&](long k) { return static_cast<std::size_t>((k * pm) % nl); };  // chain sample k
+  std::vector<double> rp(n, 0.0);
+  auto at = [&](long k) { return static_cast<std::size_t>((k * chain) % nl); };  // chain sample k
   double start0 = 0.0, start1 = 0.0;
   bool closed = false;
   for (int pass = 1; pass <= options.max_recursion_passes && !closed; ++pass) {
@@ -452,6 +458,29 @@ Separation separate_time_recursion(std::span<const std::vector<double>> probes,
   if (!closed)
     throw std::runtime_error(
         fmt::format("time recursion did not close after {} passes", options.max_recursion_passes));
+  return rp;
+}
+
+}  // namespace
+
+Separation separate_time_recursion(std::span<const std::vector<double>> probes,
+                                   const ProbeLayout& layout, const SeparationOptions& options) {
+  const std::size_t n = common_length(probes);
+  if (probes.size() != 3 || layout.angles_rad.size() != 3)
+    throw std::invalid_argument("time recursion needs exactly three probes");
+  const RecursionOffsets offsets = recursion_offsets(layout, n);
+  const long nl = static_cast<long>(n), p0 = offsets.first;
+
+  // Weights (1, -2 cos phi, 1) of the layout (0, phi, 2 phi), phi = 2 pi p / N (E4).
+  const double phi = two_pi * static_cast<double>(offsets.chain) / static_cast<double>(n);
+  const double two_cos = 2.0 * std::cos(phi);
+  Separation out;
+  std::vector<double> s = combine(probes, std::vector<double>{1.0, -two_cos, 1.0});
+  out.first_harmonic = check_first_harmonic(s, options.validity_fraction);
+  // S has no first harmonic in theory; a measured one would drive the marginally stable
+  // recursion at resonance (a drift growing with every step), so it is removed first.
+  s = remove_first_harmonic(s);
+  const std::vector<double> rp = close_recursion(s, two_cos, offsets.chain, options, out);
 
   std::vector<double> r(n);
   for (long i = 0; i < nl; ++i)
@@ -465,7 +494,7 @@ Separation separate_time_recursion(std::span<const std::vector<double>> probes,
   for (double& v : r) v += out.mean_radius;
   std::vector<double> shifted_profiles[3];
   for (std::size_t q = 0; q < 3; ++q) {
-    const long offset = q == 0 ? p0 : p0 + static_cast<long>(q) * p;
+    const long offset = p0 + static_cast<long>(q) * offsets.spacing;
     shifted_profiles[q].resize(n);
     for (long i = 0; i < nl; ++i)
       shifted_profiles[q][static_cast<std::size_t>(i)] =
