@@ -17,7 +17,8 @@ enum class ResponseRegime {
   saturated,      // growth slows across the window (nonlinearity, amplitude limit)
   contact_lost,   // one-sided contact open for more than the allowed fraction of the window
   transient,      // the window starts too early or spans too few regenerative delays
-  not_exponential // the envelope is not a straight line in ln (beating roots, pulses per revolution)
+  not_exponential, // the envelope is not a straight line in ln (beating roots, pulses per revolution)
+  steady          // the envelope holds its level: a forced steady state (or a root on Re s = 0)
 };
 const char* to_string(ResponseRegime regime);
 
@@ -35,6 +36,10 @@ struct FitValidityLimits {
   // The whole window's slope and the mean of its halves' agree within this fraction of the larger
   // plus this many ln units over the window (an exponential gives the same slope on any part).
   double slope_consistency = 0.2;
+  // Steady: the envelope changes by less than this (ln units, 0.02 = 2 %) over the window. A
+  // forced response (G6's unbalance) looks like this, and so would a root within a few 1e-3 /s
+  // of Re s = 0: the slope cannot tell them apart, so it does not stand for a root.
+  double max_steady_change = 0.02;
 };
 
 struct FitValidity {

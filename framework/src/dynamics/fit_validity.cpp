@@ -17,6 +17,7 @@ const char* to_string(ResponseRegime regime) {
     case ResponseRegime::contact_lost: return "contact lost";
     case ResponseRegime::transient: return "transient";
     case ResponseRegime::not_exponential: return "not exponential";
+    case ResponseRegime::steady: return "steady";
   }
   return "?";
 }
@@ -110,6 +111,14 @@ FitValidity assess_fit(const EnvelopeFit& fit, std::span<const double> t_s, std:
         "the envelope steps inside the window: growth {:.4g} /s over the whole window but {:.4g} and {:.4g} /s over "
         "its halves (beating roots or one pulse per revolution); lengthen the run or move the window",
         fit.growth_rate_per_s, v.first_half_growth_per_s, v.second_half_growth_per_s);
+  } else if (std::abs(fit.growth_rate_per_s) * length < limits.max_steady_change) {
+    v.regime = ResponseRegime::steady;
+    v.reason = fmt::format(
+        "the envelope holds its level: growth {:.3g} /s changes it by {:.2g} % over the window {:.4g}..{:.4g} s "
+        "(limit {:.2g} %): a forced steady vibration (or a root on Re s = 0), so the slope does not estimate a "
+        "root; the final amplitude {:.3g} m is the result",
+        fit.growth_rate_per_s, 100 * std::abs(fit.growth_rate_per_s) * length, fit.start_s, fit.end_s,
+        100 * limits.max_steady_change, v.final_amplitude_m);
   } else {
     v.valid = true;
     v.regime = fit.growth_rate_per_s >= 0 ? ResponseRegime::linear_growth : ResponseRegime::linear_decay;

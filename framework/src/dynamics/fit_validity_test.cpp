@@ -1,6 +1,7 @@
 // assess_fit (chatterlab/fit_validity.hpp) on synthetic responses whose regime is known by
 // construction: a pure exponential (valid, both signs), a logistic envelope (saturated), an open
-// contact, a window shorter than the delays, and a pulse per revolution (not exponential).
+// contact, a window shorter than the delays, a pulse per revolution (not exponential) and a
+// constant forced vibration (steady: no root to estimate).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -109,6 +110,20 @@ TEST(FitValidity, AStepBetweenTwoExponentialHalvesIsNotExponential) {
   EXPECT_EQ(v.regime, ResponseRegime::not_exponential);
   EXPECT_NEAR(v.first_half_growth_per_s, 0.5, 0.05);
   EXPECT_NE(v.reason.find("the envelope steps inside the window"), std::string::npos) << v.reason;
+}
+
+TEST(FitValidity, AConstantForcedVibrationIsSteadyNotGrowth) {
+  // A forced vibration of constant amplitude (G6's unbalance response): the fitted slope is ~0,
+  // which is no root of the system; a slow growth of 0.05 /s (5 % over the window) still counts.
+  const FitValidity v = assess(response([](double) { return 3e-8; }), 0.2);
+  EXPECT_FALSE(v.valid);
+  EXPECT_EQ(v.regime, ResponseRegime::steady);
+  EXPECT_NEAR(v.final_amplitude_m, 3e-8, 1e-9);
+  EXPECT_NE(v.reason.find("the envelope holds its level"), std::string::npos) << v.reason;
+  EXPECT_NE(v.reason.find("forced steady vibration"), std::string::npos) << v.reason;
+  const FitValidity slow = assess(response([](double t) { return 1e-6 * std::exp(0.05 * t); }), 0.2);
+  EXPECT_TRUE(slow.valid) << slow.reason;
+  EXPECT_EQ(slow.regime, ResponseRegime::linear_growth);
 }
 
 }  // namespace
