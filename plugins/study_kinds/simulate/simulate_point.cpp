@@ -62,10 +62,13 @@ ProfileSpeeds cutting_speeds(const SimulationResult& r, double t) {
 
 // The work surface of a snapshot as a closed profile in metres: radius deviation = -(removal so
 // far) over one revolution.
+// One work revolution of radius deviation, the infeed ramp removed: during a plunge the removal
+// rises by a revolution's infeed along the revolution (a spiral with a step at the seam), which
+// would dominate Wt and RONt of waves a few um deep. The plots show the same residual.
 SampledSeries work_profile(const SurfaceSnapshot& snap) {
   SampledSeries series;
-  series.values.reserve(snap.surface_m[work].size());
-  for (double removed : snap.surface_m[work]) series.values.push_back(-removed);
+  series.values = without_infeed_ramp(snap.surface_m[work]).values;
+  for (double& v : series.values) v = -v;  // removal -> radius deviation
   series.sample_interval = 360.0 / static_cast<double>(series.values.size());
   series.sample_unit = "deg";
   series.closed = true;
@@ -420,7 +423,7 @@ WorkSurfaceQuality measure_work_surface(const SimulationResult& r, const Json& s
   }
   q.summary = std::move(measured.report);
   q.summary["t_s"] = snap.t_s;
-  q.summary["profile"] = "radius deviation = -(removal so far), one work revolution";
+  q.summary["profile"] = "radius deviation = -(removal so far), one work revolution, infeed ramp removed";
   if (measured.speeds_from_caller)
     q.summary["speeds"] = {{"wheel_speed_rpm", q.speeds.wheel_speed_rpm}, {"work_speed_rpm", q.speeds.work_speed_rpm},
                            {"from", "mean over the last work revolution before the snapshot"}};
