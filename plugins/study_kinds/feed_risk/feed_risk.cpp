@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <exception>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
@@ -45,6 +47,14 @@ void append_cells(const Json& v, double tolerance, std::vector<long long>& key) 
   }
 }
 
+struct CellsHash {
+  std::size_t operator()(const std::vector<long long>& key) const {
+    std::size_t h = key.size();
+    for (long long v : key) h ^= std::hash<long long>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    return h;
+  }
+};
+
 // The [model] table: the model's type and its parameters.
 Json with_type(const Json& model_table, const Json& parameters) {
   Json t = Json{{"type", model_table.at("type")}};
@@ -71,7 +81,7 @@ Grouping group_items(const Json& model_table, const ProcessSettings& p, const st
     append_cells(parameters_of(u), tolerance, keys[u]);
   }
   Grouping g;
-  std::map<std::vector<long long>, std::size_t> cells;
+  std::unordered_map<std::vector<long long>, std::size_t, CellsHash> cells;
   for (std::size_t i = 0; i < items.size(); ++i) {
     auto [it, inserted] = cells.emplace(std::move(keys[i]), g.representative.size());
     if (inserted) {
@@ -281,28 +291,48 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
   return risk;
 }
 
+// The spindle-speed factors of a rating over the tolerance band: the nominal speed first.
+std::vector<double> band_factors(double tolerance) {
+  if (!(tolerance > 0.0)) return {1.0};
+  return {1.0, 1.0 - tolerance, 1.0 + tolerance};
+}
+
+std::vector<planner::SegmentConditions> at_speed_factor(std::vector<planner::SegmentConditions> plan, double factor) {
+  if (factor != 1.0)
+    for (auto& c : plan) c.spindle_speed_rpm *= factor;
+  return plan;
+}
+
+// The worst case per segment of the nominal rating and the band's shifted ratings.
+PlanRisk worst_over_band(PlanRisk worst, const std::vector<const PlanRisk*>& shifted,
+                         const std::vector<planner::SegmentConditions>& plan, const RiskThresholds& thresholds) {
+  if (shifted.empty()) return worst;
+  for (const PlanRisk* r : shifted)
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      SegmentRisk& w = worst.segments[k];
+      w.certified = w.certified && r->segments[k].certified;
+      if (r->segments[k].growth_rate_per_s > w.growth_rate_per_s) {
+        w.growth_rate_per_s = r->segments[k].growth_rate_per_s;
+        w.chatter_frequency_hz = r->segments[k].chatter_frequency_hz;
+      }
+    }
+  accumulate(plan, thresholds, worst);
+  return worst;
+}
+
 // rate_plan's worst case per segment over the spindle speeds n (1 - tol), n, n (1 + tol).
 PlanRisk rate_plan_band(const Json& model_table, const ProcessSettings& p,
                         const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
                         const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
                         int phases, double tolerance) {
-  PlanRisk worst = rate_plan(model_table, p, plan, generatrix, roots, thresholds, amplitude_ratio, phases);
-  if (!(tolerance > 0.0)) return worst;
-  for (double factor : {1.0 - tolerance, 1.0 + tolerance}) {
-    std::vector<planner::SegmentConditions> shifted = plan;
-    for (auto& c : shifted) c.spindle_speed_rpm *= factor;
-    const PlanRisk r = rate_plan(model_table, p, shifted, generatrix, roots, thresholds, amplitude_ratio, phases);
-    for (std::size_t k = 0; k < plan.size(); ++k) {
-      SegmentRisk& w = worst.segments[k];
-      w.certified = w.certified && r.segments[k].certified;
-      if (r.segments[k].growth_rate_per_s > w.growth_rate_per_s) {
-        w.growth_rate_per_s = r.segments[k].growth_rate_per_s;
-        w.chatter_frequency_hz = r.segments[k].chatter_frequency_hz;
-      }
-    }
-  }
-  accumulate(plan, thresholds, worst);
-  return worst;
+  const std::vector<double> factors = band_factors(tolerance);
+  std::vector<PlanRisk> rated;
+  for (double factor : factors)
+    rated.push_back(rate_plan(model_table, p, at_speed_factor(plan, factor), generatrix, roots, thresholds,
+                              amplitude_ratio, phases));
+  std::vector<const PlanRisk*> shifted;
+  for (std::size_t i = 1; i < rated.size(); ++i) shifted.push_back(&rated[i]);
+  return worst_over_band(std::move(rated.front()), shifted, plan, thresholds);
 }
 
 }  // namespace
@@ -590,8 +620,9 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
   OptimiseResult result;
   RootSettings coarse = roots;
   coarse.condition_tolerance = settings.condition_tolerance;
+  // 1. The candidates and their plans (the planner runs serially, once per planning speed).
   std::map<double, std::vector<planner::SegmentConditions>> plans;  // by planning speed
-  bool found = false;
+  std::vector<std::vector<planner::SegmentConditions>> candidate_plans;
   for (double a : settings.amplitude_ratios) {
     const double lo = settings.spindle_min_rpm / (1.0 - a), hi = settings.spindle_max_rpm / (1.0 + a);
     if (!(a >= 0.0 && a < 1.0) || lo > hi * (1 + 1e-12))
@@ -607,34 +638,71 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
       if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
       std::vector<planner::SegmentConditions> plan = it->second;
       for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
-      const PlanRisk nominal =
-          rate_plan(model_table, p, plan, generatrix, coarse, thresholds, a, settings.phase_samples);
-      const PlanRisk risk = rate_plan_band(model_table, p, plan, generatrix, coarse, thresholds, a,
-                                           settings.phase_samples, settings.speed_tolerance);
-      c.nominal_max_growth_rate_per_s = nominal.max_growth_rate_per_s;
-      if (a == 0.0) c.exact_speed_ratio = kit::exact_ratio(p.wheel_speed_rpm, c.spindle_speed_rpm);
-      c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
-      c.time_factor = c.total_time_s / baseline_time_s;
-      c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
-      c.max_floored_log_amplification = risk.max_floored_log_amplification;
-      c.worst = risk.worst;
-      c.admissible = c.time_factor <= settings.max_time_factor * (1 + 1e-12);
       result.candidates.push_back(c);
-      if (!c.admissible) continue;
-      const Candidate& b = result.candidates[result.best];
-      const bool better = !found || c.max_floored_log_amplification < b.max_floored_log_amplification - 1e-9 ||
-                          (std::abs(c.max_floored_log_amplification - b.max_floored_log_amplification) <= 1e-9 &&
-                           (c.max_growth_rate_per_s < b.max_growth_rate_per_s - 1e-9 ||
-                            (std::abs(c.max_growth_rate_per_s - b.max_growth_rate_per_s) <= 1e-9 &&
-                             c.total_time_s < b.total_time_s)));
-      if (better) {
-        result.best = result.candidates.size() - 1;
-        result.best_plan = std::move(plan);
-        found = true;
-      }
+      candidate_plans.push_back(std::move(plan));
+    }
+  }
+  // 2. Every rating (candidate x speed factor of the band, the nominal one also being the
+  // candidate's nominal rating) is independent: they run in parallel, each one's groups serially
+  // (nested), the largest first. Each rating is deterministic, so the results do not depend on
+  // the thread count or order.
+  const std::vector<double> factors = band_factors(settings.speed_tolerance);
+  const std::size_t per_candidate = factors.size();
+  const std::size_t task_count = result.candidates.size() * per_candidate;
+  auto items_of = [&](std::size_t t) {
+    const Candidate& c = result.candidates[t / per_candidate];
+    const std::size_t phases = c.amplitude_ratio > 0.0 ? static_cast<std::size_t>(std::max(settings.phase_samples, 1)) : 1;
+    return candidate_plans[t / per_candidate].size() * phases;
+  };
+  std::vector<std::size_t> order(task_count);
+  for (std::size_t t = 0; t < task_count; ++t) order[t] = t;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return items_of(x) > items_of(y); });
+  std::vector<PlanRisk> rated(task_count);
+  std::vector<std::exception_ptr> failures(task_count);
+  const auto n = static_cast<long>(task_count);
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < n; ++i) {
+    const std::size_t t = order[static_cast<std::size_t>(i)];
+    const std::size_t k = t / per_candidate;
+    try {
+      rated[t] = rate_plan(model_table, p, at_speed_factor(candidate_plans[k], factors[t % per_candidate]), generatrix,
+                           coarse, thresholds, result.candidates[k].amplitude_ratio, settings.phase_samples);
+    } catch (...) {
+      failures[t] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
+  // 3. The band's worst case per candidate, and the best candidate in candidate order.
+  bool found = false;
+  for (std::size_t k = 0; k < result.candidates.size(); ++k) {
+    Candidate& c = result.candidates[k];
+    const std::vector<planner::SegmentConditions>& plan = candidate_plans[k];
+    c.nominal_max_growth_rate_per_s = rated[k * per_candidate].max_growth_rate_per_s;
+    std::vector<const PlanRisk*> shifted;
+    for (std::size_t j = 1; j < per_candidate; ++j) shifted.push_back(&rated[k * per_candidate + j]);
+    const PlanRisk risk = worst_over_band(std::move(rated[k * per_candidate]), shifted, plan, thresholds);
+    if (c.amplitude_ratio == 0.0) c.exact_speed_ratio = kit::exact_ratio(p.wheel_speed_rpm, c.spindle_speed_rpm);
+    c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
+    c.time_factor = c.total_time_s / baseline_time_s;
+    c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
+    c.max_floored_log_amplification = risk.max_floored_log_amplification;
+    c.worst = risk.worst;
+    c.admissible = c.time_factor <= settings.max_time_factor * (1 + 1e-12);
+    if (!c.admissible) continue;
+    const Candidate& b = result.candidates[result.best];
+    const bool better = !found || c.max_floored_log_amplification < b.max_floored_log_amplification - 1e-9 ||
+                        (std::abs(c.max_floored_log_amplification - b.max_floored_log_amplification) <= 1e-9 &&
+                         (c.max_growth_rate_per_s < b.max_growth_rate_per_s - 1e-9 ||
+                          (std::abs(c.max_growth_rate_per_s - b.max_growth_rate_per_s) <= 1e-9 &&
+                           c.total_time_s < b.total_time_s)));
+    if (better) {
+      result.best = k;
+      found = true;
     }
   }
   if (!found) throw PointFailure("chatter-aware planning: no candidate within the time limit");
+  result.best_plan = std::move(candidate_plans[result.best]);
   stable_window(result);
   return result;
 }
