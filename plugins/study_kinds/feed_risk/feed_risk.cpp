@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <exception>
+#include <iterator>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -23,6 +24,26 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Runs task(i) for i = 0..count-1 on the OpenMP threads (dynamic schedule, in the order given by
+// `order` when not empty); exceptions are caught per task and the first one in index order is
+// rethrown after all tasks ran, so the outcome does not depend on the thread count.
+template <class Task>
+void parallel_tasks(std::size_t count, const Task& task, const std::vector<std::size_t>& order = {}) {
+  std::vector<std::exception_ptr> failures(count);
+  const auto n = static_cast<long>(count);
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < n; ++i) {
+    const std::size_t t = order.empty() ? static_cast<std::size_t>(i) : order[static_cast<std::size_t>(i)];
+    try {
+      task(t);
+    } catch (...) {
+      failures[t] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
+}
 
 double surface_speed_m_per_s(double diameter_mm, double rpm) { return kPi * diameter_mm * 1e-3 * rpm / 60.0; }
 
@@ -658,21 +679,15 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
   for (std::size_t t = 0; t < task_count; ++t) order[t] = t;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return items_of(x) > items_of(y); });
   std::vector<PlanRisk> rated(task_count);
-  std::vector<std::exception_ptr> failures(task_count);
-  const auto n = static_cast<long>(task_count);
-#pragma omp parallel for schedule(dynamic)
-  for (long i = 0; i < n; ++i) {
-    const std::size_t t = order[static_cast<std::size_t>(i)];
-    const std::size_t k = t / per_candidate;
-    try {
-      rated[t] = rate_plan(model_table, p, at_speed_factor(candidate_plans[k], factors[t % per_candidate]), generatrix,
-                           coarse, thresholds, result.candidates[k].amplitude_ratio, settings.phase_samples);
-    } catch (...) {
-      failures[t] = std::current_exception();
-    }
-  }
-  for (const std::exception_ptr& failure : failures)
-    if (failure) std::rethrow_exception(failure);
+  parallel_tasks(
+      task_count,
+      [&](std::size_t t) {
+        const std::size_t k = t / per_candidate;
+        rated[t] = rate_plan(model_table, p, at_speed_factor(candidate_plans[k], factors[t % per_candidate]),
+                             generatrix, coarse, thresholds, result.candidates[k].amplitude_ratio,
+                             settings.phase_samples);
+      },
+      order);
   // 3. The band's worst case per candidate, and the best candidate in candidate order.
   bool found = false;
   for (std::size_t k = 0; k < result.candidates.size(); ++k) {
@@ -750,26 +765,39 @@ std::vector<Lever> stability_levers(const Json& model_table, const ProcessSettin
     d.scale(changed, factor);
     return growth_at(model_table, p, changed, roots, speed_tolerance);
   };
-  const double growth0 = growth_at(model_table, p, conditions, roots, speed_tolerance);
   constexpr double step = 0.05;  // central difference in ln(quantity)
-  std::vector<Lever> levers;
-  for (const LeverDefinition& d : lever_definitions) {
-    Lever lever;
-    lever.name = d.name;
-    lever.acts_on = d.acts_on;
-    lever.growth_per_unit_log = (worst_growth(d, std::exp(step)) - worst_growth(d, std::exp(-step))) / (2 * step);
+  constexpr std::size_t count = std::size(lever_definitions);
+  // The growth rate at the segment and the central differences: independent searches, in
+  // parallel (task 0: the segment; 1 + 2i, 2 + 2i: lever i at e^{+-step}).
+  std::vector<double> growth(1 + 2 * count);
+  parallel_tasks(growth.size(), [&](std::size_t t) {
+    growth[t] = t == 0 ? growth_at(model_table, p, conditions, roots, speed_tolerance)
+                       : worst_growth(lever_definitions[(t - 1) / 2], std::exp((t % 2 == 1 ? 1.0 : -1.0) * step));
+  });
+  const double growth0 = growth[0];
+  std::vector<Lever> levers(count);
+  std::vector<double> log_changes(count, 0.0);
+  for (std::size_t i = 0; i < count; ++i) {
+    Lever& lever = levers[i];
+    lever.name = lever_definitions[i].name;
+    lever.acts_on = lever_definitions[i].acts_on;
+    lever.growth_per_unit_log = (growth[1 + 2 * i] - growth[2 + 2 * i]) / (2 * step);
+    lever.growth_rate_after_per_s = growth0;
     if (lever.growth_per_unit_log != 0.0) {
       const double limit = std::log(max_factor);
       const double log_change =
           std::clamp((target_growth_per_s - growth0) / lever.growth_per_unit_log, -limit, limit);
       lever.change_percent = 100.0 * (std::exp(log_change) - 1.0);
-      lever.growth_rate_after_per_s = worst_growth(d, std::exp(log_change));
-      lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
-    } else {
-      lever.growth_rate_after_per_s = growth0;
+      log_changes[i] = log_change;
     }
-    levers.push_back(std::move(lever));
   }
+  // The change each lever needs, checked by its own search (in parallel).
+  parallel_tasks(count, [&](std::size_t i) {
+    Lever& lever = levers[i];
+    if (!lever.change_percent) return;
+    lever.growth_rate_after_per_s = worst_growth(lever_definitions[i], std::exp(log_changes[i]));
+    lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
+  });
   return levers;
 }
 
