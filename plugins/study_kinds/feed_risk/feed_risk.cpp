@@ -125,12 +125,13 @@ std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, co
                                     const RootSettings& settings) {
   std::vector<RootValue> values(g.representative.size());
   const auto n = static_cast<long>(values.size());
+  const kit::StabilitySettings stability = kit::stability_settings_table().read(settings.stability);
 #pragma omp parallel for schedule(dynamic)
   for (long i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     try {
       auto model = kit::build_model(g.tables[u]);
-      const RightmostRoot root = kit::rightmost_root(*model, kit::stability_settings_table().read(settings.stability));
+      const RightmostRoot root = kit::rightmost_root(*model, stability);
       values[u].growth_rate_per_s = root.root.real();
       values[u].frequency_hz = std::abs(root.root.imag()) / (2 * kPi);
       values[u].certified = root.certified;
@@ -744,11 +745,12 @@ const LeverDefinition lever_definitions[] = {
 double growth_at(const Json& model_table, const ProcessSettings& p, const ProcessConditions& conditions,
                  const RootSettings& roots, double speed_tolerance) {
   double worst = -std::numeric_limits<double>::infinity();
+  const kit::StabilitySettings stability = kit::stability_settings_table().read(roots.stability);
   for (double factor : {1.0 - speed_tolerance, 1.0, 1.0 + speed_tolerance}) {
     ProcessConditions at = conditions;
     at.work_speed_rpm *= factor;
     auto model = kit::build_model(model_table_at(model_table, p, at));
-    worst = std::max(worst, kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real());
+    worst = std::max(worst, kit::rightmost_root(*model, stability).root.real());
     if (!(speed_tolerance > 0.0)) break;
   }
   return worst;
