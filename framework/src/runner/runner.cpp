@@ -468,7 +468,11 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
       continue;
     }
     const auto count = static_cast<std::ptrdiff_t>(block->size());
-#pragma omp parallel for schedule(dynamic) num_threads(threads) reduction(+ : compute_s)
+    // No more threads than points: a team of one is an inactive region, so a lone point's own
+    // OpenMP loops (feed_risk's root searches, lobe tracing) get the threads instead of running
+    // nested and serial (libgomp's max-active-levels is 1).
+    const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, std::max<std::ptrdiff_t>(count, 1)));
+#pragma omp parallel for schedule(dynamic) num_threads(team) reduction(+ : compute_s)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (watch.changed().load()) continue;  // stopped: the inputs are not what they were
       const std::size_t index = base + static_cast<std::size_t>(k);

@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <exception>
+#include <iterator>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/model.hpp"
@@ -21,6 +24,26 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Runs task(i) for i = 0..count-1 on the OpenMP threads (dynamic schedule, in the order given by
+// `order` when not empty); exceptions are caught per task and the first one in index order is
+// rethrown after all tasks ran, so the outcome does not depend on the thread count.
+template <class Task>
+void parallel_tasks(std::size_t count, const Task& task, const std::vector<std::size_t>& order = {}) {
+  std::vector<std::exception_ptr> failures(count);
+  const auto n = static_cast<long>(count);
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < n; ++i) {
+    const std::size_t t = order.empty() ? static_cast<std::size_t>(i) : order[static_cast<std::size_t>(i)];
+    try {
+      task(t);
+    } catch (...) {
+      failures[t] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
+}
 
 double surface_speed_m_per_s(double diameter_mm, double rpm) { return kPi * diameter_mm * 1e-3 * rpm / 60.0; }
 
@@ -44,6 +67,14 @@ void append_cells(const Json& v, double tolerance, std::vector<long long>& key) 
     key.push_back(static_cast<long long>(std::hash<std::string>{}(v.dump())));
   }
 }
+
+struct CellsHash {
+  std::size_t operator()(const std::vector<long long>& key) const {
+    std::size_t h = key.size();
+    for (long long v : key) h ^= std::hash<long long>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    return h;
+  }
+};
 
 // The [model] table: the model's type and its parameters.
 Json with_type(const Json& model_table, const Json& parameters) {
@@ -71,7 +102,7 @@ Grouping group_items(const Json& model_table, const ProcessSettings& p, const st
     append_cells(parameters_of(u), tolerance, keys[u]);
   }
   Grouping g;
-  std::map<std::vector<long long>, std::size_t> cells;
+  std::unordered_map<std::vector<long long>, std::size_t, CellsHash> cells;
   for (std::size_t i = 0; i < items.size(); ++i) {
     auto [it, inserted] = cells.emplace(std::move(keys[i]), g.representative.size());
     if (inserted) {
@@ -94,12 +125,13 @@ std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, co
                                     const RootSettings& settings) {
   std::vector<RootValue> values(g.representative.size());
   const auto n = static_cast<long>(values.size());
+  const kit::StabilitySettings stability = kit::stability_settings_table().read(settings.stability);
 #pragma omp parallel for schedule(dynamic)
   for (long i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     try {
       auto model = kit::build_model(g.tables[u]);
-      const RightmostRoot root = kit::rightmost_root(*model, kit::stability_settings_table().read(settings.stability));
+      const RightmostRoot root = kit::rightmost_root(*model, stability);
       values[u].growth_rate_per_s = root.root.real();
       values[u].frequency_hz = std::abs(root.root.imag()) / (2 * kPi);
       values[u].certified = root.certified;
@@ -281,28 +313,48 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
   return risk;
 }
 
+// The spindle-speed factors of a rating over the tolerance band: the nominal speed first.
+std::vector<double> band_factors(double tolerance) {
+  if (!(tolerance > 0.0)) return {1.0};
+  return {1.0, 1.0 - tolerance, 1.0 + tolerance};
+}
+
+std::vector<planner::SegmentConditions> at_speed_factor(std::vector<planner::SegmentConditions> plan, double factor) {
+  if (factor != 1.0)
+    for (auto& c : plan) c.spindle_speed_rpm *= factor;
+  return plan;
+}
+
+// The worst case per segment of the nominal rating and the band's shifted ratings.
+PlanRisk worst_over_band(PlanRisk worst, const std::vector<const PlanRisk*>& shifted,
+                         const std::vector<planner::SegmentConditions>& plan, const RiskThresholds& thresholds) {
+  if (shifted.empty()) return worst;
+  for (const PlanRisk* r : shifted)
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      SegmentRisk& w = worst.segments[k];
+      w.certified = w.certified && r->segments[k].certified;
+      if (r->segments[k].growth_rate_per_s > w.growth_rate_per_s) {
+        w.growth_rate_per_s = r->segments[k].growth_rate_per_s;
+        w.chatter_frequency_hz = r->segments[k].chatter_frequency_hz;
+      }
+    }
+  accumulate(plan, thresholds, worst);
+  return worst;
+}
+
 // rate_plan's worst case per segment over the spindle speeds n (1 - tol), n, n (1 + tol).
 PlanRisk rate_plan_band(const Json& model_table, const ProcessSettings& p,
                         const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
                         const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
                         int phases, double tolerance) {
-  PlanRisk worst = rate_plan(model_table, p, plan, generatrix, roots, thresholds, amplitude_ratio, phases);
-  if (!(tolerance > 0.0)) return worst;
-  for (double factor : {1.0 - tolerance, 1.0 + tolerance}) {
-    std::vector<planner::SegmentConditions> shifted = plan;
-    for (auto& c : shifted) c.spindle_speed_rpm *= factor;
-    const PlanRisk r = rate_plan(model_table, p, shifted, generatrix, roots, thresholds, amplitude_ratio, phases);
-    for (std::size_t k = 0; k < plan.size(); ++k) {
-      SegmentRisk& w = worst.segments[k];
-      w.certified = w.certified && r.segments[k].certified;
-      if (r.segments[k].growth_rate_per_s > w.growth_rate_per_s) {
-        w.growth_rate_per_s = r.segments[k].growth_rate_per_s;
-        w.chatter_frequency_hz = r.segments[k].chatter_frequency_hz;
-      }
-    }
-  }
-  accumulate(plan, thresholds, worst);
-  return worst;
+  const std::vector<double> factors = band_factors(tolerance);
+  std::vector<PlanRisk> rated;
+  for (double factor : factors)
+    rated.push_back(rate_plan(model_table, p, at_speed_factor(plan, factor), generatrix, roots, thresholds,
+                              amplitude_ratio, phases));
+  std::vector<const PlanRisk*> shifted;
+  for (std::size_t i = 1; i < rated.size(); ++i) shifted.push_back(&rated[i]);
+  return worst_over_band(std::move(rated.front()), shifted, plan, thresholds);
 }
 
 }  // namespace
@@ -590,8 +642,9 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
   OptimiseResult result;
   RootSettings coarse = roots;
   coarse.condition_tolerance = settings.condition_tolerance;
+  // 1. The candidates and their plans (the planner runs serially, once per planning speed).
   std::map<double, std::vector<planner::SegmentConditions>> plans;  // by planning speed
-  bool found = false;
+  std::vector<std::vector<planner::SegmentConditions>> candidate_plans;
   for (double a : settings.amplitude_ratios) {
     const double lo = settings.spindle_min_rpm / (1.0 - a), hi = settings.spindle_max_rpm / (1.0 + a);
     if (!(a >= 0.0 && a < 1.0) || lo > hi * (1 + 1e-12))
@@ -607,34 +660,65 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
       if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
       std::vector<planner::SegmentConditions> plan = it->second;
       for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
-      const PlanRisk nominal =
-          rate_plan(model_table, p, plan, generatrix, coarse, thresholds, a, settings.phase_samples);
-      const PlanRisk risk = rate_plan_band(model_table, p, plan, generatrix, coarse, thresholds, a,
-                                           settings.phase_samples, settings.speed_tolerance);
-      c.nominal_max_growth_rate_per_s = nominal.max_growth_rate_per_s;
-      if (a == 0.0) c.exact_speed_ratio = kit::exact_ratio(p.wheel_speed_rpm, c.spindle_speed_rpm);
-      c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
-      c.time_factor = c.total_time_s / baseline_time_s;
-      c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
-      c.max_floored_log_amplification = risk.max_floored_log_amplification;
-      c.worst = risk.worst;
-      c.admissible = c.time_factor <= settings.max_time_factor * (1 + 1e-12);
       result.candidates.push_back(c);
-      if (!c.admissible) continue;
-      const Candidate& b = result.candidates[result.best];
-      const bool better = !found || c.max_floored_log_amplification < b.max_floored_log_amplification - 1e-9 ||
-                          (std::abs(c.max_floored_log_amplification - b.max_floored_log_amplification) <= 1e-9 &&
-                           (c.max_growth_rate_per_s < b.max_growth_rate_per_s - 1e-9 ||
-                            (std::abs(c.max_growth_rate_per_s - b.max_growth_rate_per_s) <= 1e-9 &&
-                             c.total_time_s < b.total_time_s)));
-      if (better) {
-        result.best = result.candidates.size() - 1;
-        result.best_plan = std::move(plan);
-        found = true;
-      }
+      candidate_plans.push_back(std::move(plan));
+    }
+  }
+  // 2. Every rating (candidate x speed factor of the band, the nominal one also being the
+  // candidate's nominal rating) is independent: they run in parallel, each one's groups serially
+  // (nested), the largest first. Each rating is deterministic, so the results do not depend on
+  // the thread count or order.
+  const std::vector<double> factors = band_factors(settings.speed_tolerance);
+  const std::size_t per_candidate = factors.size();
+  const std::size_t task_count = result.candidates.size() * per_candidate;
+  auto items_of = [&](std::size_t t) {
+    const Candidate& c = result.candidates[t / per_candidate];
+    const std::size_t phases = c.amplitude_ratio > 0.0 ? static_cast<std::size_t>(std::max(settings.phase_samples, 1)) : 1;
+    return candidate_plans[t / per_candidate].size() * phases;
+  };
+  std::vector<std::size_t> order(task_count);
+  for (std::size_t t = 0; t < task_count; ++t) order[t] = t;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return items_of(x) > items_of(y); });
+  std::vector<PlanRisk> rated(task_count);
+  parallel_tasks(
+      task_count,
+      [&](std::size_t t) {
+        const std::size_t k = t / per_candidate;
+        rated[t] = rate_plan(model_table, p, at_speed_factor(candidate_plans[k], factors[t % per_candidate]),
+                             generatrix, coarse, thresholds, result.candidates[k].amplitude_ratio,
+                             settings.phase_samples);
+      },
+      order);
+  // 3. The band's worst case per candidate, and the best candidate in candidate order.
+  bool found = false;
+  for (std::size_t k = 0; k < result.candidates.size(); ++k) {
+    Candidate& c = result.candidates[k];
+    const std::vector<planner::SegmentConditions>& plan = candidate_plans[k];
+    c.nominal_max_growth_rate_per_s = rated[k * per_candidate].max_growth_rate_per_s;
+    std::vector<const PlanRisk*> shifted;
+    for (std::size_t j = 1; j < per_candidate; ++j) shifted.push_back(&rated[k * per_candidate + j]);
+    const PlanRisk risk = worst_over_band(std::move(rated[k * per_candidate]), shifted, plan, thresholds);
+    if (c.amplitude_ratio == 0.0) c.exact_speed_ratio = kit::exact_ratio(p.wheel_speed_rpm, c.spindle_speed_rpm);
+    c.total_time_s = plan.back().start_s + plan.back().duration_s - plan.front().start_s;
+    c.time_factor = c.total_time_s / baseline_time_s;
+    c.max_growth_rate_per_s = risk.max_growth_rate_per_s;
+    c.max_floored_log_amplification = risk.max_floored_log_amplification;
+    c.worst = risk.worst;
+    c.admissible = c.time_factor <= settings.max_time_factor * (1 + 1e-12);
+    if (!c.admissible) continue;
+    const Candidate& b = result.candidates[result.best];
+    const bool better = !found || c.max_floored_log_amplification < b.max_floored_log_amplification - 1e-9 ||
+                        (std::abs(c.max_floored_log_amplification - b.max_floored_log_amplification) <= 1e-9 &&
+                         (c.max_growth_rate_per_s < b.max_growth_rate_per_s - 1e-9 ||
+                          (std::abs(c.max_growth_rate_per_s - b.max_growth_rate_per_s) <= 1e-9 &&
+                           c.total_time_s < b.total_time_s)));
+    if (better) {
+      result.best = k;
+      found = true;
     }
   }
   if (!found) throw PointFailure("chatter-aware planning: no candidate within the time limit");
+  result.best_plan = std::move(candidate_plans[result.best]);
   stable_window(result);
   return result;
 }
@@ -661,11 +745,12 @@ const LeverDefinition lever_definitions[] = {
 double growth_at(const Json& model_table, const ProcessSettings& p, const ProcessConditions& conditions,
                  const RootSettings& roots, double speed_tolerance) {
   double worst = -std::numeric_limits<double>::infinity();
+  const kit::StabilitySettings stability = kit::stability_settings_table().read(roots.stability);
   for (double factor : {1.0 - speed_tolerance, 1.0, 1.0 + speed_tolerance}) {
     ProcessConditions at = conditions;
     at.work_speed_rpm *= factor;
     auto model = kit::build_model(model_table_at(model_table, p, at));
-    worst = std::max(worst, kit::rightmost_root(*model, kit::stability_settings_table().read(roots.stability)).root.real());
+    worst = std::max(worst, kit::rightmost_root(*model, stability).root.real());
     if (!(speed_tolerance > 0.0)) break;
   }
   return worst;
@@ -682,26 +767,39 @@ std::vector<Lever> stability_levers(const Json& model_table, const ProcessSettin
     d.scale(changed, factor);
     return growth_at(model_table, p, changed, roots, speed_tolerance);
   };
-  const double growth0 = growth_at(model_table, p, conditions, roots, speed_tolerance);
   constexpr double step = 0.05;  // central difference in ln(quantity)
-  std::vector<Lever> levers;
-  for (const LeverDefinition& d : lever_definitions) {
-    Lever lever;
-    lever.name = d.name;
-    lever.acts_on = d.acts_on;
-    lever.growth_per_unit_log = (worst_growth(d, std::exp(step)) - worst_growth(d, std::exp(-step))) / (2 * step);
+  constexpr std::size_t count = std::size(lever_definitions);
+  // The growth rate at the segment and the central differences: independent searches, in
+  // parallel (task 0: the segment; 1 + 2i, 2 + 2i: lever i at e^{+-step}).
+  std::vector<double> growth(1 + 2 * count);
+  parallel_tasks(growth.size(), [&](std::size_t t) {
+    growth[t] = t == 0 ? growth_at(model_table, p, conditions, roots, speed_tolerance)
+                       : worst_growth(lever_definitions[(t - 1) / 2], std::exp((t % 2 == 1 ? 1.0 : -1.0) * step));
+  });
+  const double growth0 = growth[0];
+  std::vector<Lever> levers(count);
+  std::vector<double> log_changes(count, 0.0);
+  for (std::size_t i = 0; i < count; ++i) {
+    Lever& lever = levers[i];
+    lever.name = lever_definitions[i].name;
+    lever.acts_on = lever_definitions[i].acts_on;
+    lever.growth_per_unit_log = (growth[1 + 2 * i] - growth[2 + 2 * i]) / (2 * step);
+    lever.growth_rate_after_per_s = growth0;
     if (lever.growth_per_unit_log != 0.0) {
       const double limit = std::log(max_factor);
       const double log_change =
           std::clamp((target_growth_per_s - growth0) / lever.growth_per_unit_log, -limit, limit);
       lever.change_percent = 100.0 * (std::exp(log_change) - 1.0);
-      lever.growth_rate_after_per_s = worst_growth(d, std::exp(log_change));
-      lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
-    } else {
-      lever.growth_rate_after_per_s = growth0;
+      log_changes[i] = log_change;
     }
-    levers.push_back(std::move(lever));
   }
+  // The change each lever needs, checked by its own search (in parallel).
+  parallel_tasks(count, [&](std::size_t i) {
+    Lever& lever = levers[i];
+    if (!lever.change_percent) return;
+    lever.growth_rate_after_per_s = worst_growth(lever_definitions[i], std::exp(log_changes[i]));
+    lever.reaches_target = lever.growth_rate_after_per_s <= target_growth_per_s;
+  });
   return levers;
 }
 
