@@ -8,6 +8,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "runner/output_dir.hpp"
+#include "runner/results_hdf5.hpp"
 #include "study/messages.hpp"
 
 namespace chatterlab::runner {
@@ -114,6 +115,27 @@ ResumedPoints read_journals(const fs::path& out_dir, const JournalHeader& expect
     }
   }
   for (auto& [point, record] : chosen) {
+    if (retry_failed && record.status != "ok") continue;
+    out.records.emplace_back(point, std::move(record));
+  }
+  return out;
+}
+
+ResumedPoints read_results_h5(const fs::path& out_dir, const fs::path& results_h5,
+                              const JournalHeader& expected, const Study& study, bool retry_failed) {
+  Hdf5Results results;
+  try {
+    results = read_hdf5_results(results_h5);
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("cannot resume from {} (the run's journal was removed when it "
+                                 "completed): {}; run without --resume to start over",
+                                 results_h5.string(), e.what()));
+  }
+  if (results.header.study_fingerprint != expected.study_fingerprint ||
+      results.header.points != expected.points || results.header.columns != expected.columns)
+    throw InputError(mismatch(results_h5, results.header, expected, out_dir, study));
+  ResumedPoints out;
+  for (auto& [point, record] : results.records) {
     if (retry_failed && record.status != "ok") continue;
     out.records.emplace_back(point, std::move(record));
   }
