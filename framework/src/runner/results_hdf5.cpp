@@ -480,7 +480,7 @@ Hdf5ResultsWriter::Hdf5ResultsWriter(const Study& study, std::vector<std::string
       {"points", std::to_string(study.point_count())},
       {"columns", json_text(columns)},
       {"grid_keys", json_text(keys)},
-      {"inputs", json_text(provenance.value("inputs", Json::object()))},
+      {"inputs", json_text(result_inputs(study))},  // {path: sha256}, as the journal's header
       {"study_file", study.file.string()},
       {"study_text", study_text},
       {"study", json_text(study.document, 2)},

@@ -43,7 +43,10 @@ Study shaped_study(const std::vector<std::size_t>& shape) {
   study.kind = "none";
   study.document = {{"study", {{"kind", "none"}}}};
   for (std::size_t a = 0; a < shape.size(); ++a) {
-    GridAxis axis{"a" + std::to_string(a), "model.a" + std::to_string(a), {}, {}};
+    // (appended, not "a" + std::to_string(a): GCC 12 warns -Wrestrict about that at -O3)
+    std::string key = "a";
+    key += std::to_string(a);
+    GridAxis axis{key, "model." + key, {}, {}};
     for (std::size_t i = 0; i < shape[a]; ++i) axis.values.push_back(0.25 * static_cast<double>(i));
     study.grid.push_back(std::move(axis));
   }
