@@ -24,7 +24,7 @@ load=$(cut -d' ' -f1 /proc/loadavg)
 /usr/bin/time -v "$bin" run "$study" --out "$out" --allow-large --threads "$threads" --no-progress \
   >"$out.log" 2>"$out.time" || { cat "$out.log" "$out.time" >&2; exit 1; }
 rss_kb=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$out.time")
-size() { du -sb "$@" 2>/dev/null | awk '{s += $1} END {printf "%.1f", s / 1e6}'; }
+size() { { du -sb "$@" 2>/dev/null || true; } | awk '{s += $1} END {printf "%.1f", s / 1e6}'; }
 results=$(size "$out"/results.*)
 journal=$(size "$out"/journal)
 plots=$(size "$out"/*.png "$out"/*.svg "$out"/*.dat "$out"/*.gp)

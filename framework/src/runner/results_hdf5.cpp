@@ -28,7 +28,7 @@ ResultsFormat results_format(const Study& study) {
   const Json output = study.document.value("output", Json::object());
   const std::string format = output.value("format", std::string("csv"));
   if (format == "hdf5") return ResultsFormat::hdf5;
-  if (format == "auto" && study.point_count() > auto_hdf5_min_points) return ResultsFormat::hdf5;
+  if (format == "auto" && study.point_count() > auto_hdf5_above_points) return ResultsFormat::hdf5;
   return ResultsFormat::csv;
 }
 

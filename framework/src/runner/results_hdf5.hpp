@@ -31,7 +31,7 @@ namespace chatterlab::runner {
 
 enum class ResultsFormat { csv, hdf5 };
 // [output] format = "auto" writes HDF5 above this many points.
-inline constexpr std::size_t auto_hdf5_min_points = 100'000;
+inline constexpr std::size_t auto_hdf5_above_points = 100'000;
 // Points per chunk (and per write) of a column dataset: 128 KiB of float64.
 inline constexpr std::size_t hdf5_chunk_points = 16'384;
 

@@ -95,6 +95,22 @@ TEST(Hdf5Results, ChunkRowsWideningAndNullsReadBackUnchanged) {
   }
 }
 
+TEST(Hdf5Results, AutoFormatIsHdf5AboveTheDocumentedSize) {
+  Study study = shaped_study({auto_hdf5_above_points});
+  EXPECT_EQ(results_format(study), ResultsFormat::csv);  // no [output]: CSV
+  study.document["output"] = {{"format", "auto"}};
+  EXPECT_EQ(results_format(study), ResultsFormat::csv);
+  EXPECT_EQ(results_format(shaped_study({auto_hdf5_above_points + 1})), ResultsFormat::csv);
+  Study large = shaped_study({auto_hdf5_above_points + 1});
+  large.document["output"] = {{"format", "auto"}};
+  EXPECT_EQ(results_format(large), ResultsFormat::hdf5);
+  large.document["output"] = {{"format", "csv"}};
+  EXPECT_EQ(results_format(large), ResultsFormat::csv);
+  study.document["output"] = {{"format", "hdf5"}};
+  EXPECT_EQ(results_format(study), ResultsFormat::hdf5);
+  EXPECT_EQ(results_path("out", ResultsFormat::hdf5), fs::path("out/results.h5"));
+}
+
 TEST(Hdf5Results, TextInAColumnOfNumbersFailsTheCommitNamingColumnAndPoint) {
   const Study study = shaped_study({4});
   const fs::path file = fresh("conflict") / "results.h5";

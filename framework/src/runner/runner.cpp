@@ -335,9 +335,10 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
 // meta.json says so (results.csv is not written), and the run ends with exit 2.
 std::string input_changed(const MetaInputs& in, const std::vector<std::string>& changes) {
   std::string message = fmt::format(
-      "an input file changed while the study ran, so the run was stopped and results.csv was not "
+      "an input file changed while the study ran, so the run was stopped and {} was not "
       "written: {}. Run the study again (without --resume: the finished points belong to the old "
       "file)",
+      runner::results_path(fs::path(), runner::results_format(in.study)).string(),
       fmt::join(changes, "; "));
   Json meta = runner::meta_with_state(in, runner::state_input_changed);
   meta["input_changes"] = changes;
