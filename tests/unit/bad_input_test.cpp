@@ -65,8 +65,8 @@ TEST_F(BadInput, OutputTableNamesTheFileLineKeyValueAndTheFormats) {
                   {"study.toml:11:", "output.format = 5", "expected a string"});
   expect_mentions(error(fake_study("[output]\nkeep_journals = true\n")),
                   {"study.toml:11:", "unknown key 'output.keep_journals'", "keep_journal"});
-  expect_mentions(error(fake_study("output = \"hdf5\"\n")),
-                  {"study.toml:10:", "output = \"hdf5\"", "expected a table [output]"});
+  expect_mentions(error("output = \"hdf5\"\n" + fake_study()),
+                  {"study.toml:1:", "output = \"hdf5\"", "expected a table [output]"});
 }
 
 TEST_F(BadInput, UnknownStudyKindListsTheKindsSorted) {

@@ -16,6 +16,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/runner.hpp"
 #include "runner/output_dir.hpp"
+#include "runner/results_io.hpp"
 
 namespace chatterlab::runner {
 namespace {
@@ -337,6 +338,20 @@ TEST(Hdf5Results, ACompleteRunDropsItsJournalAndResumesFromResultsH5) {
   ASSERT_EQ(after.records.size(), before.records.size());
   for (std::size_t p = 0; p < after.records.size(); ++p)
     EXPECT_EQ(after.records[p].second.outputs, before.records[p].second.outputs) << p;
+
+  // A later session's journal (an interrupted --resume --retry-failed) overlays results.h5: its
+  // ok record of point 3 (marked -7) wins.
+  fs::create_directories(journal_dir(out));
+  PointResult marked = before.records[3].second;
+  marked.outputs[0] = -7.0;
+  std::ofstream(journal_file(out, 1, 0))
+      << journal_header_line({before.header.study_fingerprint, 20, before.header.columns,
+                              before.header.inputs})
+      << journal_line(3, marked);
+  EXPECT_EQ(run_study(study, options).resumed, 20u);
+  const Hdf5Results overlaid = read_hdf5_results(out / "results.h5");
+  EXPECT_EQ(overlaid.records[3].second.outputs[0], -7.0);
+  EXPECT_EQ(overlaid.records[4].second.outputs, before.records[4].second.outputs);
 
   // Another computation is refused, naming results.h5 and what changed.
   std::string text = text_file(dir / "dde_2d.toml");

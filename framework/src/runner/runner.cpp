@@ -133,12 +133,8 @@ Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expe
   prep.done.assign(expected.points, '0');
   if (options.resume) {
     // A complete HDF5 run keeps no journal (results.h5 holds every point): resume from that.
-    const fs::path results_h5 = runner::results_path(options.out_dir, runner::ResultsFormat::hdf5);
-    if (runner::journal_files(options.out_dir).empty() && fs::exists(results_h5))
-      prep.resumed = runner::read_results_h5(options.out_dir, results_h5, expected, study,
-                                             options.retry_failed);
-    else
-      prep.resumed = runner::read_journals(options.out_dir, expected, study, options.retry_failed);
+    prep.resumed =
+        runner::read_resumable_points(options.out_dir, expected, study, options.retry_failed);
     for (const auto& record : prep.resumed.records) prep.done[record.first] = '1';
   }
   // Only now, when the journals were accepted: a refused --resume leaves the old run untouched.
