@@ -57,6 +57,17 @@ if command -v h5dump >/dev/null && command -v h5ls >/dev/null; then
       >"$work/$column.merged.txt"
     cmp -s "$work/$column.h5.txt" "$work/$column.merged.txt" || fail "$column: merged shards differ from the single run"
   done
+  # Two MPI ranks (rank 0 writes results.h5, the other rank's points arrive at the end): the
+  # same datasets as one process.
+  if command -v mpirun >/dev/null; then
+    export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    expect_exit 0 "$work/mpi" mpirun --oversubscribe -np 2 "$bin" run "$work/h5.toml" --out "$work/mpi" --threads 1
+    for dataset in growth_rate_per_s stable certificate status; do
+      cmp -s <(h5dump -m '%.17g' -d "/$dataset" "$work/mpi/results.h5" | sed 1d) \
+             <(h5dump -m '%.17g' -d "/$dataset" "$work/h5/results.h5" | sed 1d) ||
+        fail "$dataset: 2 MPI ranks wrote other values than one process"
+    done
+  fi
   h5dump -a /study_text "$work/h5/results.h5" | grep -q 'DDE-BIFTOOL test' ||
     fail "results.h5 lacks the study file text"
 else
