@@ -64,9 +64,9 @@ struct JournalHeader {
 };
 
 // Identifies everything that decides a run's numbers: the kind, the resolved document (keys
-// sorted, without [study] name and description and without [run] and [output]: they change no number), the
-// grid axes in order, the output columns, and the content hashes of the data files and plugin
-// libraries. A journal is only reused for the very same computation. SHA-256 of that canonical
+// sorted, without [study] name and description, [run] and [output]: they change no number),
+// the grid axes in order, the output columns, and the content hashes of the data files and
+// plugin libraries. A journal is only reused for the very same computation. SHA-256 of that canonical
 // text, 64 hex digits.
 std::string study_fingerprint(const Study& study, const std::vector<std::string>& columns);
 
