@@ -148,12 +148,12 @@ void print_run_summary(const chatterlab::RunSummary& summary, const chatterlab::
       std::cout << fmt::format("; shard {}/{} in {} (combine the shards with chatterlab merge)\n",
                                options.shard->index, options.shard->count, options.out_dir.string());
     else if (summary.output_error.empty())
-      std::cout << fmt::format("; results in {}\n", (options.out_dir / "results.csv").string());
+      std::cout << fmt::format("; results in {}\n", summary.results_file.string());
     else
       std::cout << '\n';
     if (summary.failed > 0)
       std::cout << (options.shard ? "failed points: reasons in meta.json\n"
-                                  : "failed points: status column of results.csv, reasons in meta.json\n");
+                                  : "failed points: status column of the results, reasons in meta.json\n");
     if (!summary.output_error.empty())
       std::cerr << fmt::format(
           "chatterlab: error: output could not be written: {} (meta.json: state output_failed); "

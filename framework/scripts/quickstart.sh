@@ -15,9 +15,10 @@ esac
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libsundials-dev libfftw3-dev libopenmpi-dev openmpi-bin
-  libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libmuparser-dev libnanoflann-dev
+  libhdf5-openmpi-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libmuparser-dev libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   file  # cpack's Debian generator (the sdk test packages chatterlab) inspects binaries with it
+  hdf5-tools  # h5dump/h5ls: tests/cli/hdf5_output.cli.sh reads results.h5 with them
   # The Python module (docs/python.md), built for Debian's /usr/bin/python3, and its tests
   python3-dev pybind11-dev python3-numpy python3-pandas python3-matplotlib python3-pytest
 )

@@ -98,4 +98,5 @@ grep -q "a plugin ended the process (exit()) while grid point(s) 1 were computed
   fail "exit(0) in-process: no message: $(cat "$work/exit.err")"
 grep -q '"state": "ended_by_plugin"' "$work/exit/meta.json" || fail "meta.json does not say ended_by_plugin"
 [ ! -e "$work/exit/results.csv" ] || fail "results.csv written by a run that a plugin ended"
+ls "$work/exit"/results.csv.tmp* >/dev/null 2>&1 && fail "a half results.csv (temporary file) was left behind"
 finish

@@ -52,10 +52,21 @@ TEST_F(BadInput, UnknownKeysListTheValidOnes) {
                    "valid keys: damping_ratio, frequency_hz"});
   expect_mentions(error(fake_study("[stability]\nmax_frequency_hz = 100.0\n")),
                   {"study.toml:10:", "unknown top-level key 'stability'",
-                   "valid: fake_settings, grid, model, plugins, run, study"});
+                   "valid: fake_settings, grid, model, output, plugins, run, study"});
   expect_mentions(error("title = \"x\"\n" + fake_study()), {"study.toml:1:", "unknown top-level key 'title'"});
   expect_mentions(error(with_line(2, "kind = \"test_fake_kind\"\nkinds = 1")),
                   {"study.toml:3:", "unknown key 'study.kinds'", "valid keys: description, kind, name"});
+}
+
+TEST_F(BadInput, OutputTableNamesTheFileLineKeyValueAndTheFormats) {
+  expect_mentions(error(fake_study("[output]\nformat = \"hdf\"\n")),
+                  {"study.toml:11:", "output.format = \"hdf\"", "csv", "hdf5", "auto"});
+  expect_mentions(error(fake_study("[output]\nformat = 5\n")),
+                  {"study.toml:11:", "output.format = 5", "expected a string"});
+  expect_mentions(error(fake_study("[output]\nkeep_journals = true\n")),
+                  {"study.toml:11:", "unknown key 'output.keep_journals'", "keep_journal"});
+  expect_mentions(error("output = \"hdf5\"\n" + fake_study()),
+                  {"study.toml:1:", "output = \"hdf5\"", "expected a table [output]"});
 }
 
 TEST_F(BadInput, UnknownStudyKindListsTheKindsSorted) {

@@ -291,7 +291,8 @@ TEST(RunnerStreaming, PlotTableOfALargeGridIsDecimatedAndFlagged) {
   EXPECT_EQ(runner::plot_strides(study, 65536), (std::vector<std::size_t>{1, 1}));
   EXPECT_EQ(runner::plot_strides(study, 1000), (std::vector<std::size_t>{31, 1}));  // 33 x 30
   const fs::path dir = fresh_dir("streaming_decimated");
-  runner::GridOrderWriter writer(study, {"out"}, dir / "results.csv", 1000);
+  runner::GridOrderWriter writer(study, {"out"}, dir / "results.csv", runner::ResultsFormat::csv,
+                                 Json::object(), 1000);
   for (std::size_t p = study.point_count(); p-- > 0;) writer.add(p, ok({static_cast<double>(p)}));
   writer.commit();
   const ResultTable plot = writer.take_plot_table();

@@ -31,6 +31,7 @@ class AtomicFileWriter {
   void commit();
   void abandon() noexcept;
   const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& temporary_path() const { return tmp_; }
 
  private:
   [[noreturn]] void fail(const char* what, int err);

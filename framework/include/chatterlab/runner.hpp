@@ -54,6 +54,7 @@ struct RunSummary {
   std::size_t timed_out = 0;  // of which stopped at the time limit
   std::size_t resumed = 0;    // points taken over from an earlier run
   std::string output_error;   // "" or why an output file could not be written (meta.json too)
+  std::filesystem::path results_file;  // results.csv or results.h5 ([output] format); empty for a shard
   // 0 every point ok, 1 some points failed or timed out, 3 an output could not be written.
   // (2, bad input, is thrown as InputError before anything is written.)
   int exit_code() const { return !output_error.empty() ? 3 : failed == 0 ? 0 : 1; }

@@ -49,7 +49,8 @@ Study decimated_study(const Study& study, const std::vector<std::size_t>& stride
 }
 
 GridOrderWriter::GridOrderWriter(const Study& study, std::vector<std::string> output_columns,
-                                 const std::filesystem::path& csv, std::size_t plot_rows)
+                                 const std::filesystem::path& file, ResultsFormat format,
+                                 const Json& provenance, std::size_t plot_rows)
     : study_(study), columns_(std::move(output_columns)) {
   if (auto it = std::find(columns_.begin(), columns_.end(), "notice"); it != columns_.end())
     notice_column_ = it - columns_.begin();
@@ -67,7 +68,13 @@ GridOrderWriter::GridOrderWriter(const Study& study, std::vector<std::string> ou
   plot_table_.rows.resize(plot_study_->point_count());
   plot_table_.status.resize(plot_study_->point_count());
 
-  file_ = std::make_unique<AtomicFileWriter>(csv);
+  if (format == ResultsFormat::hdf5) {
+    hdf5_ = std::make_unique<Hdf5ResultsWriter>(study, columns_, file, provenance);
+    temporary_path_ = hdf5_->temporary_path();
+    return;
+  }
+  file_ = std::make_unique<AtomicFileWriter>(file);
+  temporary_path_ = file_->temporary_path();
   std::string header;
   for (const auto& c : plot_table_.grid_columns) header += csv_field(c) + ',';
   for (const auto& c : columns_) header += csv_field(c) + ',';
@@ -95,7 +102,8 @@ void GridOrderWriter::add(std::size_t point, PointResult&& result) {
   if (!result.done || result.outputs.size() != columns_.size() || point >= study_.point_count())
     throw std::logic_error(fmt::format("runner: point {} has no complete result", point));
   // Formatting (most of a row's cost) happens outside the lock, on the computing thread.
-  std::string line = format_row(point, result);
+  Early pending;
+  if (file_) pending.line = format_row(point, result);
   Json failure = failed_point(study_, point, result.status, result.elapsed_s);
   Json notice;
   if (notice_column_ >= 0) {
@@ -118,31 +126,48 @@ void GridOrderWriter::add(std::size_t point, PointResult&& result) {
     const std::vector<std::size_t> index = study_.point_indices(point);
     for (std::size_t a = 0; a < study_.grid.size(); ++a)
       plot_cells.push_back(study_.grid[a].values[index[a]]);
-    for (Json& output : result.outputs) plot_cells.push_back(std::move(output));
+    for (Json& output : result.outputs)
+      if (hdf5_)
+        plot_cells.push_back(output);
+      else
+        plot_cells.push_back(std::move(output));
   }
+  if (hdf5_) pending.result = std::move(result);
 
   std::lock_guard lock(mutex_);
   if (!failure.is_null()) failed_.emplace(point, std::move(failure));
   if (!notice.is_null()) notices_.emplace(point, std::move(notice));
   if (plot_row >= 0) {
     plot_table_.rows[static_cast<std::size_t>(plot_row)] = std::move(plot_cells);
-    plot_table_.status[static_cast<std::size_t>(plot_row)] = result.status;
+    plot_table_.status[static_cast<std::size_t>(plot_row)] =
+        hdf5_ ? pending.result.status : result.status;
   }
   if (point != next_) {
-    early_.emplace(point, std::move(line));
+    early_.emplace(point, std::move(pending));
     return;
   }
-  buffer_ += line;
-  ++next_;
+  append(std::move(pending));
   write_ready();
 }
 
-void GridOrderWriter::write_ready() {
-  for (auto it = early_.begin(); it != early_.end() && it->first == next_; it = early_.erase(it)) {
-    buffer_ += it->second;
-    ++next_;
+void GridOrderWriter::append(Early&& row) {
+  ++next_;
+  if (!hdf5_) {
+    buffer_ += row.line;
+    return;
   }
-  if (buffer_.size() < write_block_bytes && next_ < study_.point_count()) return;
+  if (!error_.empty()) return;
+  try {
+    hdf5_->append(std::move(row.result));  // writes whole chunks as they fill
+  } catch (const std::exception& e) {
+    error_ = e.what();
+  }
+}
+
+void GridOrderWriter::write_ready() {
+  for (auto it = early_.begin(); it != early_.end() && it->first == next_; it = early_.erase(it))
+    append(std::move(it->second));
+  if (hdf5_ || (buffer_.size() < write_block_bytes && next_ < study_.point_count())) return;
   if (error_.empty() && file_) {
     try {
       file_->write(buffer_);
@@ -159,16 +184,25 @@ void GridOrderWriter::commit() {
     throw std::logic_error(fmt::format("runner: results.csv has {} of {} rows", next_,
                                        study_.point_count()));
   if (!buffer_.empty()) write_ready();  // the header of a grid whose rows were never written
+  if (error_.empty() && hdf5_) {
+    try {
+      hdf5_->commit();
+    } catch (const std::exception& e) {
+      error_ = e.what();
+    }
+  }
   if (!error_.empty()) {
     file_.reset();
+    hdf5_.reset();
     throw OutputError(error_);
   }
-  file_->commit();
+  if (file_) file_->commit();
 }
 
 void GridOrderWriter::abandon() noexcept {
   std::lock_guard lock(mutex_);
   if (file_) file_->abandon();
+  if (hdf5_) hdf5_->abandon();
 }
 
 Json GridOrderWriter::failed_points() const {

@@ -1,8 +1,9 @@
 #pragma once
 // Streaming results (docs/architecture.md, "Streaming results"). Rank 0 hands every finished
-// point to a GridOrderWriter in whatever order points finish; the writer appends its results.csv
-// row as soon as every earlier point is in, so it holds only the formatted rows of points that
-// finished ahead of an earlier one, never the whole grid. It keeps what the end of the run needs:
+// point to a GridOrderWriter in whatever order points finish; the writer appends its row of
+// results.csv (or of results.h5, runner/results_hdf5.hpp) as soon as every earlier point is in,
+// so it holds only the points that finished ahead of an earlier one (and, for HDF5, one row of
+// chunks), never the whole grid. It keeps what the end of the run needs:
 // one entry per failed point and per notice, and the bounded table the plots draw (every point of
 // a small grid; the points on a lattice of every k-th axis value of a large one).
 #include <cstddef>
@@ -16,6 +17,7 @@
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "runner/results_hdf5.hpp"
 #include "runner/results_io.hpp"
 
 namespace chatterlab::runner {
@@ -35,9 +37,11 @@ Study decimated_study(const Study& study, const std::vector<std::size_t>& stride
 
 class GridOrderWriter {
  public:
-  // Creates `csv` (a temporary name until commit()) and writes its header line.
+  // Creates `file` (a temporary name until commit()): results.csv with its header line, or
+  // results.h5 with `provenance` (meta.json's header) as an attribute. Throws OutputError.
   GridOrderWriter(const Study& study, std::vector<std::string> output_columns,
-                  const std::filesystem::path& csv, std::size_t plot_rows = max_plot_rows);
+                  const std::filesystem::path& file, ResultsFormat format = ResultsFormat::csv,
+                  const Json& provenance = Json::object(), std::size_t plot_rows = max_plot_rows);
 
   // One finished point (each exactly once, from any thread). An output error is kept and thrown
   // by commit(): a grid loop must not unwind from a worker thread.
@@ -45,8 +49,11 @@ class GridOrderWriter {
 
   // After every point was added: results.csv into place. Throws OutputError.
   void commit();
-  // The run is not valid after all (an input file changed): no results.csv.
+  // The run is not valid after all (an input file changed): no results file.
   void abandon() noexcept;
+  // The file the results are written to until commit(): what a process that must end at once (a
+  // plugin called exit()) removes without waiting for a lock.
+  const std::filesystem::path& temporary_path() const { return temporary_path_; }
 
   // meta.json's failed_points (in grid order) and notices ([{point, notice}], in grid order).
   Json failed_points() const;
@@ -58,18 +65,26 @@ class GridOrderWriter {
   ResultTable take_plot_table();
 
  private:
+  // A point ahead of next_: its formatted CSV row, or (HDF5) its result.
+  struct Early {
+    std::string line;
+    PointResult result;
+  };
   void write_ready();  // appends every row whose predecessors are all written; under mutex_
+  void append(Early&& row);  // the row of point next_; under mutex_
   std::string format_row(std::size_t point, const PointResult& result) const;
 
   const Study& study_;
   std::vector<std::string> columns_;
   std::ptrdiff_t notice_column_ = -1;
-  std::unique_ptr<AtomicFileWriter> file_;
+  std::unique_ptr<AtomicFileWriter> file_;    // results.csv
+  std::unique_ptr<Hdf5ResultsWriter> hdf5_;   // or results.h5
+  std::filesystem::path temporary_path_;
   std::string error_;  // first output error
 
   mutable std::mutex mutex_;
-  std::size_t next_ = 0;                    // the next point to write
-  std::map<std::size_t, std::string> early_;  // formatted rows ahead of next_
+  std::size_t next_ = 0;               // the next point to write
+  std::map<std::size_t, Early> early_;  // points ahead of next_
   std::string buffer_;                       // rows written in blocks
   std::map<std::size_t, Json> failed_, notices_;
 

@@ -176,6 +176,7 @@ Json result_relevant(const Json& document) {
   Json out = document;
   if (!out.is_object()) return out;
   out.erase("run");
+  out.erase("output");
   if (auto it = out.find("study"); it != out.end() && it->is_object()) {
     it->erase("name");
     it->erase("description");

@@ -64,13 +64,13 @@ struct JournalHeader {
 };
 
 // Identifies everything that decides a run's numbers: the kind, the resolved document (keys
-// sorted, without [study] name and description and without [run]: they change no number), the
-// grid axes in order, the output columns, and the content hashes of the data files and plugin
-// libraries. A journal is only reused for the very same computation. SHA-256 of that canonical
+// sorted, without [study] name and description, [run] and [output]: they change no number),
+// the grid axes in order, the output columns, and the content hashes of the data files and
+// plugin libraries. A journal is only reused for the very same computation. SHA-256 of that canonical
 // text, 64 hex digits.
 std::string study_fingerprint(const Study& study, const std::vector<std::string>& columns);
 
-// A study document without what changes no result: [study] name and description, and [run].
+// A study document without what changes no result: [study] name and description, [run], [output].
 Json result_relevant(const Json& document);
 
 // The input files that decide results (data, plugin libraries) as {path: sha256}.

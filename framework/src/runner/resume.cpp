@@ -8,6 +8,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "runner/output_dir.hpp"
+#include "runner/results_hdf5.hpp"
 #include "study/messages.hpp"
 
 namespace chatterlab::runner {
@@ -113,6 +114,47 @@ ResumedPoints read_journals(const fs::path& out_dir, const JournalHeader& expect
         it->second = std::move(record);
     }
   }
+  for (auto& [point, record] : chosen) {
+    if (retry_failed && record.status != "ok") continue;
+    out.records.emplace_back(point, std::move(record));
+  }
+  return out;
+}
+
+namespace {
+
+// Every point of results.h5 (all of them, failed ones included).
+std::vector<std::pair<std::size_t, PointResult>> points_of_results_h5(
+    const fs::path& out_dir, const fs::path& results_h5, const JournalHeader& expected,
+    const Study& study) {
+  Hdf5Results results;
+  try {
+    results = read_hdf5_results(results_h5);
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("cannot resume from {}: {}; run without --resume to start over",
+                                 results_h5.string(), e.what()));
+  }
+  if (results.header.study_fingerprint != expected.study_fingerprint ||
+      results.header.points != expected.points || results.header.columns != expected.columns)
+    throw InputError(mismatch(results_h5, results.header, expected, out_dir, study));
+  return std::move(results.records);
+}
+
+}  // namespace
+
+ResumedPoints read_resumable_points(const fs::path& out_dir, const JournalHeader& expected,
+                                    const Study& study, bool retry_failed) {
+  const fs::path results_h5 = results_path(out_dir, ResultsFormat::hdf5);
+  if (!fs::exists(results_h5)) return read_journals(out_dir, expected, study, retry_failed);
+  std::map<std::size_t, PointResult> chosen;
+  for (auto& [point, record] : points_of_results_h5(out_dir, results_h5, expected, study))
+    chosen.emplace(point, std::move(record));
+  ResumedPoints out = read_journals(out_dir, expected, study, /*retry_failed=*/false);
+  for (auto& [point, record] : out.records) {  // later sessions: an ok record wins
+    PointResult& earlier = chosen[point];
+    if (!earlier.done || earlier.status != "ok" || record.status == "ok") earlier = std::move(record);
+  }
+  out.records.clear();
   for (auto& [point, record] : chosen) {
     if (retry_failed && record.status != "ok") continue;
     out.records.emplace_back(point, std::move(record));

@@ -25,6 +25,14 @@ struct ResumedPoints {
 ResumedPoints read_journals(const std::filesystem::path& out_dir, const JournalHeader& expected,
                             const Study& study, bool retry_failed);
 
+// What --resume takes over: the points of results.h5 when a complete HDF5 run left one (its
+// journal was removed, [output] keep_journal = false), overlaid by the journals of the sessions
+// since (a --retry-failed that was interrupted); else the journals alone. The same checks and
+// `retry_failed` as read_journals.
+ResumedPoints read_resumable_points(const std::filesystem::path& out_dir,
+                                    const JournalHeader& expected, const Study& study,
+                                    bool retry_failed);
+
 // The first place where two JSON values differ, as "model.work_speed_rpm: 55 then, 60 now"
 // ("" when equal). Keys are compared in sorted order.
 std::string first_difference(const Json& then, const Json& now, const std::string& path = "");

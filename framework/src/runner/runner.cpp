@@ -132,7 +132,9 @@ Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expe
   prep.lock = runner::prepare_output_dir(options.out_dir, options.resume, study.file.string());
   prep.done.assign(expected.points, '0');
   if (options.resume) {
-    prep.resumed = runner::read_journals(options.out_dir, expected, study, options.retry_failed);
+    // A complete HDF5 run keeps no journal (results.h5 holds every point): resume from that.
+    prep.resumed =
+        runner::read_resumable_points(options.out_dir, expected, study, options.retry_failed);
     for (const auto& record : prep.resumed.records) prep.done[record.first] = '1';
   }
   // Only now, when the journals were accepted: a refused --resume leaves the old run untouched.
@@ -290,7 +292,16 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   run["journal_lines_ignored"] = {{"truncated", prep.resumed.truncated_lines},
                                   {"invalid", prep.resumed.invalid_lines}};
   if (!stats.journal_errors.empty()) run["journal_errors"] = stats.journal_errors;
+  // The journal only serves --resume of an unfinished run; once results.h5 holds every point it
+  // is removed (by default), after meta.json says so: about the size of the results again.
+  const runner::ResultsFormat format = runner::results_format(in.study);
+  const bool remove_journal = format == runner::ResultsFormat::hdf5 &&
+                              written.output_error.empty() && !runner::keep_journal(in.study);
+  run["journal"] = remove_journal ? "removed: the run is complete and results.h5 holds every "
+                                    "point (--resume reads it)"
+                                  : "kept";
   meta["run"] = std::move(run);
+  meta["results_file"] = runner::results_path(fs::path(), format).string();
   const double wall = seconds_since(start);
   Json timings = Json::object();
   timings["wall_s"] = wall;
@@ -311,6 +322,8 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
   } catch (const std::exception& e) {
     if (written.output_error.empty()) written.output_error = e.what();
   }
+  if (remove_journal && written.output_error.empty())
+    fs::remove_all(runner::journal_dir(out), ignored);  // one left behind costs disk, not results
   return written;
 }
 
@@ -318,9 +331,10 @@ OutputsWritten write_outputs(const StudyKind& kind, const MetaInputs& in, const 
 // meta.json says so (results.csv is not written), and the run ends with exit 2.
 std::string input_changed(const MetaInputs& in, const std::vector<std::string>& changes) {
   std::string message = fmt::format(
-      "an input file changed while the study ran, so the run was stopped and results.csv was not "
+      "an input file changed while the study ran, so the run was stopped and {} was not "
       "written: {}. Run the study again (without --resume: the finished points belong to the old "
       "file)",
+      runner::results_path(fs::path(), runner::results_format(in.study)).string(),
       fmt::join(changes, "; "));
   Json meta = runner::meta_with_state(in, runner::state_input_changed);
   meta["input_changes"] = changes;
@@ -405,8 +419,12 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   std::unique_ptr<runner::GridOrderWriter> writer;
   try {
     collectively([&] {
-      if (rank == 0 && !options.shard)
-        writer = std::make_unique<runner::GridOrderWriter>(study, columns, options.out_dir / "results.csv");
+      if (rank == 0 && !options.shard) {
+        const runner::ResultsFormat format = runner::results_format(study);
+        writer = std::make_unique<runner::GridOrderWriter>(
+            study, columns, runner::results_path(options.out_dir, format), format,
+            runner::meta_header(meta_in));
+      }
     });
   } catch (const InputError&) {
     undo_prepare(options);
@@ -444,6 +462,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         [&](const std::string& message) {
           journal->flush();
           if (rank != 0) return;
+          std::error_code ignored;  // no half results file left behind
+          if (writer) fs::remove(writer->temporary_path(), ignored);
           Json meta = runner::meta_with_state(meta_in, runner::state_ended_by_plugin);
           meta["error"] = message;
           runner::write_file_atomically(options.out_dir / "meta.json",
@@ -591,6 +611,8 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   summary.failed = result["failed"].get<std::size_t>();
   summary.timed_out = result["timed_out"].get<std::size_t>();
   summary.output_error = result["output_error"].get<std::string>();
+  if (!options.shard)
+    summary.results_file = runner::results_path(options.out_dir, runner::results_format(study));
   if (result.contains("notices"))
     for (const Json& notice : result["notices"])
       summary.notices.push_back({notice["point"].get<std::size_t>(), notice["notice"].get<std::string>()});

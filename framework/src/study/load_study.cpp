@@ -20,7 +20,7 @@ namespace {
 
 // Keys every study may have, whatever its kind.
 const std::vector<std::string>& generic_keys() {
-  static const std::vector<std::string> keys = {"plugins", "study", "grid", "run"};
+  static const std::vector<std::string> keys = {"plugins", "study", "grid", "run", "output"};
   return keys;
 }
 
@@ -37,6 +37,23 @@ std::vector<ParamSpec> run_table_specs() {
   specs[0].min = 0.0;
   specs[0].min_exclusive = true;
   specs[0].optional = true;
+  specs[1].default_value = false;
+  return specs;
+}
+
+// [output]: how the runner writes the results (docs/studies.md, "[output]"). Like [run], not seen
+// by the kind and not part of the resume fingerprint: the numbers are the same in every format.
+std::vector<ParamSpec> output_table_specs() {
+  std::vector<ParamSpec> specs = {
+      param_spec("format", ValueKind::string, "1",
+                 "results file: \"csv\" (results.csv), \"hdf5\" (results.h5: compressed, one "
+                 "dataset per output column over the grid axes) or \"auto\" (hdf5 for grids of "
+                 "more than 100,000 points, else csv)"),
+      param_spec("keep_journal", ValueKind::boolean, "1",
+                 "keep journal/ after a complete hdf5 run (by default it is removed then: "
+                 "results.h5 holds every point, and --resume reads it)")};
+  specs[0].default_value = std::string("csv");
+  specs[0].choices = {"csv", "hdf5", "auto"};
   specs[1].default_value = false;
   return specs;
 }
@@ -129,11 +146,11 @@ void check_top_level(const Json& document, const StudyKind& kind, const SourceMa
   }
 }
 
-// The document a kind sees: without [grid] and [run] (the runner's tables).
+// The document a kind sees: without [grid], [run] and [output] (the runner's tables).
 Json without_grid(const Json& document) {
   Json out = Json::object();
   for (const auto& [key, value] : document.items())
-    if (key != "grid" && key != "run") out[key] = value;
+    if (key != "grid" && key != "run" && key != "output") out[key] = value;
   return out;
 }
 
@@ -194,6 +211,8 @@ Study load_parsed(Json document, const std::filesystem::path& file, std::shared_
   check_top_level(document, *kind, sources);
   if (document.contains("run"))
     document["run"] = validate_params(document["run"], run_table_specs(), "run", sources);
+  if (document.contains("output"))
+    document["output"] = validate_params(document["output"], output_table_specs(), "output", sources);
 
   Json grid = document.contains("grid") ? document["grid"] : Json::object();
   Json validated = without_grid(document);
