@@ -272,24 +272,46 @@ std::vector<Index> delayed_variables(const PeriodicDelaySystem& system) {
   return out;
 }
 
-}  // namespace
+// The level plan shared by first_floquet_level and floquet_growth_rate.
+struct Plan {
+  std::vector<Index> delayed;
+  std::size_t differential_count = 0;
+  int first_steps = 0;
+  std::size_t dimension_at(const PeriodicDelaySystem& system, int steps) const {
+    const double step = system.period_s() / steps;
+    return differential_count + static_cast<std::size_t>(std::ceil(system.max_delay_s() / step) + 4) * delayed.size();
+  }
+};
 
-FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+Plan plan(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
   const double period = system.period_s();
   if (!(period > 0.0) || !std::isfinite(period)) throw PointFailure(fmt::format("Floquet: period {} s must be > 0", period));
   const double tau_min = system.min_delay_s();
   if (!(tau_min > 0.0)) throw PointFailure("Floquet: delays must be > 0");
-  const std::vector<Index> delayed = delayed_variables(system);
+  Plan p;
+  p.delayed = delayed_variables(system);
   // First level: the frequency scale resolved by steps_per_wave steps, and at least 4 steps per
   // shortest delay (the cubic stencil stays behind the step).
   const double h = std::min(1.0 / (settings.steps_per_wave * system.frequency_scale_hz()), tau_min / 4.0);
-  int steps = std::max(8, static_cast<int>(std::ceil(period / h)));
+  p.first_steps = std::max(8, static_cast<int>(std::ceil(period / h)));
   const std::vector<bool> differential = system.differential();
-  const auto differential_count = static_cast<std::size_t>(std::count(differential.begin(), differential.end(), true));
-  auto dimension_at = [&](int n) {
-    const double step = period / n;
-    return differential_count + static_cast<std::size_t>(std::ceil(system.max_delay_s() / step) + 4) * delayed.size();
-  };
+  p.differential_count = static_cast<std::size_t>(std::count(differential.begin(), differential.end(), true));
+  return p;
+}
+
+}  // namespace
+
+FloquetLevel first_floquet_level(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+  const Plan p = plan(system, settings);
+  return {p.first_steps, p.dimension_at(system, p.first_steps)};
+}
+
+FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+  const Plan p = plan(system, settings);
+  const double period = system.period_s();
+  const std::vector<Index>& delayed = p.delayed;
+  int steps = p.first_steps;
+  auto dimension_at = [&](int n) { return p.dimension_at(system, n); };
   if (dimension_at(steps) > settings.max_dimension)
     throw PointFailure(fmt::format("Floquet: {} steps per period give a monodromy of dimension {} > {} (max_dimension)",
                                    steps, dimension_at(steps), settings.max_dimension));
