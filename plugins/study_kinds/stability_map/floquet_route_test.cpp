@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <vector>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/errors.hpp"
@@ -17,8 +17,6 @@
 #include "chatterlab/registry.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/suppression.hpp"
-#include "models/plunge_regenerative/plunge_regenerative.hpp"
-#include "models/plunge_regenerative/plunge_time_domain.hpp"
 #include "study_kinds/stability_map/floquet_route.hpp"
 #include "study_kinds/stability_map/stability_map.hpp"
 #include "unit/study_test_support.hpp"
