@@ -211,8 +211,9 @@ PluginInfo StabilityMap::info() {
   info.name = "stability_map";
   info.description =
       "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
-      "and a certificate that no root lies further right";
-  info.models_md_ids = "G1, G3";
+      "and a certificate that no root lies further right; with [suppression] (modulated wheel or "
+      "work speed), the Floquet growth rate of the periodic linearisation";
+  info.models_md_ids = "G1, G3, S2, S3";
   info.params = kit::stability_settings_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_frequency_hz", 500.0}};
