@@ -9,9 +9,9 @@ studies=$CLI_TESTS_DIR/studies
 reference=$CLI_TESTS_DIR/reference/dde_rightmost_roots.csv
 rm -rf "$work" && mkdir -p "$work"
 
-common_columns="growth_rate_per_s,chatter_frequency_hz,stable,certified,certified_real_part_per_s,certificate,status"
+common_columns="growth_rate_per_s,chatter_frequency_hz,stable,certified,certified_real_part_per_s,certificate,route,status"
 # Models with process conditions (G1) also carry the speed-tolerance band verdict (issue 19).
-wheel_columns="growth_rate_per_s,chatter_frequency_hz,growth_rate_per_wheel_rev,stable,certified,certified_real_part_per_s,certificate,band_worst_growth_rate_per_s,band_worst_chatter_frequency_hz,stable_over_speed_band,exact_speed_ratio,g3_growth_rate_per_s,g3_growth_rate_per_wheel_rev,g3_chatter_frequency_hz,g3_max_growth_rate_per_wheel_rev,status"
+wheel_columns="growth_rate_per_s,chatter_frequency_hz,growth_rate_per_wheel_rev,stable,certified,certified_real_part_per_s,certificate,route,band_worst_growth_rate_per_s,band_worst_chatter_frequency_hz,stable_over_speed_band,exact_speed_ratio,g3_growth_rate_per_s,g3_growth_rate_per_wheel_rev,g3_chatter_frequency_hz,g3_max_growth_rate_per_wheel_rev,status"
 plunge_model=(-v kc=1.0e8 -v kg=5.0e9 -v kw=5.0e7 -v modes="184.08:0.05:5.0e7 305.6:0.04:8.0e7")
 
 run_study() {  # NAME [OPTION...]: runs studies/NAME.toml into $work/NAME, expecting exit 0 and the base files

@@ -82,7 +82,7 @@ class TwoTableKind final : public StudyKind {
 
 TEST(Catalog, StudyKindSettingsGoUnderTheirTable) {
   const std::string text = describe_plugin("stability_map");
-  EXPECT_NE(text.find("Reads tables:   [model], [stability]\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("Reads tables:   [model], [stability], [suppression]\n"), std::string::npos) << text;
   EXPECT_NE(text.find("\nParameters ([stability]):\n"), std::string::npos) << text;
   EXPECT_NE(text.find("Example:\n  [study]\n  kind = \"stability_map\"\n\n  [stability]\n"),
             std::string::npos)

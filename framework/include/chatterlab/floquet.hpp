@@ -65,6 +65,14 @@ struct FloquetResult {
   std::string method;                 // what was computed, for the record
 };
 
+// The first (coarsest) level the convergence check starts from: steps per period and the
+// monodromy's dimension (what a study checks against max_dimension before it runs).
+struct FloquetLevel {
+  int steps_per_period = 0;
+  std::size_t dimension = 0;
+};
+FloquetLevel first_floquet_level(const PeriodicDelaySystem& system, const FloquetSettings& settings = {});
+
 // Throws PointFailure when the system cannot be discretised within max_dimension or the
 // eigenvalue solver fails; a result that did not converge is returned with converged = false.
 FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const FloquetSettings& settings = {});

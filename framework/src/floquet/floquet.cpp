@@ -72,7 +72,9 @@ class Discretisation {
     MatrixXd s, l;
     std::vector<MatrixXd> c, m;
   };
-  Blocks blocks(double t) const;
+  // The blocks at t, reused while the coefficients stay the same (G1 under a speed modulation:
+  // only the delays vary), so a step does not redo the elimination. Valid until the next call.
+  const Blocks& blocks(double t);
   void exponentials(const MatrixXd& s);
   auto sample(Index index) {
     const Index position = ((index % ring_) + ring_) % ring_;
@@ -86,6 +88,10 @@ class Discretisation {
   std::vector<Index> diff_, alg_, delayed_;  // variable indices
   std::vector<Index> delayed_rows_in_d_, delayed_rows_in_a_;  // position of each delayed variable (-1: not there)
   MatrixXd cached_s_;
+  MatrixXd a0_, last_a0_;
+  std::vector<MatrixXd> ak_, last_ak_;
+  Blocks last_blocks_;
+  bool has_blocks_ = false;
   MatrixXd phi_;                    // e^{S h}
   std::array<MatrixXd, 4> gamma_;   // int_0^h e^{S (h - u)} (u/h)^q du
   RowMatrix state_, history_;
@@ -106,11 +112,16 @@ Discretisation::Discretisation(const PeriodicDelaySystem& system, int steps, con
   ring_ = static_cast<Index>(std::ceil(system.max_delay_s() / h_)) + 4;
 }
 
-Discretisation::Blocks Discretisation::blocks(double t) const {
-  MatrixXd a0;
-  std::vector<MatrixXd> ak;
-  system_.coefficients(t, a0, ak);
-  Blocks b;
+const Discretisation::Blocks& Discretisation::blocks(double t) {
+  system_.coefficients(t, a0_, ak_);
+  if (has_blocks_ && a0_ == last_a0_ && ak_ == last_ak_) return last_blocks_;
+  last_a0_ = a0_;
+  last_ak_ = ak_;
+  has_blocks_ = false;  // until the new blocks are complete (an exception leaves none)
+  const MatrixXd& a0 = a0_;
+  const std::vector<MatrixXd>& ak = ak_;
+  Blocks& b = last_blocks_;
+  b = Blocks{};
   const MatrixXd a_dd = take(a0, diff_, diff_), a_da = take(a0, diff_, alg_), a_ad = take(a0, alg_, diff_);
   MatrixXd solve_ad, elimination;  // A_aa^{-1} A_ad and A_da A_aa^{-1}
   Eigen::PartialPivLU<MatrixXd> lu;
@@ -140,6 +151,7 @@ Discretisation::Blocks Discretisation::blocks(double t) const {
       b.m.push_back(-lu.solve(ah));
     }
   }
+  has_blocks_ = true;
   return b;
 }
 
@@ -175,7 +187,7 @@ MatrixXd Discretisation::monodromy() {
   RowMatrix next_state(d_, dim), algebraic(static_cast<Index>(alg_.size()), dim);
   for (int i = 0; i < steps_; ++i) {
     const double t = i * h_, t_mid = t + 0.5 * h_, t_end = t + h_;
-    const Blocks mid = blocks(t_mid);
+    const Blocks& mid = blocks(t_mid);
     exponentials(mid.s);
     next_state.noalias() = phi_ * state_;
     std::vector<double> tau_end(k_count);
@@ -195,9 +207,8 @@ MatrixXd Discretisation::monodromy() {
     }
     state_.swap(next_state);
     // Algebraic variables at the step end, from the new differential state and the history.
-    Blocks end;
     if (!alg_.empty()) {
-      end = blocks(t_end);
+      const Blocks& end = blocks(t_end);  // mid is not used after this
       algebraic.noalias() = end.l * state_;
       for (std::size_t k = 0; k < k_count; ++k) {
         const double b = (i + 1) - tau_end[k] / h_;
@@ -272,24 +283,46 @@ std::vector<Index> delayed_variables(const PeriodicDelaySystem& system) {
   return out;
 }
 
-}  // namespace
+// The level plan shared by first_floquet_level and floquet_growth_rate.
+struct Plan {
+  std::vector<Index> delayed;
+  std::size_t differential_count = 0;
+  int first_steps = 0;
+  std::size_t dimension_at(const PeriodicDelaySystem& system, int steps) const {
+    const double step = system.period_s() / steps;
+    return differential_count + static_cast<std::size_t>(std::ceil(system.max_delay_s() / step) + 4) * delayed.size();
+  }
+};
 
-FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+Plan plan(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
   const double period = system.period_s();
   if (!(period > 0.0) || !std::isfinite(period)) throw PointFailure(fmt::format("Floquet: period {} s must be > 0", period));
   const double tau_min = system.min_delay_s();
   if (!(tau_min > 0.0)) throw PointFailure("Floquet: delays must be > 0");
-  const std::vector<Index> delayed = delayed_variables(system);
+  Plan p;
+  p.delayed = delayed_variables(system);
   // First level: the frequency scale resolved by steps_per_wave steps, and at least 4 steps per
   // shortest delay (the cubic stencil stays behind the step).
   const double h = std::min(1.0 / (settings.steps_per_wave * system.frequency_scale_hz()), tau_min / 4.0);
-  int steps = std::max(8, static_cast<int>(std::ceil(period / h)));
+  p.first_steps = std::max(8, static_cast<int>(std::ceil(period / h)));
   const std::vector<bool> differential = system.differential();
-  const auto differential_count = static_cast<std::size_t>(std::count(differential.begin(), differential.end(), true));
-  auto dimension_at = [&](int n) {
-    const double step = period / n;
-    return differential_count + static_cast<std::size_t>(std::ceil(system.max_delay_s() / step) + 4) * delayed.size();
-  };
+  p.differential_count = static_cast<std::size_t>(std::count(differential.begin(), differential.end(), true));
+  return p;
+}
+
+}  // namespace
+
+FloquetLevel first_floquet_level(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+  const Plan p = plan(system, settings);
+  return {p.first_steps, p.dimension_at(system, p.first_steps)};
+}
+
+FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const FloquetSettings& settings) {
+  const Plan p = plan(system, settings);
+  const double period = system.period_s();
+  const std::vector<Index>& delayed = p.delayed;
+  int steps = p.first_steps;
+  auto dimension_at = [&](int n) { return p.dimension_at(system, n); };
   if (dimension_at(steps) > settings.max_dimension)
     throw PointFailure(fmt::format("Floquet: {} steps per period give a monodromy of dimension {} > {} (max_dimension)",
                                    steps, dimension_at(steps), settings.max_dimension));

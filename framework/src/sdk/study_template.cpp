@@ -171,7 +171,15 @@ Json generated_document(const StudyKind& kind, const PluginInfo& info, const std
         best_own = own;
       }
     }
-    if (best) document[c.table] = component_table(*best);
+    if (best) {
+      document[c.table] = component_table(*best);
+      continue;
+    }
+    // No plugin fits, but the kind reads this table only optionally (stability_map's
+    // [suppression] with a model that has no linearisation): leave it out.
+    Json without = document;
+    without.erase(c.table);
+    if (refusal(kind, without, kind_name).empty()) document.erase(c.table);
   }
   return document;
 }

@@ -96,7 +96,7 @@ TEST(AmplitudeModulatedAccuracy, SimulationAgreesWithTheFloquetGrowthAndSideband
   for (double q : {0.0, 0.3}) {
     SCOPED_TRACE(q);
     const auto p = g8_like(q);
-    const FloquetResult floquet = floquet_growth(floquet_parameters(p));
+    const G7FloquetResult floquet = floquet_growth(floquet_parameters(p));
     ASSERT_TRUE(floquet.converged);
     // rtol 1e-7: the response decays by 1e-6 over the run, and the fit is sensitive to the
     // integration error at the end (rtol 1e-4 biased it by 17 %); measured 0.8 % (Q = 0) and

@@ -140,7 +140,7 @@ void check(bool ok, const std::string& what) {
 }
 
 void add_sidebands(const Model& md, const Eigen::MatrixXd& m, std::complex<double> multiplier,
-                   int n_steps, int orders, FloquetResult& out) {
+                   int n_steps, int orders, G7FloquetResult& out) {
   // Eigenvector by inverse iteration (shift a hair off the eigenvalue).
   const Eigen::Index n = m.rows();
   Eigen::MatrixXcd shifted = m.cast<std::complex<double>>();
@@ -189,7 +189,7 @@ void add_sidebands(const Model& md, const Eigen::MatrixXd& m, std::complex<doubl
 
 }  // namespace
 
-FloquetResult floquet_growth(const AmplitudeModulatedParameters& p, const FloquetOptions& options) {
+G7FloquetResult floquet_growth(const AmplitudeModulatedParameters& p, const FloquetOptions& options) {
   check(p.mass_kg > 0 && p.stiffness_n_per_m > 0 && p.grinding_stiffness_n_per_m > 0 &&
             p.contact_stiffness_n_per_m > 0 && p.wheel_speed_rpm > 0,
         "mass, stiffness, grinding and contact stiffness and wheel speed must be > 0");
@@ -209,7 +209,7 @@ FloquetResult floquet_growth(const AmplitudeModulatedParameters& p, const Floque
   // At least 8 steps: the cubic reads samples up to two steps ahead of the delayed interval.
   n_steps = std::max(8, std::min(n_steps, options.max_steps_per_period));
 
-  FloquetResult out;
+  G7FloquetResult out;
   Eigen::MatrixXd m = monodromy(md, n_steps);
   std::complex<double> multiplier = dominant_eigenvalue(m);
   double sigma = std::log(std::abs(multiplier)) / period;

@@ -42,7 +42,9 @@ struct FloquetSideband {
   double relative_amplitude = 0.0;  // |Phi_{r*+k}| / |Phi_{r*}| of the structure displacement x1
 };
 
-struct FloquetResult {
+// (G7FloquetResult, not FloquetResult: chatterlab/floquet.hpp has the framework's, and one
+// library must not define two types of one name.)
+struct G7FloquetResult {
   std::complex<double> dominant_multiplier;  // largest |mu| of the monodromy operator
   double growth_rate_per_s = 0.0;            // sigma = ln|mu| / Tg, extrapolated in N
   // Richardson correction |sigma(N) - sigma(N/2)|/15 applied to sigma(N): the convergence check
@@ -57,7 +59,7 @@ struct FloquetResult {
 
 // Throws std::invalid_argument for parameters outside the limits above (non-positive m, k, kg b,
 // kc b or speed; negative c; mu outside [0, 1]; Q outside [0, 1)).
-FloquetResult floquet_growth(const AmplitudeModulatedParameters& parameters,
+G7FloquetResult floquet_growth(const AmplitudeModulatedParameters& parameters,
                              const FloquetOptions& options = {});
 
 }  // namespace chatterlab

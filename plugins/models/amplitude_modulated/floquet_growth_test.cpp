@@ -111,7 +111,7 @@ TEST(FloquetGrowth, UnmodulatedEqualsTheRightmostRootOfTheWheelOnlyG1Model) {
   for (double grinding : {4e6, 1e7}) {
     AmplitudeModulatedParameters p = base();
     p.grinding_stiffness_n_per_m = grinding;
-    const FloquetResult f = floquet_growth(p);
+    const G7FloquetResult f = floquet_growth(p);
     ASSERT_TRUE(f.converged) << f.growth_rate_change_per_s;
     PlungeRegenerativeParameters g1;
     g1.wheel_speed_rpm = p.wheel_speed_rpm;
@@ -142,7 +142,7 @@ TEST(FloquetGrowth, PartialOverlapEqualsNewtonOnTheRawEquation) {
   AmplitudeModulatedParameters p = base();
   p.overlap_factor = 0.8;
   p.grinding_stiffness_n_per_m = 2e7;
-  const FloquetResult f = floquet_growth(p);
+  const G7FloquetResult f = floquet_growth(p);
   ASSERT_TRUE(f.converged);
   const std::complex<double> s = rightmost_by_newton(p);
   EXPECT_NEAR(f.growth_rate_per_s, s.real(), 0.01 + 2e-3 * std::abs(s.real()));
@@ -153,7 +153,7 @@ TEST(FloquetGrowthAccuracy, ModulationAgreesWithDirectTimeStepping) {
   for (double depth : {0.0, 0.3, 0.6}) {
     AmplitudeModulatedParameters p = base();
     p.modulation_depth = depth;
-    const FloquetResult f = floquet_growth(p);
+    const G7FloquetResult f = floquet_growth(p);
     ASSERT_TRUE(f.converged) << depth;
     const double fitted = simulated_growth(p, 60);
     EXPECT_NEAR(fitted, f.growth_rate_per_s, 0.05 + 0.02 * std::abs(f.growth_rate_per_s))
@@ -164,9 +164,9 @@ TEST(FloquetGrowthAccuracy, ModulationAgreesWithDirectTimeStepping) {
 TEST(FloquetGrowth, SidebandsAreSpacedByTheWheelFrequencyAndGrowWithQ) {
   AmplitudeModulatedParameters p = base();
   p.modulation_depth = 0.05;
-  const FloquetResult small = floquet_growth(p);
+  const G7FloquetResult small = floquet_growth(p);
   p.modulation_depth = 0.1;
-  const FloquetResult twice = floquet_growth(p);
+  const G7FloquetResult twice = floquet_growth(p);
   const double wheel_hz = 1450.0 / 60.0;  // 24.17 Hz
   ASSERT_EQ(twice.sidebands.size(), 7u);
   for (std::size_t i = 1; i < twice.sidebands.size(); ++i)
@@ -186,7 +186,7 @@ TEST(FloquetGrowth, WithoutRegenerationItIsTheStiffenedOscillator) {
   // solution decays at exactly -c/(2m) and rings at sqrt((k + kappa)/m - (c/2m)^2).
   AmplitudeModulatedParameters p = base();
   p.overlap_factor = 0.0;
-  const FloquetResult f = floquet_growth(p);
+  const G7FloquetResult f = floquet_growth(p);
   ASSERT_TRUE(f.converged);
   const double decay = -p.damping_n_s_per_m / (2.0 * p.mass_kg);
   EXPECT_NEAR(f.growth_rate_per_s, decay, 1e-6 * std::abs(decay));

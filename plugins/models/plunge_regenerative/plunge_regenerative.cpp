@@ -12,7 +12,7 @@ namespace chatterlab {
 PlungeRegenerative::PlungeRegenerative(const ParamValues& values) : PlungeRegenerative(plunge_dynamics::plunge_parameters_table().read(values)) {}
 
 PlungeRegenerative::PlungeRegenerative(PlungeRegenerativeParameters parameters)
-    : parameters_(std::move(parameters)), characteristic_(parameters_) {}
+    : parameters_(std::move(parameters)), characteristic_(parameters_), linearisation_(parameters_) {}
 
 PluginInfo PlungeRegenerative::info() {
   return PluginInfo{

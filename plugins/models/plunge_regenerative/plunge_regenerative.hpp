@@ -14,6 +14,7 @@
 #include "chatterlab/params.hpp"
 #include "chatterlab/process_conditions.hpp"
 #include "chatterlab/registry.hpp"
+#include "models/plunge_regenerative/plunge_time_domain.hpp"
 #include "shared/plunge_dynamics/plunge_characteristic.hpp"
 #include "shared/plunge_dynamics/plunge_parameters.hpp"
 
@@ -32,6 +33,10 @@ class PlungeRegenerative final : public Model,
   std::unique_ptr<CharacteristicFunction> characteristic() const override;
   std::optional<double> wheel_period_s() const override;
   std::unique_ptr<TimeDomainModel> time_domain() const override;  // G1 time domain
+  // The linearisation of the same contact law (plunge_time_domain.hpp): the derived
+  // characteristic function to check the hand-written one against, and Floquet multipliers of
+  // modulated speeds (stability_map with [suppression]). characteristic() stays the fast path.
+  const LinearisedModel* linearised() const override { return &linearisation_; }
   const PlungeRegenerativeParameters& parameters() const { return parameters_; }
 
   std::optional<StiffnessChain> stiffness_chain() const override;
@@ -51,6 +56,7 @@ class PlungeRegenerative final : public Model,
  private:
   PlungeRegenerativeParameters parameters_;
   PlungeCharacteristic characteristic_;  // H(s) of the compliance capability
+  PlungeLinearisation linearisation_;
 };
 
 }  // namespace chatterlab

@@ -1,5 +1,7 @@
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
 
+#include "chatterlab/derived_model.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -36,7 +38,7 @@ PlungeRegenerativeParameters g8_grinder() {
   return p;
 }
 
-PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p) {
+PlungeEquations::PlungeEquations(const PlungeRegenerativeParameters& p) {
   total_compliance_ = 0.0;
   for (const StructuralMode& m : p.modes) {
     modes_.push_back({2.0 * std::numbers::pi * m.frequency_hz, m.damping_ratio, 1.0 / m.stiffness_n_per_m});
@@ -48,6 +50,32 @@ PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p
       1.0 / (1.0 / p.contact_stiffness_n_per_m + wheel_wear_compliance_ + work_removal_compliance_);
 }
 
+namespace {
+
+// PlungeEquations in the shape derived_detail::jacobian differentiates (derived_model.hpp).
+struct PlungeEquationsForJacobian {
+  const PlungeEquations& eqs;
+  template <class S>
+  void contact(const ContactInputOf<S>& in, ContactOutputOf<S>& out) const { eqs.contact(in, out); }
+  template <class S>
+  void derivatives(const ContactInputOf<S>& in, const ContactOutputOf<S>& c, std::span<S> dx) const {
+    eqs.derivatives(in, c, dx);
+  }
+};
+
+}  // namespace
+
+PlungeLinearisation::PlungeLinearisation(const PlungeRegenerativeParameters& p)
+    : eqs_(p),
+      layout_(derived_detail::layout_of(2 * p.modes.size(), p.wheel_regeneration, p.work_regeneration,
+                                        p.wheel_speed_rpm, p.work_speed_rpm)) {}
+
+JacobianMatrix PlungeLinearisation::jacobian(const ProcessPoint& point) const {
+  return derived_detail::jacobian(PlungeEquationsForJacobian{eqs_}, layout_, point);
+}
+
+PlungeTimeDomain::PlungeTimeDomain(const PlungeRegenerativeParameters& p) : p_(p), eqs_(p) {}
+
 SimulationSettings converged_reference_settings(SimulationSettings settings) {
   settings.integrator = TimeIntegrator::explicit_runge_kutta;
   settings.relative_tolerance = 1e-8;
@@ -58,17 +86,17 @@ SimulationSettings converged_reference_settings(SimulationSettings settings) {
 
 void PlungeTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
   // The disturbance in the static deflection shape: each mode takes its share of compliance.
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const double share = modes_[i].compliance_m_per_n / total_compliance_;
+  for (std::size_t i = 0; i < eqs_.modes().size(); ++i) {
+    const double share = eqs_.modes()[i].compliance_m_per_n / eqs_.total_compliance_m_per_n();
     x[2 * i] = d.displacement_m * share;
     x[2 * i + 1] = d.velocity_m_per_s * share;
   }
 }
 
 void PlungeTimeDomain::state_scales(double displacement_m, std::span<double> scales) const {
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
+  for (std::size_t i = 0; i < eqs_.modes().size(); ++i) {
     scales[2 * i] = displacement_m;
-    scales[2 * i + 1] = displacement_m * modes_[i].omega;
+    scales[2 * i + 1] = displacement_m * eqs_.modes()[i].omega;
   }
 }
 
@@ -76,7 +104,7 @@ double PlungeTimeDomain::highest_frequency_hz() const {
   // The contact stiffens each mode at most to sqrt(1 + kc/k_i) w_i; 1.5x leaves room for the
   // regenerative shift and the lattice roots around it.
   double highest = 0.0;
-  for (const Mode& m : modes_)
+  for (const Mode& m : eqs_.modes())
     highest = std::max(highest, m.omega / (2.0 * std::numbers::pi) *
                                     std::sqrt(1.0 + p_.contact_stiffness_n_per_m * m.compliance_m_per_n));
   return 1.5 * highest;
@@ -90,31 +118,6 @@ double PlungeTimeDomain::nominal_speed_rpm(Rotor rotor) const {
   return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
 }
 
-void PlungeTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
-  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
-  constexpr auto work = static_cast<std::size_t>(Rotor::work);
-  const double interference = in.infeed_m - in.previous_surface_m[wheel] -
-                              in.previous_surface_m[work] - displacement_m(in.state);
-  const double force = interference * series_stiffness_;
-  out.penetration_m = interference;
-  out.normal_force_n = force;
-  out.tangential_force_n = 0.0;
-  out.removed_m[wheel] = force * wheel_wear_compliance_;
-  out.removed_m[work] = force * work_removal_compliance_;
-  out.depth_of_cut_m = out.removed_m[work];
-}
-
-void PlungeTimeDomain::derivatives(const ContactInput& in, const ContactOutput& contact,
-                                   std::span<double> dx) const {
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const Mode& m = modes_[i];
-    const double q = in.state[2 * i], v = in.state[2 * i + 1];
-    dx[2 * i] = v;
-    dx[2 * i + 1] = m.omega * m.omega * (contact.normal_force_n * m.compliance_m_per_n - q) -
-                    2.0 * m.zeta * m.omega * v;
-  }
-}
-
 std::optional<LinearForm> PlungeTimeDomain::linear_form(double /*t_s*/) const {
   // State (q_i, q_i'): q_i' = v_i, v_i' = w_i^2 (F / k_i - q_i) - 2 zeta_i w_i v_i, with
   // F = k (f - sum_j q_j) in contact and 0 out of contact.
@@ -122,18 +125,18 @@ std::optional<LinearForm> PlungeTimeDomain::linear_form(double /*t_s*/) const {
   LinearForm form;
   form.free_matrix.assign(n * n, 0.0);
   form.free_input.assign(n, 0.0);
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const Mode& m = modes_[i];
+  for (std::size_t i = 0; i < eqs_.modes().size(); ++i) {
+    const Mode& m = eqs_.modes()[i];
     form.free_matrix[(2 * i) * n + 2 * i + 1] = 1.0;
     form.free_matrix[(2 * i + 1) * n + 2 * i] = -m.omega * m.omega;
     form.free_matrix[(2 * i + 1) * n + 2 * i + 1] = -2.0 * m.zeta * m.omega;
   }
   form.contact_matrix = form.free_matrix;
   form.contact_input.assign(n, 0.0);
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const Mode& m = modes_[i];
-    const double gain = m.omega * m.omega * m.compliance_m_per_n * series_stiffness_;
-    for (std::size_t j = 0; j < modes_.size(); ++j) form.contact_matrix[(2 * i + 1) * n + 2 * j] -= gain;
+  for (std::size_t i = 0; i < eqs_.modes().size(); ++i) {
+    const Mode& m = eqs_.modes()[i];
+    const double gain = m.omega * m.omega * m.compliance_m_per_n * eqs_.series_stiffness_n_per_m();
+    for (std::size_t j = 0; j < eqs_.modes().size(); ++j) form.contact_matrix[(2 * i + 1) * n + 2 * j] -= gain;
     form.contact_input[2 * i + 1] = gain;
   }
   return form;
@@ -143,12 +146,6 @@ double PlungeTimeDomain::linear_forcing(const ContactInput& in) const {
   constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
   constexpr auto work = static_cast<std::size_t>(Rotor::work);
   return in.infeed_m - in.previous_surface_m[wheel] - in.previous_surface_m[work];
-}
-
-double PlungeTimeDomain::displacement_m(std::span<const double> state) const {
-  double x = 0.0;
-  for (std::size_t i = 0; i < modes_.size(); ++i) x += state[2 * i];
-  return x;
 }
 
 }  // namespace chatterlab

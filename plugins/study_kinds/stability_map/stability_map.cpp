@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "chatterlab/closed_form.hpp"
+#include "chatterlab/delay_system.hpp"
+#include "study_kinds/stability_map/floquet_route.hpp"
 
 namespace chatterlab {
 
@@ -26,6 +29,25 @@ constexpr const char* col_band_growth = "band_worst_growth_rate_per_s";
 constexpr const char* col_band_frequency = "band_worst_chatter_frequency_hz";
 constexpr const char* col_band_stable = "stable_over_speed_band";
 constexpr const char* col_exact_ratio = "exact_speed_ratio";
+// Which route gave the growth rate: "characteristic" (a model's hand-written characteristic
+// function), "derived" (the characteristic function derived from its linearisation) or "floquet".
+constexpr const char* col_route = "route";
+// The Floquet route (a [suppression] table): the dominant multiplier, the constant-speed root it
+// is compared with, and the discretisation's convergence figures (chatterlab/floquet.hpp).
+constexpr const char* col_constant_growth = "constant_speed_growth_rate_per_s";
+constexpr const char* col_growth_change = "growth_rate_change_per_s";
+constexpr const char* col_multiplier = "floquet_multiplier_modulus";
+constexpr const char* col_period = "floquet_period_s";
+constexpr const char* col_converged = "floquet_converged";
+constexpr const char* col_error = "floquet_error_per_s";
+constexpr const char* col_steps = "floquet_steps_per_period";
+constexpr const char* col_dimension = "floquet_dimension";
+
+bool floquet_route(const Json& document) { return document.contains("suppression"); }
+
+std::string characteristic_route(const CharacteristicFunction& characteristic) {
+  return dynamic_cast<const DelayCharacteristic*>(&characteristic) ? "derived" : "characteristic";
+}
 
 bool has_speed_band(const Model& model) { return model.process_conditions() != nullptr; }
 
@@ -103,6 +125,35 @@ void plot_roots(const std::vector<kit::PlotAxis>& axes, const Study& study, cons
   kit::plot_column(axes, results, band, out_dir, map ? "band_growth_rate_map" : "band_growth_rate", figures);
 }
 
+// The Floquet route: the growth rate ln|mu|/T (its zero line the stability boundary) and its
+// change against constant speed (blue: the modulation stabilises). Points whose discretisation
+// did not converge are flagged.
+void plot_floquet(const std::vector<kit::PlotAxis>& axes, const Study& study, const ResultTable& results,
+                  const fs::path& out_dir, kit::Figures& figures) {
+  const std::string title = kit::study_title(study);
+  const bool map = axes.size() == 2;
+  struct Spec {
+    const char *column, *what, *value_label, *reference_label, *low, *high, *stem;
+  };
+  const Spec specs[] = {
+      {col_growth_rate, "Floquet growth rate ln|mu|/T", "Floquet growth rate [1/s]",
+       map ? "stability boundary (|mu| = 1)" : "stability limit (|mu| = 1)", "stable", "chatter", "floquet_growth_rate"},
+      {col_growth_change, "Floquet growth rate - constant speed", "growth rate change [1/s]", "no effect",
+       "modulation stabilises", "modulation destabilises", "growth_rate_change"},
+  };
+  for (const Spec& spec : specs) {
+    kit::ColumnFigure figure{spec.column, title + ": " + spec.what, spec.value_label};
+    figure.reference = 0.0;
+    figure.reference_label = spec.reference_label;
+    figure.flag_column = col_converged;
+    figure.flag_label = "not converged";
+    figure.diverging = map;
+    figure.low_label = spec.low;
+    figure.high_label = spec.high;
+    kit::plot_column(axes, results, figure, out_dir, map ? std::string(spec.stem) + "_map" : spec.stem, figures);
+  }
+}
+
 // Closed-form chatter margins (ClosedFormIndicatorSpec::chatter_margin): drawn like the growth
 // rate, with their own zero line, and the title counts the points where the closed form's verdict
 // (margin > 0: chatter) differs from the rightmost root's (Re s > 0).
@@ -132,6 +183,27 @@ void plot_closed_form_margins(const std::vector<kit::PlotAxis>& axes, const Stud
   }
 }
 
+// One point of the Floquet route: the Floquet growth rate ln|mu|/T, its convergence figures, and
+// the constant-speed rightmost root (the same model at its nominal speeds) to compare with.
+std::vector<Json> floquet_point(const Model& model, const Json& document, const kit::StabilitySettings& settings) {
+  const stability_floquet::FloquetPoint f = stability_floquet::growth_rate(model, document.at("suppression"));
+  const double growth = f.floquet.growth_rate_per_s;
+  const RightmostRoot constant = kit::rightmost_root(model, settings);
+  std::vector<Json> out{growth};
+  if (const auto wheel_period = model.wheel_period_s()) out.emplace_back(growth * *wheel_period / (2.0 * std::numbers::pi));
+  out.emplace_back(growth < 0.0);
+  out.emplace_back("floquet");
+  out.emplace_back(constant.root.real());
+  out.emplace_back(growth - constant.root.real());
+  out.emplace_back(std::abs(f.floquet.multiplier));
+  out.emplace_back(f.period_s);
+  out.emplace_back(f.floquet.converged);
+  out.emplace_back(f.floquet.growth_rate_error_per_s);
+  out.emplace_back(f.floquet.steps_per_period);
+  out.emplace_back(f.floquet.dimension);
+  return out;
+}
+
 }  // namespace
 
 PluginInfo StabilityMap::info() {
@@ -139,8 +211,9 @@ PluginInfo StabilityMap::info() {
   info.name = "stability_map";
   info.description =
       "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
-      "and a certificate that no root lies further right";
-  info.models_md_ids = "G1, G3";
+      "and a certificate that no root lies further right; with [suppression] (modulated wheel or "
+      "work speed), the Floquet growth rate of the periodic linearisation";
+  info.models_md_ids = "G1, G3, S2, S3";
   info.params = kit::stability_settings_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_frequency_hz", 500.0}};
@@ -150,14 +223,23 @@ PluginInfo StabilityMap::info() {
 void StabilityMap::validate(Json& document, const SourceMap& sources) const {
   auto model = kit::validate_model(document, kit::ModelNeeds::characteristic, "stability_map", sources);
   kit::validate_stability(document, *model, sources);
+  if (floquet_route(document)) stability_floquet::validate(document, *model, sources);
 }
 
 std::vector<std::string> StabilityMap::output_columns(const Json& document) const {
+  if (floquet_route(document)) {
+    std::vector<std::string> columns{col_growth_rate};
+    if (kit::build_model(document.at("model"))->wheel_period_s()) columns.push_back(col_growth_per_wheel_rev);
+    for (const char* c : {col_stable, col_route, col_constant_growth, col_growth_change, col_multiplier, col_period,
+                          col_converged, col_error, col_steps, col_dimension})
+      columns.push_back(c);
+    return columns;
+  }
   std::vector<std::string> columns{col_growth_rate, col_chatter_frequency};
   // Growth per wheel revolution (G3) only for models with a wheel.
   if (kit::build_model(document.at("model"))->wheel_period_s())
     columns.push_back(col_growth_per_wheel_rev);
-  for (const char* c : {col_stable, col_certified, col_certified_real_part, col_certificate})
+  for (const char* c : {col_stable, col_certified, col_certified_real_part, col_certificate, col_route})
     columns.push_back(c);
   if (has_speed_band(*kit::build_model(document.at("model"))))
     for (const char* c : {col_band_growth, col_band_frequency, col_band_stable, col_exact_ratio})
@@ -172,6 +254,7 @@ std::vector<Json> StabilityMap::run_point(const Json& point_document,
   auto model = kit::build_model(point_document.at("model"));
   const kit::StabilitySettings settings =
       kit::read_settings(point_document, "stability", kit::stability_settings_table());
+  if (floquet_route(point_document)) return floquet_point(*model, point_document, settings);
   const RightmostRoot found = kit::rightmost_root(*model, settings);
   const kit::StabilityVerdict v = kit::verdict(found, *model);
   std::vector<Json> out{v.growth_rate_per_s, v.chatter_frequency_hz};
@@ -181,6 +264,7 @@ std::vector<Json> StabilityMap::run_point(const Json& point_document,
   out.emplace_back(found.certified);
   out.push_back(found.certified ? Json(found.certified_real_part) : Json());
   out.emplace_back(found.certificate);
+  out.emplace_back(characteristic_route(*model->characteristic()));
   if (has_speed_band(*model)) {
     const kit::SpeedBandVerdict band = kit::speed_band_verdict(point_document.at("model"), *model, settings, found);
     out.emplace_back(band.worst_growth_rate_per_s);
@@ -199,6 +283,11 @@ void StabilityMap::write_artifacts(const Study& study, const ResultTable& result
   const std::vector<kit::PlotAxis> axes = kit::varying_axes(study);
   if (axes.empty() || axes.size() > 2) return;
   kit::Figures figures;
+  if (floquet_route(study.document)) {
+    plot_floquet(axes, study, results, out_dir, figures);
+    figures.finish();
+    return;
+  }
   plot_roots(axes, study, results, out_dir, figures);
   plot_closed_form_margins(axes, study, results, out_dir, figures);
   figures.finish();

@@ -51,7 +51,7 @@ const StabilityMap kind;
 TEST(StabilityMap, IsRegisteredWithItsTables) {
   const auto& entry = study_kind_registry().at("stability_map");
   EXPECT_EQ(entry.info.name, "stability_map");
-  EXPECT_EQ(kind.tables(), (std::vector<std::string>{"model", "stability"}));
+  EXPECT_EQ(kind.tables(), (std::vector<std::string>{"model", "stability", "suppression"}));
 }
 
 TEST(StabilityMap, StabilityTableGetsDefaults) {
@@ -96,7 +96,7 @@ TEST(StabilityMap, WheelColumnOnlyForModelsWithAWheel) {
   TempDir dir;
   const std::vector<std::string> common = {
       "growth_rate_per_s", "chatter_frequency_hz",      "stable",
-      "certified",         "certified_real_part_per_s", "certificate"};
+      "certified",         "certified_real_part_per_s", "certificate", "route"};
   EXPECT_EQ(kind.output_columns(load(dir, dde_model).document), common);
   std::vector<std::string> with_wheel = common;
   with_wheel.insert(with_wheel.begin() + 2, "growth_rate_per_wheel_rev");
@@ -276,10 +276,10 @@ TEST(StabilityMap, ClosedFormIndicatorsBecomeColumnsAfterTheRootResults) {
   TempDir dir;
   Study study = load(dir, thompson_model);
   std::vector<std::string> columns = kind.output_columns(study.document);
-  const std::size_t certificate = column(columns, "certificate");
+  const std::size_t route = column(columns, "route");
   const std::size_t margin = column(columns, "closed_form_chatter_margin");
-  EXPECT_GT(margin, certificate);
-  EXPECT_EQ(columns.size(), certificate + 1 + 11);  // Thompson reports 11 indicators
+  EXPECT_GT(margin, route);
+  EXPECT_EQ(columns.size(), route + 1 + 11);  // Thompson reports 11 indicators
   std::vector<Json> out = kind.run_point(study.point_document(0), {});
   ASSERT_EQ(out.size(), columns.size());
   // Example parameters: conditionally stable (a band exists), chattering at 1450/55 rpm, and the
