@@ -36,11 +36,17 @@ struct SurfaceSettings {
 };
 
 // Everything one evaluation produces: the summary (see docs/analysis/surface.md for its keys)
-// and the filtered profiles in micrometres for filtered.csv and plots.
+// and the filtered profiles in micrometres for filtered.csv and plots. Two arrays per sample, not
+// four: positions and roughness follow from them (a 10^7-sample profile evaluates in a few arrays'
+// worth of memory, issue 23).
 struct SurfaceEvaluation {
   Json summary;
-  std::vector<double> position;   // x_mm (open) or angle_deg (closed)
-  std::vector<double> profile_um, waviness_um, roughness_um;
+  std::vector<double> profile_um, waviness_um;
+  double position_step = 1.0;  // x_mm (open) or angle_deg (closed) between samples
+
+  std::size_t samples() const { return profile_um.size(); }
+  double position(std::size_t i) const { return static_cast<double>(i) * position_step; }
+  double roughness_um(std::size_t i) const { return profile_um[i] - waviness_um[i]; }
 };
 
 // Throws InputError when the series cannot be evaluated as configured (too few samples per

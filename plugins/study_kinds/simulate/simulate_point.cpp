@@ -64,8 +64,10 @@ ProfileSpeeds cutting_speeds(const SimulationResult& r, double t) {
 // far) over one revolution.
 SampledSeries work_profile(const SurfaceSnapshot& snap) {
   SampledSeries series;
-  series.values.reserve(snap.surface_m[work].size());
-  for (double removed : snap.surface_m[work]) series.values.push_back(-removed);
+  std::vector<double> radius_m;
+  radius_m.reserve(snap.surface_m[work].size());
+  for (double removed : snap.surface_m[work]) radius_m.push_back(-removed);
+  series.set_samples(std::move(radius_m));
   series.sample_interval = 360.0 / static_cast<double>(series.values.size());
   series.sample_unit = "deg";
   series.closed = true;
