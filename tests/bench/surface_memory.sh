@@ -48,3 +48,5 @@ for build in new ${baseline:+baseline}; do
   printf '%-9s %14s %14.1f %14s %8s\n' "$build" "$peak_kb" "$(echo "$peak_kb * 1024 / $samples" | bc -l)" \
     "$(du -sb "$out" | cut -f1)" "$wall"
 done
+[ -z "$baseline" ] || cmp -s "$work/out_${samples}_${filter}_new/results.csv" "$work/out_${samples}_${filter}_baseline/results.csv" ||
+  echo "results.csv differs from the baseline's" >&2

@@ -144,8 +144,14 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   const FilterSettings filter = resolve_filter(series, settings, filter_json);
 
   SurfaceEvaluation out;
-  out.profile_um.resize(n);
-  for (std::size_t i = 0; i < n; ++i) out.profile_um[i] = series.values[i] * settings.value_to_um;
+  if (settings.value_to_um == 1.0) {
+    out.profile_um = series.values;
+  } else {
+    out.scaled_profile_um.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      out.scaled_profile_um[i] = series.values[i] * settings.value_to_um;
+    out.profile_um = out.scaled_profile_um;
+  }
   FilterResult filtered = filter_profile(out.profile_um, filter);
   out.waviness_um = std::move(filtered.waviness);
   const double position_step = series.closed && series.sample_unit == "rad"

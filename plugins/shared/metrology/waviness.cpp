@@ -167,7 +167,7 @@ std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_sp
   return {low, high};
 }
 
-std::vector<double> band_limited(const std::vector<double>& closed_profile, UprBand band) {
+std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band) {
   RealFft fft(closed_profile.size());
   auto spectrum = fft.forward(closed_profile);
   for (std::size_t k = 0; k < spectrum.size(); ++k) {
@@ -177,7 +177,7 @@ std::vector<double> band_limited(const std::vector<double>& closed_profile, UprB
   return fft.inverse(spectrum);
 }
 
-BandWaviness band_waviness(const std::vector<double>& closed_profile, UprBand band,
+BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
                            double work_speed_rpm) {
   const std::size_t n = closed_profile.size();
   BandWaviness out;

@@ -72,10 +72,10 @@ std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_sp
 
 // Wz|f of one band of a closed profile (UPR 0 and 1 -- radius and eccentricity -- are never in a
 // band: ranges are clipped to [2, N/2]).
-BandWaviness band_waviness(const std::vector<double>& closed_profile, UprBand band,
+BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
                            double work_speed_rpm);
 
 // The profile keeping only DFT bins in [from_upr, to_upr] (closed profiles).
-std::vector<double> band_limited(const std::vector<double>& closed_profile, UprBand band);
+std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band);
 
 }  // namespace chatterlab::surface

@@ -181,11 +181,12 @@ TEST_F(SurfaceStudyInput, FilteredCsvIsStreamedAsCsvTextAndOptional) {
       x.push_back(e.position(i));
       roughness.push_back(e.roughness_um(i));
     }
+    const std::vector<double> profile(e.profile_um.begin(), e.profile_um.end());
     std::ifstream file(dir_.path() / "auto" / "filtered.csv");
     std::stringstream text;
     text << file.rdbuf();
     EXPECT_EQ(text.str(), csv_text({"x_mm", "profile_um", "waviness_um", "roughness_um"},
-                                   {x, e.profile_um, e.waviness_um, roughness}));
+                                   {x, profile, e.waviness_um, roughness}));
     std::ifstream summary(dir_.path() / "auto" / "summary.json");
     EXPECT_FALSE(Json::parse(summary).contains("filtered_csv"));
   }
