@@ -271,12 +271,15 @@ FilterResult robust_regression(std::span<const double> z, const FilterSettings& 
   mean /= static_cast<double>(n);
   for (double v : z) square += (v - mean) * (v - mean);
   const double c_floor = 1e-3 * std::sqrt(square / static_cast<double>(n));
-  // Buffers reused by every pass (fresh million-sample vectors cost page faults).
-  std::vector<double> delta(n, 1.0), residual(n), scratch, next;
+  // Buffers reused by every pass (fresh million-sample vectors cost page faults). `work` holds
+  // the residuals until the weights are made from them, then the next mean line: one array less
+  // on profiles of 10^7 samples.
+  std::vector<double> delta(n, 1.0), work(n), scratch;
   FilterResult result;
   regression.fit_unit_weights(z, result.waviness);
   result.converged = false;
   for (result.iterations = 1; result.iterations < settings.max_iterations;) {
+    std::vector<double>& residual = work;
     for (std::size_t i = 0; i < n; ++i) residual[i] = z[i] - result.waviness[i];
     // Residuals below 0.1 % of the profile's rms are the regression's own bias on a smooth
     // profile, not outliers: reweighting them makes the mean line wander without converging,
@@ -292,6 +295,7 @@ FilterResult robust_regression(std::span<const double> z, const FilterSettings& 
       delta[i] = std::abs(q) < 1.0 ? (1 - q * q) * (1 - q * q) : 0.0;
       result.zero_weight_samples += delta[i] == 0.0 ? 1 : 0;
     }
+    std::vector<double>& next = work;  // the residuals are no longer needed
     regression.fit(z, delta, result.waviness, next);
     double change = 0.0;
     for (std::size_t i = 0; i < n; ++i)
