@@ -137,7 +137,10 @@ DataTable read_text_table(const fs::path& file, std::string_view text) {
   if (table.rows() == 0)
     throw InputError(fmt::format("{}: no data rows (only {})", file.string(),
                                  table.names.empty() ? "comments or blank lines" : "a header"));
-  for (auto& column : table.columns) column.shrink_to_fit();  // comment lines reserved too much
+  // Comment and blank lines reserved room for rows that never came: give it back when it is
+  // more than a little (shrinking copies the column).
+  for (auto& column : table.columns)
+    if (column.capacity() - column.size() > column.size() / 8) column.shrink_to_fit();
   return table;
 }
 
