@@ -39,7 +39,17 @@ TEST(ReadDataTable, CsvWithHeaderCommentsAndCrLf) {
   EXPECT_EQ(t.rows(), 2u);
   EXPECT_EQ(t.column("x_m")[1], -2e-3);
   EXPECT_EQ(t.column("2")[0], 1.5);
-  EXPECT_EQ(t.source_lines, (std::vector<std::size_t>{3, 4}));
+  EXPECT_EQ(t.source_line(0), 3u);
+  EXPECT_EQ(t.source_line(1), 4u);
+  EXPECT_EQ(t.source_line(2), 0u);  // past the end
+}
+
+TEST(ReadDataTable, SourceLinesAcrossCommentsAndBlankLines) {
+  DataTable t = read_data_table(write("lines.csv", "a\n1\n# note\n2\n3\n\n\n4\n5\n"));
+  ASSERT_EQ(t.rows(), 5u);
+  const std::vector<std::size_t> lines{2, 4, 5, 8, 9};
+  for (std::size_t row = 0; row < lines.size(); ++row) EXPECT_EQ(t.source_line(row), lines[row]) << row;
+  EXPECT_EQ(t.line_runs.size(), 3u);  // 2; 4-5; 8-9
 }
 
 TEST(ReadDataTable, WhitespaceColumnsWithoutHeader) {

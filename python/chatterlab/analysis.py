@@ -38,8 +38,10 @@ class AnalysisResult(MappingABC):
     Attributes:
         name: the analysis plugin.
         result: the plugin's result.
-        timing: seconds spent copying the samples into the analysis (``copy_s``) and in the
-            analysis itself (``analyse_s``); the rest of a call is Python.
+        timing: seconds spent handing the samples to the analysis (``input_s``: a view of the
+            array, no copy), whether numpy had to convert the input to a C-contiguous float64
+            array first (``input_converted``), and seconds in the analysis itself
+            (``analyse_s``); the rest of a call is Python.
     """
 
     name: str

@@ -18,7 +18,7 @@ using namespace chatterlab;
 SampledSeries transition() {
   monitor::TransitionSignal spec;
   SampledSeries s;
-  s.values = spec.samples();
+  s.set_samples(spec.samples());
   s.sample_interval = 1.0 / spec.sample_rate_hz;
   return s;
 }

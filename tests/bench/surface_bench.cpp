@@ -24,11 +24,13 @@ SampledSeries open_profile(std::size_t n) {
   s.sample_unit = "mm";
   std::mt19937 rng(1);
   std::normal_distribution<double> noise(0.0, 0.1);
+  std::vector<double> values;
   for (std::size_t i = 0; i < n; ++i) {
     const double x = static_cast<double>(i) * s.sample_interval;
-    s.values.push_back(1.5 * std::sin(2 * std::numbers::pi * x / 4.0) +
-                       0.3 * std::sin(2 * std::numbers::pi * x / 0.05) + noise(rng));
+    values.push_back(1.5 * std::sin(2 * std::numbers::pi * x / 4.0) +
+                     0.3 * std::sin(2 * std::numbers::pi * x / 0.05) + noise(rng));
   }
+  s.set_samples(std::move(values));
   return s;
 }
 
@@ -40,11 +42,13 @@ SampledSeries closed_profile(std::size_t n) {
   s.sample_interval = 360.0 / static_cast<double>(n);
   std::mt19937 rng(2);
   std::normal_distribution<double> noise(0.0, 0.05);
+  std::vector<double> values;
   for (std::size_t i = 0; i < n; ++i) {
     const double th = 2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n);
-    s.values.push_back(4 * std::cos(th) + 2.13 * std::cos(26 * th) + 1.56 * std::cos(895 * th) +
-                       noise(rng));
+    values.push_back(4 * std::cos(th) + 2.13 * std::cos(26 * th) + 1.56 * std::cos(895 * th) +
+                     noise(rng));
   }
+  s.set_samples(std::move(values));
   return s;
 }
 

@@ -15,7 +15,9 @@
 // never by a plugin's name or its result keys:
 //   ProfileQualityMeasurement (below)   part quality of a surface profile (waviness, roundness)
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,8 +26,13 @@
 
 namespace chatterlab {
 
+// A series as analyses read it: a non-owning view of the samples plus their spacing. Analyses
+// only read, so the samples stay where they are: a numpy array passed from Python (issue 24:
+// 10^7 samples without a copy), a column of an input table, a simulation's output. Whoever
+// produces samples either keeps them alive for as long as the series is used (view()) or hands
+// them to the series (owning()), which then shares them with its copies.
 struct SampledSeries {
-  std::vector<double> values;
+  std::span<const double> values;  // the samples, read-only; valid while their owner lives
   double sample_interval = 1.0;    // in sample_unit: s for signals, mm for open profiles, rad or
                                    // deg for closed (circumferential) profiles
   std::string sample_unit = "s";
@@ -33,6 +40,32 @@ struct SampledSeries {
   std::string name;                // e.g. the input column, for plot titles
 
   double sample_rate() const { return 1.0 / sample_interval; }  // samples per sample_unit
+
+  // A series that keeps `samples` (moved in, shared by copies of the series).
+  static SampledSeries owning(std::vector<double> samples, double sample_interval = 1.0,
+                              std::string sample_unit = "s", bool closed = false,
+                              std::string name = {}) {
+    SampledSeries s;
+    s.set_samples(std::move(samples));
+    s.sample_interval = sample_interval;
+    s.sample_unit = std::move(sample_unit);
+    s.closed = closed;
+    s.name = std::move(name);
+    return s;
+  }
+  // Replaces the samples with `samples`, owned by this series (and its copies).
+  void set_samples(std::vector<double> samples) {
+    share_samples(std::make_shared<const std::vector<double>>(std::move(samples)));
+  }
+  // Replaces the samples with ones owned elsewhere and kept alive by `samples` (e.g. a column of
+  // the run's parsed input table, through an aliasing shared_ptr): no copy.
+  void share_samples(std::shared_ptr<const std::vector<double>> samples) {
+    values = std::span<const double>(*samples);
+    storage_ = std::move(samples);
+  }
+
+ private:
+  std::shared_ptr<const std::vector<double>> storage_;  // null: values is the caller's memory
 };
 
 class ProfileQualityMeasurement;

@@ -27,7 +27,8 @@
 
 // Raised whenever a change of the public headers would make an existing library misbehave (a
 // new virtual function, a changed struct layout, a new registry in Registries). 2: study kinds.
-#define CHATTERLAB_PLUGIN_API_VERSION 2
+// 3: SampledSeries::values is a read-only view (std::span), no longer a std::vector.
+#define CHATTERLAB_PLUGIN_API_VERSION 3
 
 namespace chatterlab {
 

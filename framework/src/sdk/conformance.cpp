@@ -395,12 +395,14 @@ SampledSeries test_series() {
   series.sample_interval = 1e-3;
   series.name = "conformance test signal";
   std::uint64_t state = 12345;
+  std::vector<double> values;
   for (int i = 0; i < 2048; ++i) {
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     const double noise = static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5;
-    series.values.push_back(std::sin(two_pi * 0.013 * i) + 0.5 * std::sin(two_pi * 0.0712 * i + 1.0) +
-                            0.1 * noise);
+    values.push_back(std::sin(two_pi * 0.013 * i) + 0.5 * std::sin(two_pi * 0.0712 * i + 1.0) +
+                     0.1 * noise);
   }
+  series.set_samples(std::move(values));
   return series;
 }
 
@@ -441,7 +443,9 @@ std::string check_nan_product(const Suppression&, Problems&) { return {}; }
 
 std::string check_nan_product(const Analysis& analysis, Problems& problems) {
   SampledSeries series = test_series();
-  series.values[series.values.size() / 2] = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> with_nan(series.values.begin(), series.values.end());
+  with_nan[with_nan.size() / 2] = std::numeric_limits<double>::quiet_NaN();
+  series.set_samples(std::move(with_nan));
   try {
     analysis.analyse(series, Json::object());
     problems.push_back("analyse() returned a result for a series holding NaN (it must throw InputError)");

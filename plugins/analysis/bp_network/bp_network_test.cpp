@@ -76,11 +76,13 @@ SampledSeries book_like_signal(std::uint64_t seed) {
   s.sample_interval = 1.0 / 8000.0;
   s.name = "acceleration";
   const double phase = 2 * pi * rng.uniform01();
+  std::vector<double> acceleration;
   for (int i = 0; i < 300; ++i) {
     const double t = i * s.sample_interval;
     const double amplitude = i < 150 ? 0.0 : 3.0 * std::exp(std::log(2.0) * (i - 150) / 150.0);
-    s.values.push_back(rng.normal() + amplitude * std::sin(2 * pi * 360.0 * t + phase));
+    acceleration.push_back(rng.normal() + amplitude * std::sin(2 * pi * 360.0 * t + phase));
   }
+  s.set_samples(std::move(acceleration));
   return s;
 }
 
@@ -133,7 +135,7 @@ SampledSeries transition_series(std::uint64_t seed) {
   monitor::TransitionSignal spec;
   spec.seed = seed;
   SampledSeries s;
-  s.values = spec.samples();
+  s.set_samples(spec.samples());
   s.sample_interval = 1.0 / spec.sample_rate_hz;
   return s;
 }

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <span>
 #include <bit>
 #include <cmath>
 #include <functional>
@@ -173,7 +174,7 @@ struct ScanPlan {
   std::vector<std::size_t> radius_scale;  // empty for a given radius
 };
 
-ScanPlan plan_scan(const std::vector<double>& x, const EmbeddingParameters& embedding,
+ScanPlan plan_scan(std::span<const double> x, const EmbeddingParameters& embedding,
                    std::optional<std::int64_t> given_steps, std::optional<double> given_radius,
                    const std::string& name) {
   ScanPlan p;
@@ -335,7 +336,7 @@ Estimate not_determined(std::string why) {
 
 // Kantz's curves for every size and dimension at once (one scan), Rosenstein's per dimension,
 // fitted and classified.
-CurveSet scan_curves(const std::vector<double>& x, const ScanPlan& plan, std::size_t references,
+CurveSet scan_curves(std::span<const double> x, const ScanPlan& plan, std::size_t references,
                      std::size_t replicates, std::uint64_t seed) {
   const auto scan = kantz_scan(x, plan.m0, plan.m_max, plan.delay, plan.theiler, plan.steps,
                                references, plan.radii, plan.stride);
@@ -409,7 +410,7 @@ bool noisy_scale(const NoiseEvidence& noise, std::size_t q) {
          (std::isfinite(larger) && low[q] - larger > noise_dimension_excess);
 }
 
-NoiseEvidence detect_noise(const std::vector<double>& x, const ScanPlan& plan,
+NoiseEvidence detect_noise(std::span<const double> x, const ScanPlan& plan,
                            const CurveSet& set) {
   NoiseEvidence noise;
   find_noise_floor(set, plan, noise);

@@ -43,7 +43,7 @@ void orthonormalise_columns(double* a, std::size_t dim, double* r_diagonal) {
 }
 }  // namespace
 
-SpectrumEstimate lyapunov_spectrum(const std::vector<double>& x, int dimension, int delay,
+SpectrumEstimate lyapunov_spectrum(std::span<const double> x, int dimension, int delay,
                                    std::size_t theiler, std::size_t evolution_steps,
                                    std::size_t neighbours, std::size_t references) {
   using nonlinear::Embedding;
@@ -197,7 +197,7 @@ struct FitSettings {
   }
 };
 
-Spectra compute_spectra(const std::vector<double>& x, const FitSettings& s, bool reversal) {
+Spectra compute_spectra(std::span<const double> x, const FitSettings& s, bool reversal) {
   Spectra out;
   out.forward = lyapunov_spectrum(x, s.dimension, s.delay, s.theiler, s.evolution_steps,
                                   s.neighbours_for(s.dimension), s.references);

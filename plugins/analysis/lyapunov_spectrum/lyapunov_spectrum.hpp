@@ -7,6 +7,7 @@
 // Exponents that do not reappear with opposite sign in the spectrum of the time-reversed series
 // are flagged spurious (Parlitz 1992). docs/analysis/chaos.md, section "Lyapunov spectrum".
 #include <vector>
+#include <span>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/analysis.hpp"
@@ -20,7 +21,7 @@ struct SpectrumEstimate {
 };
 // `dimension` x `delay` embedding, Jacobians over `evolution_steps` samples fitted to
 // `neighbours` nearest neighbours at up to `references` points spaced evolution_steps apart.
-SpectrumEstimate lyapunov_spectrum(const std::vector<double>& x, int dimension, int delay,
+SpectrumEstimate lyapunov_spectrum(std::span<const double> x, int dimension, int delay,
                                    std::size_t theiler, std::size_t evolution_steps,
                                    std::size_t neighbours, std::size_t references);
 

@@ -166,7 +166,7 @@ Json rbf_params(std::int64_t persistence = 10) {
 
 SampledSeries transition_series(const monitor::TransitionSignal& spec) {
   SampledSeries s;
-  s.values = spec.samples();
+  s.set_samples(spec.samples());
   s.sample_interval = 1.0 / spec.sample_rate_hz;
   s.name = "displacement";
   return s;
@@ -208,7 +208,7 @@ TEST(RbfDensity, PersistenceSuppressesNoiseFlicker) {
 TEST(RbfDensity, WindowLongerThanSignal) {
   auto analysis = analysis_registry().at("rbf_density").create(ParamValues(rbf_params()));
   SampledSeries s;
-  s.values.assign(20, 0.0);
+  s.set_samples(std::vector<double>(20, 0.0));
   s.name = "acc";
   try {
     analysis->analyse(s, Json::object());

@@ -18,16 +18,16 @@
 
 namespace chatterlab {
 
-std::vector<double> iaaft_surrogate(const std::vector<double>& x, std::uint64_t seed,
+std::vector<double> iaaft_surrogate(std::span<const double> x, std::uint64_t seed,
                                     int max_iterations) {
   const std::size_t n = x.size();
-  std::vector<double> sorted = x;
+  std::vector<double> sorted(x.begin(), x.end());
   std::sort(sorted.begin(), sorted.end());
   RealFft fft(n);
   const auto spectrum = fft.forward(x);
   std::vector<double> amplitude(spectrum.size());
   for (std::size_t k = 0; k < spectrum.size(); ++k) amplitude[k] = std::abs(spectrum[k]);
-  std::vector<double> s = x;
+  std::vector<double> s(x.begin(), x.end());
   std::mt19937_64 rng(seed);
   std::shuffle(s.begin(), s.end(), rng);
   std::vector<std::uint32_t> order(n), previous;
@@ -59,7 +59,7 @@ std::vector<double> iaaft_surrogate(const std::vector<double>& x, std::uint64_t 
   return s;
 }
 
-std::vector<double> phase_randomised_surrogate(const std::vector<double>& x, std::uint64_t seed) {
+std::vector<double> phase_randomised_surrogate(std::span<const double> x, std::uint64_t seed) {
   const std::size_t n = x.size();
   RealFft fft(n);
   auto spectrum = fft.forward(x);
@@ -72,7 +72,7 @@ std::vector<double> phase_randomised_surrogate(const std::vector<double>& x, std
   return fft.inverse(spectrum);
 }
 
-double prediction_error(const std::vector<double>& x, int dimension, int delay,
+double prediction_error(std::span<const double> x, int dimension, int delay,
                         std::size_t theiler, std::size_t neighbours, std::size_t references) {
   const std::size_t window = std::size_t(dimension - 1) * std::size_t(delay);
   // Vectors whose next sample exists.
@@ -96,7 +96,7 @@ double prediction_error(const std::vector<double>& x, int dimension, int delay,
   return std::sqrt(sse / used) / nonlinear::standard_deviation(x);
 }
 
-double time_reversal_asymmetry(const std::vector<double>& x, int delay) {
+double time_reversal_asymmetry(std::span<const double> x, int delay) {
   const auto tau = std::size_t(delay);
   double s2 = 0, s3 = 0;
   for (std::size_t i = 0; i + tau < x.size(); ++i) {
@@ -130,7 +130,7 @@ struct Scales {
 // Correlation sums up to r (absolute): every pair closer than r (a little beyond, for the last
 // bin) when r is below 5 % of the range (few pairs at C = 1e-2, exact counts); else, where the
 // pairs within r are many (high-dimensional, noise-like data), sampled references.
-CorrelationSums sums_up_to(const std::vector<double>& x, const Scales& s, double log_r) {
+CorrelationSums sums_up_to(std::span<const double> x, const Scales& s, double log_r) {
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double cut = 1.2 * std::exp(log_r) / (*hi - *lo);
   return cut <= 0.05
@@ -139,7 +139,7 @@ CorrelationSums sums_up_to(const std::vector<double>& x, const Scales& s, double
 }
 
 // Slope of ln C over [log_r_low, log_r_high] in the statistic's dimension (NaN if unresolved).
-double dimension_statistic(const std::vector<double>& x, const Scales& s) {
+double dimension_statistic(std::span<const double> x, const Scales& s) {
   const auto sums = sums_up_to(x, s, s.log_r_high);
   const auto log_c = sums.log_correlation(s.correlation_dimension);
   const auto log_r = sums.log_radii();
@@ -153,12 +153,12 @@ double dimension_statistic(const std::vector<double>& x, const Scales& s) {
 }
 
 // Kantz's divergence at eps from k = 0 to the data's half-rise step.
-std::vector<double> divergence_curve(const std::vector<double>& x, const Scales& s) {
+std::vector<double> divergence_curve(std::span<const double> x, const Scales& s) {
   return kantz_scan(x, s.dimension, s.dimension, s.delay, s.theiler, s.steps,
                     divergence_references, {s.eps}, s.stride)
       .curve(0, s.dimension);
 }
-double divergence_statistic(const std::vector<double>& x, const Scales& s) {
+double divergence_statistic(std::span<const double> x, const Scales& s) {
   const auto y = divergence_curve(x, s);
   return y[s.half_rise_step] - y[0];
 }
@@ -226,7 +226,7 @@ std::vector<std::size_t> surrogate_kinds(const std::string& kinds) {
 // The correlation-sum statistic's scales: the data's radii where C = 1e-3 and 1e-2 (sampled
 // references, all radii), in the saturation dimension of `correlation_dimension` (else m), as
 // far as the series holds vectors.
-void set_dimension_scales(const std::vector<double>& x, const Json& context, Scales& s) {
+void set_dimension_scales(std::span<const double> x, const Json& context, Scales& s) {
   const auto saturation =
       nonlinear::context_value(context, "correlation_dimension", "saturation_dimension");
   s.correlation_dimension =
@@ -246,7 +246,7 @@ void set_dimension_scales(const std::vector<double>& x, const Json& context, Sca
 
 // The divergence statistic's scales: eps = the median distance to the divergence_neighbour-th
 // neighbour (300 references), the horizon and curve stride.
-void set_divergence_scales(const std::vector<double>& x, Scales& s) {
+void set_divergence_scales(std::span<const double> x, Scales& s) {
   const nonlinear::Embedding e(x, s.dimension, s.delay);
   const nonlinear::NeighbourSearch search(e);
   std::vector<double> d;
@@ -265,7 +265,7 @@ void set_divergence_scales(const std::vector<double>& x, Scales& s) {
 
 // The data's half-rise step of its divergence curve and the statistic there; false when the
 // curve does not rise (no statistic).
-bool set_half_rise(const std::vector<double>& x, Scales& s, double& statistic) {
+bool set_half_rise(std::span<const double> x, Scales& s, double& statistic) {
   if (!(s.eps > 0)) return false;
   const auto y = divergence_curve(x, s);
   const double top = *std::max_element(y.begin(), y.end());
@@ -295,7 +295,7 @@ struct Tests {
 
 // Every statistic of the data and of `count` surrogates of each kind.
 template <class PredictionError>
-void run_tests(const std::vector<double>& x, const Scales& s, std::uint64_t seed,
+void run_tests(std::span<const double> x, const Scales& s, std::uint64_t seed,
                const PredictionError& error_of, Tests& t) {
   t.prediction.data = error_of(x);
   if (t.dimension_ok) t.dimension.data = dimension_statistic(x, s);
@@ -395,9 +395,7 @@ Json tests_json(const Tests& t, std::size_t samples_used) {
 Json Surrogates::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto max_samples = std::size_t(params_.integer("max_samples"));
-  const std::vector<double> x(series.values.begin(),
-                              series.values.begin() +
-                                  std::ptrdiff_t(std::min(max_samples, series.values.size())));
+  const std::span<const double> x = series.values.first(std::min(max_samples, series.values.size()));
   // Scales of the statistics, fixed by the data.
   Scales s;
   s.dimension = embedding.dimension;
@@ -413,7 +411,7 @@ Json Surrogates::analyse(const SampledSeries& series, const Json& context) const
                        s.log_r_high > s.log_r_low;
   const auto k = std::size_t(params_.integer("neighbours"));
   const auto refs = std::size_t(params_.integer("max_reference_points"));
-  auto error_of = [&](const std::vector<double>& v) {
+  auto error_of = [&](std::span<const double> v) {
     return prediction_error(v, s.dimension, s.delay, s.theiler, k, refs);
   };
   run_tests(x, s, std::uint64_t(params_.integer("seed")), error_of, tests);

@@ -15,6 +15,7 @@
 //    dimension".
 // Time-reversal asymmetry is reported beside them. docs/analysis/chaos.md, section "Surrogates".
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
@@ -23,18 +24,18 @@
 namespace chatterlab {
 
 // One IAAFT surrogate of x (iterations until the ranks stop changing, at most max_iterations).
-std::vector<double> iaaft_surrogate(const std::vector<double>& x, std::uint64_t seed,
+std::vector<double> iaaft_surrogate(std::span<const double> x, std::uint64_t seed,
                                     int max_iterations = 200);
 // One phase-randomised (Fourier) surrogate: the data's Fourier amplitudes with uniformly random
 // phases (the mean and, for even length, the Nyquist term kept real).
-std::vector<double> phase_randomised_surrogate(const std::vector<double>& x, std::uint64_t seed);
+std::vector<double> phase_randomised_surrogate(std::span<const double> x, std::uint64_t seed);
 
 // Normalised RMS one-step error of the locally constant predictor (k nearest neighbours).
-double prediction_error(const std::vector<double>& x, int dimension, int delay,
+double prediction_error(std::span<const double> x, int dimension, int delay,
                         std::size_t theiler, std::size_t neighbours, std::size_t references);
 
 // <(x_{n+tau} - x_n)^3> / <(x_{n+tau} - x_n)^2>^{3/2}: zero for time-reversible processes.
-double time_reversal_asymmetry(const std::vector<double>& x, int delay);
+double time_reversal_asymmetry(std::span<const double> x, int delay);
 
 class Surrogates final : public nonlinear::ParameterisedAnalysis {
  public:

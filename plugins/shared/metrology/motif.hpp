@@ -21,6 +21,7 @@
 //      the upper envelope.
 // Not implemented: the standard's optional rules for isolated exceptional peaks/valleys.
 #include <cstddef>
+#include <span>
 #include <vector>
 
 namespace chatterlab::surface {
@@ -41,7 +42,12 @@ struct MotifParameters {
 };
 
 // Profile y sampled at `spacing` (mm); limits A and B in mm (ISO 12085 defaults 0.5 and 2.5).
-MotifParameters motif_parameters(const std::vector<double>& y, double spacing, double a_mm = 0.5,
+MotifParameters motif_parameters(std::span<const double> y, double spacing, double a_mm = 0.5,
                                  double b_mm = 2.5);
+
+// The same on the profile y[i] - (intercept + slope i) (form removal by a straight line), without
+// making that profile: a 10^7-sample profile keeps its memory to the motifs themselves.
+MotifParameters motif_parameters(std::span<const double> y, double intercept, double slope,
+                                 double spacing, double a_mm, double b_mm);
 
 }  // namespace chatterlab::surface

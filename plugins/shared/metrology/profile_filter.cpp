@@ -85,8 +85,8 @@ class GaussianRegression {
 
   // The fitted values into `out` (resized to N; must not be `fallback`, the value where the
   // normal equations fail).
-  void fit(const std::vector<double>& z, const std::vector<double>& delta,
-           const std::vector<double>& fallback, std::vector<double>& out) {
+  void fit(std::span<const double> z, const std::vector<double>& delta,
+           std::span<const double> fallback, std::vector<double>& out) {
     out.resize(n_);
     for (std::size_t first = 0; first < n_; first += outputs_per_block_)
       fit_block(z, &delta, fallback, first, std::min(outputs_per_block_, n_ - first), out);
@@ -94,7 +94,7 @@ class GaussianRegression {
   // The same with every delta = 1 (the Gaussian filter, the robust filter's first pass): the
   // sums S_p are then sums of g_p over the part of the window inside the profile, taken from
   // cumulative sums of the kernel instead of 2 order + 2 transforms per block.
-  void fit_unit_weights(const std::vector<double>& z, std::vector<double>& out) {
+  void fit_unit_weights(std::span<const double> z, std::vector<double>& out) {
     out.resize(n_);
     for (std::size_t first = 0; first < n_; first += outputs_per_block_)
       fit_block(z, nullptr, z, first, std::min(outputs_per_block_, n_ - first), out);
@@ -137,8 +137,8 @@ class GaussianRegression {
   }
 
   // delta == nullptr: unit weights.
-  void fit_block(const std::vector<double>& z, const std::vector<double>* delta,
-                 const std::vector<double>& fallback, std::size_t first, std::size_t count,
+  void fit_block(std::span<const double> z, const std::vector<double>* delta,
+                 std::span<const double> fallback, std::size_t first, std::size_t count,
                  std::vector<double>& out) {
     const std::size_t m = fft_.size();
     // Inputs y[j] = x[first - lead + j] for the samples the block's outputs reach, zero beyond
@@ -216,7 +216,7 @@ class GaussianRegression {
   std::vector<std::vector<double>> s_, t_;
 };
 
-std::vector<double> closed_gaussian(const std::vector<double>& z, double cutoff_samples) {
+std::vector<double> closed_gaussian(std::span<const double> z, double cutoff_samples) {
   const std::size_t n = z.size();
   RealFft fft(n);
   auto spectrum = fft.forward(z);
@@ -260,7 +260,7 @@ double median_abs(const std::vector<double>& r, std::vector<double>& scratch) {
   return *mid;
 }
 
-FilterResult robust_regression(const std::vector<double>& z, const FilterSettings& settings) {
+FilterResult robust_regression(std::span<const double> z, const FilterSettings& settings) {
   const std::size_t n = z.size();
   GaussianRegression regression(n, settings.cutoff_samples, regression_gamma, 2, 2.0,
                                 settings.closed);
@@ -271,12 +271,15 @@ FilterResult robust_regression(const std::vector<double>& z, const FilterSetting
   mean /= static_cast<double>(n);
   for (double v : z) square += (v - mean) * (v - mean);
   const double c_floor = 1e-3 * std::sqrt(square / static_cast<double>(n));
-  // Buffers reused by every pass (fresh million-sample vectors cost page faults).
-  std::vector<double> delta(n, 1.0), residual(n), scratch, next;
+  // Buffers reused by every pass (fresh million-sample vectors cost page faults). `work` holds
+  // the residuals until the weights are made from them, then the next mean line: one array less
+  // on profiles of 10^7 samples.
+  std::vector<double> delta(n, 1.0), work(n), scratch;
   FilterResult result;
   regression.fit_unit_weights(z, result.waviness);
   result.converged = false;
   for (result.iterations = 1; result.iterations < settings.max_iterations;) {
+    std::vector<double>& residual = work;
     for (std::size_t i = 0; i < n; ++i) residual[i] = z[i] - result.waviness[i];
     // Residuals below 0.1 % of the profile's rms are the regression's own bias on a smooth
     // profile, not outliers: reweighting them makes the mean line wander without converging,
@@ -292,6 +295,7 @@ FilterResult robust_regression(const std::vector<double>& z, const FilterSetting
       delta[i] = std::abs(q) < 1.0 ? (1 - q * q) * (1 - q * q) : 0.0;
       result.zero_weight_samples += delta[i] == 0.0 ? 1 : 0;
     }
+    std::vector<double>& next = work;  // the residuals are no longer needed
     regression.fit(z, delta, result.waviness, next);
     double change = 0.0;
     for (std::size_t i = 0; i < n; ++i)
@@ -312,7 +316,7 @@ std::string to_string(FilterType type) {
   return type == FilterType::gaussian ? "gaussian" : "robust_gaussian";
 }
 
-FilterResult filter_profile(const std::vector<double>& profile, const FilterSettings& settings) {
+FilterResult filter_profile(std::span<const double> profile, const FilterSettings& settings) {
   if (profile.size() < 4) throw std::invalid_argument("filter_profile: fewer than 4 samples");
   if (!(settings.cutoff_samples > 0.0 && std::isfinite(settings.cutoff_samples)))
     throw std::invalid_argument("filter_profile: cut-off must be positive");

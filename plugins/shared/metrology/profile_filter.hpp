@@ -23,6 +23,7 @@
 //     Closed profiles use the periodically continued profile.
 // All sums are convolutions with fixed kernels done by FFT: O(N log N).
 #include <cstddef>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,7 +55,7 @@ struct FilterResult {
 };
 
 // Throws std::invalid_argument for fewer than 4 samples or a non-positive cut-off.
-FilterResult filter_profile(const std::vector<double>& profile, const FilterSettings& settings);
+FilterResult filter_profile(std::span<const double> profile, const FilterSettings& settings);
 
 // Interior amplitude transmission of the waviness (mean line) at wavelength/cut-off ratio
 // `lambda_over_cutoff` (the analytic value the filters reproduce, for docs and tests).

@@ -254,9 +254,9 @@ TEST(ProfileFilter, BlockedRobustRegressionIsTheFixedPointOfItsWeights) {
 TEST(ProfileFilter, RejectsTooShortProfiles) {
   FilterSettings s;
   s.cutoff_samples = 10;
-  EXPECT_THROW(filter_profile({1, 2, 3}, s), std::invalid_argument);
+  EXPECT_THROW(filter_profile(std::vector<double>{1, 2, 3}, s), std::invalid_argument);
   s.cutoff_samples = 0;
-  EXPECT_THROW(filter_profile({1, 2, 3, 4, 5}, s), std::invalid_argument);
+  EXPECT_THROW(filter_profile(std::vector<double>{1, 2, 3, 4, 5}, s), std::invalid_argument);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <span>
 
 #include "shared/metrology/motif.hpp"
 #include "shared/metrology/roundness.hpp"
@@ -13,8 +14,12 @@
 namespace chatterlab::surface {
 namespace {
 
-// The profile minus its least-squares straight line (form removal of an open profile).
-std::vector<double> without_line(const std::vector<double>& y) {
+// The least-squares straight line intercept + slope * i through y (form of an open profile).
+struct Line {
+  double intercept, slope;
+};
+
+Line least_squares_line(std::span<const double> y) {
   const double n = static_cast<double>(y.size());
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (std::size_t i = 0; i < y.size(); ++i) {
@@ -26,6 +31,12 @@ std::vector<double> without_line(const std::vector<double>& y) {
   }
   const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
   const double intercept = (sy - slope * sx) / n;
+  return {intercept, slope};
+}
+
+// The profile minus its least-squares straight line (form removal of an open profile).
+std::vector<double> without_line(std::span<const double> y) {
+  const auto [intercept, slope] = least_squares_line(y);
   std::vector<double> out(y.size());
   for (std::size_t i = 0; i < y.size(); ++i)
     out[i] = y[i] - intercept - slope * static_cast<double>(i);
@@ -133,19 +144,20 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   const FilterSettings filter = resolve_filter(series, settings, filter_json);
 
   SurfaceEvaluation out;
-  out.profile_um.resize(n);
-  for (std::size_t i = 0; i < n; ++i) out.profile_um[i] = series.values[i] * settings.value_to_um;
-  const FilterResult filtered = filter_profile(out.profile_um, filter);
-  out.waviness_um = filtered.waviness;
-  out.roughness_um.resize(n);
-  out.position.resize(n);
+  if (settings.value_to_um == 1.0) {
+    out.profile_um = series.values;
+  } else {
+    out.scaled_profile_um.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      out.scaled_profile_um[i] = series.values[i] * settings.value_to_um;
+    out.profile_um = out.scaled_profile_um;
+  }
+  FilterResult filtered = filter_profile(out.profile_um, filter);
+  out.waviness_um = std::move(filtered.waviness);
   const double position_step = series.closed && series.sample_unit == "rad"
                                    ? series.sample_interval * 180.0 / std::numbers::pi
                                    : series.sample_interval;
-  for (std::size_t i = 0; i < n; ++i) {
-    out.roughness_um[i] = out.profile_um[i] - out.waviness_um[i];
-    out.position[i] = static_cast<double>(i) * position_step;
-  }
+  out.position_step = position_step;
   filter_json["cutoff_samples"] = filter.cutoff_samples;
   if (settings.filter == FilterType::robust_gaussian) {
     filter_json["iterations"] = filtered.iterations;
@@ -159,7 +171,7 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   s["filter"] = filter_json;
 
   // Form removal before the W parameters: a straight line (open) or the least-squares circle
-  // (closed: mean radius and eccentricity).
+  // (closed: mean radius and eccentricity). `w` is freed after the parameters (peak memory).
   std::vector<double> w;
   std::optional<Roundness> round;
   if (series.closed) {
@@ -171,16 +183,16 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
     // defined up to the ends (moment retention), but there it passes more of the short waves
     // than the Gaussian does; lc/2 in (2.7 sigma of the Gaussian weights) it is the Gaussian.
     const std::size_t skip = ends_skipped(filter.cutoff_samples);
-    w = without_line(std::vector<double>(out.waviness_um.begin() + static_cast<std::ptrdiff_t>(skip),
-                                         out.waviness_um.end() - static_cast<std::ptrdiff_t>(skip)));
+    w = without_line(std::span<const double>(out.waviness_um).subspan(skip, n - 2 * skip));
     s["form_removed"] = "least-squares straight line";
-    s["evaluation_from_mm"] = out.position[skip];
-    s["evaluation_to_mm"] = out.position[n - 1 - skip];
+    s["evaluation_from_mm"] = out.position(skip);
+    s["evaluation_to_mm"] = out.position(n - 1 - skip);
   }
   // Width discrimination: 1 % of the cut-off (ISO 4287's 1 % of the sampling length lr = lc).
   const WavinessParameters p = waviness_parameters(w, position_step, series.closed,
                                                    settings.sampling_lengths,
                                                    0.01 * filter.cutoff_samples);
+  std::vector<double>().swap(w);
   s["Wa_um"] = p.Wa;
   s["Wq_um"] = p.Wq;
   s["Wp_um"] = p.Wp;
@@ -196,8 +208,10 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   s["sampling_lengths"] = std::clamp<int>(settings.sampling_lengths, 1, static_cast<int>(n / 4));
 
   if (!series.closed) {
-    const MotifParameters m = motif_parameters(without_line(out.profile_um), series.sample_interval,
-                                               settings.motif_a_mm, settings.motif_b_mm);
+    const Line form = least_squares_line(out.profile_um);
+    const MotifParameters m = motif_parameters(out.profile_um, form.intercept, form.slope,
+                                               series.sample_interval, settings.motif_a_mm,
+                                               settings.motif_b_mm);
     s["motif"] = Json{{"A_mm", settings.motif_a_mm}, {"B_mm", settings.motif_b_mm},
                       {"R_um", m.R},   {"AR_mm", m.AR}, {"Rx_um", m.Rx},
                       {"W_um", m.W},   {"AW_mm", m.AW}, {"Wx_um", m.Wx},

@@ -9,6 +9,7 @@
 //     SurfaceSettings settings;  settings.value_to_um = 1e6;  settings.cutoff_upr = 50;
 //     Json summary = evaluate_surface(s, settings);
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "shared/metrology/profile_filter.hpp"
@@ -36,11 +37,28 @@ struct SurfaceSettings {
 };
 
 // Everything one evaluation produces: the summary (see docs/analysis/surface.md for its keys)
-// and the filtered profiles in micrometres for filtered.csv and plots.
+// and the filtered profiles in micrometres for filtered.csv and plots. Two arrays per sample, not
+// four: positions and roughness follow from them (a 10^7-sample profile evaluates in a few arrays'
+// worth of memory, issue 23).
+//
+// profile_um is the series' own samples when they are in um already (no copy), else a scaled copy
+// held here: an evaluation is valid while the series' samples are (moved, never copied).
 struct SurfaceEvaluation {
   Json summary;
-  std::vector<double> position;   // x_mm (open) or angle_deg (closed)
-  std::vector<double> profile_um, waviness_um, roughness_um;
+  std::span<const double> profile_um;
+  std::vector<double> waviness_um;
+  double position_step = 1.0;  // x_mm (open) or angle_deg (closed) between samples
+  std::vector<double> scaled_profile_um;  // profile_um's samples when the series is not in um
+
+  SurfaceEvaluation() = default;
+  SurfaceEvaluation(SurfaceEvaluation&&) = default;
+  SurfaceEvaluation& operator=(SurfaceEvaluation&&) = default;
+  SurfaceEvaluation(const SurfaceEvaluation&) = delete;  // profile_um would view the original
+  SurfaceEvaluation& operator=(const SurfaceEvaluation&) = delete;
+
+  std::size_t samples() const { return profile_um.size(); }
+  double position(std::size_t i) const { return static_cast<double>(i) * position_step; }
+  double roughness_um(std::size_t i) const { return profile_um[i] - waviness_um[i]; }
 };
 
 // Throws InputError when the series cannot be evaluated as configured (too few samples per

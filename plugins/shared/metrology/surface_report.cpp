@@ -29,9 +29,11 @@ ParamSpec positive(ParamSpec s) {
   return s;
 }
 
-std::vector<double> every(const std::vector<double>& v, std::size_t stride) {
+// value(i) for i = 0, stride, 2 stride, ... < n.
+template <class Value>
+std::vector<double> every(std::size_t n, std::size_t stride, Value&& value) {
   std::vector<double> out;
-  for (std::size_t i = 0; i < v.size(); i += stride) out.push_back(v[i]);
+  for (std::size_t i = 0; i < n; i += stride) out.push_back(value(i));
   return out;
 }
 
@@ -150,7 +152,7 @@ std::string profile_column(const Json& input, const DataTable& table, const Sour
 
 SampledSeries series_from(const Json& input, const DataTable& table, const std::string& column) {
   SampledSeries s;
-  s.values = table.column(column);
+  s.values = table.column(column);  // a view: valid while `table` lives
   s.closed = input["closed"].get<bool>();
   s.name = column;
   if (s.closed) {
@@ -213,7 +215,7 @@ void check_uniform(const DataTable& table, const std::string& x_column, const So
   for (std::size_t i = 0; i + 1 < x.size(); ++i) {
     const double step = x[i + 1] - x[i];
     if (!(mean > 0) || std::abs(step - mean) > 1e-3 * mean) {
-      const std::size_t line = i + 1 < table.source_lines.size() ? table.source_lines[i + 1] : i + 2;
+      const std::size_t line = table.source_line(i + 1) != 0 ? table.source_line(i + 1) : i + 2;
       throw InputError(fmt::format(
           "{}: input.x_column = \"{}\": non-uniform spacing in {} at line {}: step {} mm differs "
           "from the mean spacing {} mm by more than 0.1 % (resample the profile uniformly)",
@@ -227,27 +229,27 @@ void check_uniform(const DataTable& table, const std::string& x_column, const So
 
 void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& title,
                    const fs::path& dir) {
-  const std::size_t stride = std::max<std::size_t>(1, e.position.size() / 20000);
+  const std::size_t n = e.samples(), stride = std::max<std::size_t>(1, n / 20000);
   const std::string x_label = closed ? "angle [deg]" : "x [mm]";
-  const auto x = every(e.position, stride);
+  const auto x = every(n, stride, [&](std::size_t i) { return e.position(i); });
   plot::Curves profile;
   profile.title = title + ": profile and waviness (filter mean line)";
   profile.x_label = x_label;
   profile.y_label = "height [um]";
-  profile.series.push_back({"profile", x, every(e.profile_um, stride), "lines"});
+  profile.series.push_back({"profile", x, every(n, stride, [&](std::size_t i) { return e.profile_um[i]; }), "lines"});
   const Json& filter = e.summary.at("filter");
   const std::string cutoff = filter.contains("cutoff_upr")
                                  ? fmt::format("{} UPR", filter["cutoff_upr"].get<double>())
                                  : fmt::format("lc = {} mm", filter["cutoff_mm"].get<double>());
   profile.series.push_back({fmt::format("waviness ({} filter, {})",
                                         filter["type"].get<std::string>(), cutoff),
-                            x, every(e.waviness_um, stride), "lines"});
+                            x, every(n, stride, [&](std::size_t i) { return e.waviness_um[i]; }), "lines"});
   plot::render(profile, dir, "profile");
   plot::Curves roughness;
   roughness.title = title + ": roughness (profile - waviness)";
   roughness.x_label = x_label;
   roughness.y_label = "roughness [um]";
-  roughness.series.push_back({"roughness", x, every(e.roughness_um, stride), "lines"});
+  roughness.series.push_back({"roughness", x, every(n, stride, [&](std::size_t i) { return e.roughness_um(i); }), "lines"});
   roughness.reference_y = 0.0;
   roughness.reference_label = "mean line";
   plot::render(roughness, dir, "roughness");
@@ -274,7 +276,7 @@ void plot_polar(const SurfaceEvaluation& e, const std::string& title, const fs::
   plot::Series profile{"waviness", {}, {}, "lines"};
   for (std::size_t i = 0; i <= n; i += stride) {
     const std::size_t k = i % n;
-    const double th = e.position[k] * std::numbers::pi / 180.0;
+    const double th = e.position(k) * std::numbers::pi / 180.0;
     const double rho = base + e.waviness_um[k] - limacon(ls, th);
     profile.x.push_back(rho * std::cos(th));
     profile.y.push_back(rho * std::sin(th));

@@ -52,8 +52,10 @@ double unit_to_um(const std::string& unit);
 std::string profile_column(const Json& input, const DataTable& table, const SourceMap* sources);
 
 // The profile of a validated [input] as a sampled series (by angle when closed, by x in mm when
-// open: spacing_mm or the x column's mean step).
+// open: spacing_mm or the x column's mean step). A view of the table's column, valid while
+// `table` lives (a 10^7-sample profile is not copied).
 SampledSeries series_from(const Json& input, const DataTable& table, const std::string& column);
+SampledSeries series_from(const Json& input, DataTable&& table, const std::string& column) = delete;
 
 // The evaluation settings of a document holding the four tables. `rows`: the profile's samples;
 // for a closed profile given with spacing_mm (circumferential spacing) and cutoff_mm, the

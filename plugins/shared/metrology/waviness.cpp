@@ -50,15 +50,18 @@ AmplitudeMoments amplitude_moments(const double* w, std::size_t n) {
 
 }  // namespace
 
-ProfileElements profile_elements(const std::vector<double>& w, double height_discrimination,
+ProfileElements profile_elements(std::span<const double> w, double height_discrimination,
                                  bool closed, double width_discrimination) {
   ProfileElements out;
   if (w.size() < 3) return out;
-  std::vector<double> y = w;
+  std::span<const double> y = w;  // open: read in place
+  std::vector<double> loop;
   if (closed) {
     // Start at the deepest valley and close the loop with it: every phase is then complete.
-    std::rotate(y.begin(), std::min_element(y.begin(), y.end()), y.end());
-    y.push_back(y.front());
+    loop.assign(w.begin(), w.end());
+    std::rotate(loop.begin(), std::min_element(loop.begin(), loop.end()), loop.end());
+    loop.push_back(loop.front());
+    y = loop;
   }
   const double h = height_discrimination;
   std::vector<PhaseExtreme> phases;
@@ -121,7 +124,7 @@ double mean_of_five_largest(std::vector<double> heights) {
   return sum / static_cast<double>(count);
 }
 
-WavinessParameters waviness_parameters(const std::vector<double>& w, double spacing, bool closed,
+WavinessParameters waviness_parameters(std::span<const double> w, double spacing, bool closed,
                                        int sampling_lengths, double width_discrimination) {
   if (w.size() < 4) throw std::invalid_argument("waviness_parameters: fewer than 4 samples");
   WavinessParameters p;
@@ -164,7 +167,7 @@ std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_sp
   return {low, high};
 }
 
-std::vector<double> band_limited(const std::vector<double>& closed_profile, UprBand band) {
+std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band) {
   RealFft fft(closed_profile.size());
   auto spectrum = fft.forward(closed_profile);
   for (std::size_t k = 0; k < spectrum.size(); ++k) {
@@ -174,7 +177,7 @@ std::vector<double> band_limited(const std::vector<double>& closed_profile, UprB
   return fft.inverse(spectrum);
 }
 
-BandWaviness band_waviness(const std::vector<double>& closed_profile, UprBand band,
+BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
                            double work_speed_rpm) {
   const std::size_t n = closed_profile.size();
   BandWaviness out;

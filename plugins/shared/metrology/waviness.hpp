@@ -16,6 +16,7 @@
 //   revolution (UPR); the book's Wz of each band-limited profile with its dominant UPR and the
 //   frequency that UPR had during grinding, f = UPR * n_w / 60.
 #include <cstddef>
+#include <span>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,7 +33,7 @@ struct WavinessParameters {
 // `w`: waviness profile with form removed; `spacing`: sample spacing (mm or deg); closed: one
 // revolution, the profile wraps. sampling_lengths >= 1 (clamped to the sample count / 4);
 // width_discrimination in samples (0: none).
-WavinessParameters waviness_parameters(const std::vector<double>& w, double spacing, bool closed,
+WavinessParameters waviness_parameters(std::span<const double> w, double spacing, bool closed,
                                        int sampling_lengths = 1,
                                        double width_discrimination = 0.0);
 
@@ -44,7 +45,7 @@ struct ProfileElements {
   std::vector<double> up_crossings;  // fractional sample index (closed: of the rotated profile)
   std::vector<double> wave_heights;
 };
-ProfileElements profile_elements(const std::vector<double>& w, double height_discrimination,
+ProfileElements profile_elements(std::span<const double> w, double height_discrimination,
                                  bool closed, double width_discrimination = 0.0);
 
 // Mean of the five largest heights (all of them if fewer); 0 for none.
@@ -71,10 +72,10 @@ std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_sp
 
 // Wz|f of one band of a closed profile (UPR 0 and 1 -- radius and eccentricity -- are never in a
 // band: ranges are clipped to [2, N/2]).
-BandWaviness band_waviness(const std::vector<double>& closed_profile, UprBand band,
+BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
                            double work_speed_rpm);
 
 // The profile keeping only DFT bins in [from_upr, to_upr] (closed profiles).
-std::vector<double> band_limited(const std::vector<double>& closed_profile, UprBand band);
+std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band);
 
 }  // namespace chatterlab::surface

@@ -3,6 +3,7 @@
 // pair loops that need every neighbour within a radius (kantz_scan walks its rows): cheaper than
 // a k-d tree when all neighbours within one radius are wanted.
 #include <algorithm>
+#include <span>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -20,7 +21,7 @@ class BoxGrid {
     double a, b;
     std::uint32_t index;
   };
-  BoxGrid(const std::vector<double>& x, int delay, int axes, std::size_t points, double radius)
+  BoxGrid(std::span<const double> x, int delay, int axes, std::size_t points, double radius)
       : axes_(axes), delay_(std::size_t(delay)) {
     const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
     low_ = *lo;

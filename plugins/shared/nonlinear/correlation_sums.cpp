@@ -43,7 +43,7 @@ void add_uncounted_pairs(CorrelationSums& sums) {
 }
 
 // Zeroed histograms for dimensions 1..max_dimension of the series x.
-CorrelationSums empty_sums(const std::vector<double>& x, int max_dimension) {
+CorrelationSums empty_sums(std::span<const double> x, int max_dimension) {
   CorrelationSums out;
   out.max_dimension = max_dimension;
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
@@ -55,7 +55,7 @@ CorrelationSums empty_sums(const std::vector<double>& x, int max_dimension) {
 }
 
 // (x - min) / range: distances come out as fractions of the range directly.
-std::vector<double> normalised(const std::vector<double>& x) {
+std::vector<double> normalised(std::span<const double> x) {
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double scale = 1.0 / (*hi - *lo);
   std::vector<double> y(x.size());
@@ -354,7 +354,7 @@ std::vector<double> CorrelationSums::log_radii() const {
   return out;
 }
 
-CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
+CorrelationSums correlation_sums(std::span<const double> x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references) {
   CorrelationSums out = empty_sums(x, max_dimension);
   std::vector<double> y = normalised(x);
@@ -400,7 +400,7 @@ CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension
   return out;
 }
 
-CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
+CorrelationSums correlation_sums_within(std::span<const double> x, int max_dimension,
                                         int delay, std::size_t theiler, double cut) {
   if (max_dimension < 1 || std::size_t(max_dimension) > max_pair_dimensions || !(cut > 0))
     throw PointFailure(fmt::format("correlation_sums_within: needs 1 <= dimensions <= {} and a "

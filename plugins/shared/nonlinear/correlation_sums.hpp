@@ -3,6 +3,7 @@
 // core of the `correlation_dimension` analysis, shared with `surrogates` (its correlation-sum
 // statistic). docs/analysis/chaos.md, section "Correlation dimension".
 #include <cstddef>
+#include <span>
 #include <cstdint>
 #include <vector>
 
@@ -36,14 +37,14 @@ struct CorrelationSums {
   std::vector<double> log_correlation(int d) const;
   std::vector<double> log_radii() const;
 };
-CorrelationSums correlation_sums(const std::vector<double>& x, int max_dimension, int delay,
+CorrelationSums correlation_sums(std::span<const double> x, int max_dimension, int delay,
                                  std::size_t theiler, std::size_t references);
 // The same histograms from every pair (i, j), |i - j| > theiler, closer than `cut` x range (TISEAN
 // d2 with -N 0 and -R = cut): exact C(r) for r < cut x range, no sampling. Strips of the first
 // delay coordinate, sorted by the second, skip the farther pairs, so the cost grows with `cut`
 // (pairs within it), not with N^2. Each pair is counted for both its vectors (as an ordered pair,
 // like correlation_sums), so both schemes share one normalisation.
-CorrelationSums correlation_sums_within(const std::vector<double>& x, int max_dimension,
+CorrelationSums correlation_sums_within(std::span<const double> x, int max_dimension,
                                         int delay, std::size_t theiler, double cut);
 
 }  // namespace chatterlab

@@ -19,7 +19,7 @@ double median_of(std::vector<double> v) {
 }
 }  // namespace
 
-BlockCurve rosenstein_curve(const std::vector<double>& x, int dimension, int delay,
+BlockCurve rosenstein_curve(std::span<const double> x, int dimension, int delay,
                             std::size_t theiler, std::size_t steps, std::size_t stride,
                             std::size_t references) {
   using nonlinear::Embedding;
@@ -122,7 +122,7 @@ std::size_t curve_stride(int delay, std::size_t horizon, std::size_t min_points)
   return best;
 }
 
-std::vector<double> neighbour_distances(const std::vector<double>& x, int dimension, int delay,
+std::vector<double> neighbour_distances(std::span<const double> x, int dimension, int delay,
                                         std::size_t theiler, std::size_t limit,
                                         const std::vector<std::size_t>& ks, std::size_t sample) {
   const nonlinear::Embedding e(x, dimension, delay, limit);
@@ -159,7 +159,7 @@ std::vector<double> local_dimensions(const std::vector<double>& distances,
   return out;
 }
 
-std::size_t saturation_horizon(const std::vector<double>& x, int dimension, int delay,
+std::size_t saturation_horizon(std::span<const double> x, int dimension, int delay,
                                std::size_t theiler, std::size_t horizon, std::size_t min_points) {
   constexpr std::size_t pilot_references = 500;
   const std::size_t stride = curve_stride(delay, horizon, min_points);

@@ -4,6 +4,7 @@
 // curves are in kantz_scan.hpp), the linear region of a curve, the curve resolution and
 // horizon, and neighbour distances with the local dimensions they imply.
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include "shared/nonlinear/kantz_scan.hpp"
@@ -13,7 +14,7 @@ namespace chatterlab {
 // Rosenstein et al. (1993): S(k) = < ln |X_{i + k stride} - X_{j(i) + k stride}| >_i over
 // `references` vectors evenly spread, j(i) the nearest neighbour outside the Theiler window
 // (Euclidean), k = 0..steps-1; per-block sums for the bootstrap.
-BlockCurve rosenstein_curve(const std::vector<double>& x, int dimension, int delay,
+BlockCurve rosenstein_curve(std::span<const double> x, int dimension, int delay,
                             std::size_t theiler, std::size_t steps, std::size_t stride,
                             std::size_t references);
 
@@ -37,13 +38,13 @@ std::size_t curve_stride(int delay, std::size_t horizon, std::size_t min_points)
 // `horizon` samples) takes to make 90 % of its rise, at least 30 samples; the whole `horizon`
 // when it never rises by ln 2 (no divergence must be seen over a long time, not over 30
 // samples).
-std::size_t saturation_horizon(const std::vector<double>& x, int dimension, int delay,
+std::size_t saturation_horizon(std::span<const double> x, int dimension, int delay,
                                std::size_t theiler, std::size_t horizon, std::size_t min_points);
 
 // Median distance (Euclidean, dimension `dimension`, vectors below `limit`) to the k-th nearest
 // neighbour for each k of `ks` (ascending), over `sample` references evenly spread; NaN where
 // fewer than half of them have k neighbours (at most a quarter of the vectors is asked for).
-std::vector<double> neighbour_distances(const std::vector<double>& x, int dimension, int delay,
+std::vector<double> neighbour_distances(std::span<const double> x, int dimension, int delay,
                                         std::size_t theiler, std::size_t limit,
                                         const std::vector<std::size_t>& ks, std::size_t sample);
 // Local dimension between the neighbour counts k_q and k_{q+1}: ln(k ratio) / ln(distance

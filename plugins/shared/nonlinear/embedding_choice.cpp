@@ -19,7 +19,7 @@ using nonlinear::NeighbourSearch;
 // Reference vectors used by FNN/Cao at most (evenly spread): fractions to 0.1 % (10 vectors).
 constexpr std::size_t max_fnn_references = 10000;
 
-std::vector<double> autocorrelation(const std::vector<double>& x, std::size_t max_lag) {
+std::vector<double> autocorrelation(std::span<const double> x, std::size_t max_lag) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
   double var = 0;
   for (double v : x) var += (v - mean) * (v - mean);
@@ -32,7 +32,7 @@ std::vector<double> autocorrelation(const std::vector<double>& x, std::size_t ma
   return acf;
 }
 
-std::vector<double> mutual_information(const std::vector<double>& x, std::size_t max_lag,
+std::vector<double> mutual_information(std::span<const double> x, std::size_t max_lag,
                                        int bins) {
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double width = (*hi - *lo) / bins;
@@ -66,7 +66,7 @@ std::vector<double> mutual_information(const std::vector<double>& x, std::size_t
 
 }  // namespace
 
-DelayChoice choose_delay(const std::vector<double>& x, std::size_t max_lag, int bins) {
+DelayChoice choose_delay(std::span<const double> x, std::size_t max_lag, int bins) {
   DelayChoice out;
   max_lag = std::max<std::size_t>(3, std::min(max_lag, x.size() / 4));
   out.mutual_information = mutual_information(x, max_lag, bins);
@@ -105,7 +105,7 @@ DelayChoice choose_delay(const std::vector<double>& x, std::size_t max_lag, int 
   return out;
 }
 
-DimensionChoice choose_dimension(const std::vector<double>& x, int delay, int max_dimension,
+DimensionChoice choose_dimension(std::span<const double> x, int delay, int max_dimension,
                                  std::size_t theiler, double distance_ratio,
                                  double fnn_threshold) {
   DimensionChoice out;
@@ -169,7 +169,7 @@ DimensionChoice choose_dimension(const std::vector<double>& x, int delay, int ma
 std::size_t embedding_default_max_lag(std::size_t n) { return std::min<std::size_t>(1000, n / 10); }
 std::size_t theiler_range(int delay) { return std::size_t(std::max(100, 20 * delay)); }
 
-EmbeddingChoice choose_embedding(const std::vector<double>& x, std::size_t max_lag, int bins, int max_dimension,
+EmbeddingChoice choose_embedding(std::span<const double> x, std::size_t max_lag, int bins, int max_dimension,
                   double ratio, double threshold, const Json& fixed_delay) {
   EmbeddingChoice c;
   if (fixed_delay.is_number_integer()) {

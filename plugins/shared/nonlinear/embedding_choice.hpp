@@ -4,6 +4,7 @@
 // (correlation_dimension, lyapunov, lyapunov_spectrum, surrogates) through resolve_embedding.
 // docs/analysis/chaos.md.
 #include <cstddef>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -22,7 +23,7 @@ struct DelayChoice {
 // AMI with `bins` equal-width bins over lags 0..max_lag; the first lag whose AMI is below both
 // neighbours within +-2 lags and below the bias floor + half the drop from lag 0 to there is the
 // first minimum; else the first lag where the autocorrelation falls below 1/e.
-DelayChoice choose_delay(const std::vector<double>& x, std::size_t max_lag, int bins);
+DelayChoice choose_delay(std::span<const double> x, std::size_t max_lag, int bins);
 
 struct DimensionChoice {
   int fnn_dimension = 0;   // 0: the FNN fraction never fell below the threshold
@@ -32,7 +33,7 @@ struct DimensionChoice {
   bool deterministic = false;  // some E2(d) differs from 1 (Cao)
   double e2_max_deviation = 0;
 };
-DimensionChoice choose_dimension(const std::vector<double>& x, int delay, int max_dimension,
+DimensionChoice choose_dimension(std::span<const double> x, int delay, int max_dimension,
                                  std::size_t theiler, double distance_ratio,
                                  double fnn_threshold);
 
@@ -65,7 +66,7 @@ struct EmbeddingChoice {
   nonlinear::TheilerChoice theiler;
   int chosen_dimension = 2;
 };
-EmbeddingChoice choose_embedding(const std::vector<double>& x, std::size_t max_lag, int bins,
+EmbeddingChoice choose_embedding(std::span<const double> x, std::size_t max_lag, int bins,
                                  int max_dimension, double ratio, double threshold,
                                  const Json& fixed_delay);
 

@@ -510,7 +510,7 @@ template <std::size_t Radii>
 
 }  // namespace
 
-KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_dimension, int delay,
+KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimension, int delay,
                      std::size_t theiler, std::size_t steps, std::size_t references,
                      std::vector<double> radii, std::size_t stride) {
   KantzScan out;

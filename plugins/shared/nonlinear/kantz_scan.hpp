@@ -3,6 +3,7 @@
 // statistic of TISEAN's lyap_k (MODELS.md N3/N4), used by the `lyapunov` analysis
 // (radius_scan_count) and benchmarked against lyap_k in tests/bench/chaos_bench.cpp.
 #include <cstddef>
+#include <span>
 #include <vector>
 
 namespace chatterlab {
@@ -52,7 +53,7 @@ struct KantzScan {
   // The same with its sums per block.
   BlockCurve block_curve(std::size_t r, int m) const;
 };
-KantzScan kantz_scan(const std::vector<double>& x, int min_dimension, int max_dimension, int delay,
+KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimension, int delay,
                      std::size_t theiler, std::size_t steps, std::size_t references,
                      std::vector<double> radii, std::size_t stride = 1);
 

@@ -45,14 +45,14 @@ std::size_t minimum_samples(int dimension, int delay) {
          minimum_vectors;
 }
 
-void check_finite(const std::vector<double>& x, const std::string& what) {
+void check_finite(std::span<const double> x, const std::string& what) {
   for (std::size_t i = 0; i < x.size(); ++i)
     if (!std::isfinite(x[i]))
       throw InputError(fmt::format("{}: sample {} is {}: every sample must be a finite number",
                                    what, i + 1, x[i]));
 }
 
-void check_series(const std::vector<double>& x, int dimension, int delay, const std::string& what) {
+void check_series(std::span<const double> x, int dimension, int delay, const std::string& what) {
   check_finite(x, what);
   const std::size_t needed = minimum_samples(dimension, delay);
   if (x.size() < needed)
@@ -73,7 +73,7 @@ std::size_t vector_count(std::size_t n, int dimension, int delay) {
   return n > window ? n - window : 0;
 }
 
-Embedding::Embedding(const std::vector<double>& x, int dimension, int delay, std::size_t count)
+Embedding::Embedding(std::span<const double> x, int dimension, int delay, std::size_t count)
     : dimension_(dimension), delay_(delay) {
   const std::size_t available = vector_count(x.size(), dimension, delay);
   count_ = count == 0 ? available : std::min(count, available);
@@ -324,7 +324,7 @@ Interval block_bootstrap(std::size_t blocks, std::size_t replicates, std::uint64
 }
 
 // ---------------------------------------------------------------- helpers
-double standard_deviation(const std::vector<double>& x) {
+double standard_deviation(std::span<const double> x) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
   double s = 0;
   for (double v : x) s += (v - mean) * (v - mean);

@@ -5,6 +5,7 @@
 // regions, straight-line fits, block bootstrap and the result convention of analysis.hpp.
 // docs/analysis/chaos.md describes the rules in words.
 #include <algorithm>
+#include <span>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -51,11 +52,11 @@ inline constexpr std::size_t minimum_series_samples = 300;
 // Samples needed to embed in `dimension` with `delay` and still have minimum_vectors vectors.
 std::size_t minimum_samples(int dimension, int delay);
 // Throws InputError when a sample is not finite, naming its index.
-void check_finite(const std::vector<double>& x, const std::string& what);
+void check_finite(std::span<const double> x, const std::string& what);
 // Throws InputError when a sample is not finite (naming its index), the series is constant, or
 // it is shorter than minimum_samples(dimension, delay) (naming the minimum). `what` names the
 // series in the message (e.g. the input column).
-void check_series(const std::vector<double>& x, int dimension, int delay, const std::string& what);
+void check_series(std::span<const double> x, int dimension, int delay, const std::string& what);
 
 // ---------------------------------------------------------------- delay embedding (N1)
 // X_i = (x_i, x_{i+delay}, ..., x_{i+(dimension-1) delay}), i < count. The vectors are stored
@@ -64,7 +65,7 @@ void check_series(const std::vector<double>& x, int dimension, int delay, const 
 // dimensions share the same vector indices.
 class Embedding {
  public:
-  Embedding(const std::vector<double>& x, int dimension, int delay, std::size_t count = 0);
+  Embedding(std::span<const double> x, int dimension, int delay, std::size_t count = 0);
   std::size_t size() const { return count_; }
   int dimension() const { return dimension_; }
   int delay() const { return delay_; }
@@ -184,7 +185,7 @@ Interval block_bootstrap(std::size_t blocks, std::size_t replicates, std::uint64
                          const std::function<double(const std::vector<double>&)>& statistic);
 
 // ---------------------------------------------------------------- helpers
-double standard_deviation(const std::vector<double>& x);
+double standard_deviation(std::span<const double> x);
 // Parameter specs shared by the methods that embed a series.
 ParamSpec delay_spec();              // delay_samples, optional (auto)
 ParamSpec dimension_spec();          // embedding_dimension, optional (auto)

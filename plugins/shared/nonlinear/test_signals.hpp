@@ -244,7 +244,7 @@ inline std::vector<double> with_noise(std::vector<double> x, double level, unsig
 
 inline SampledSeries series(std::vector<double> values, double dt, const char* name) {
   SampledSeries s;
-  s.values = std::move(values);
+  s.set_samples(std::move(values));
   s.sample_interval = dt;
   s.name = name;
   return s;

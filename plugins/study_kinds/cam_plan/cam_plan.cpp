@@ -53,7 +53,7 @@ LiftTable read_lift_table(const CamPart& part) {
   for (std::size_t i = 0; i < table.angle_deg.size(); ++i)
     if (!(table.angle_deg[i] > 0 && table.angle_deg[i] <= 360 && table.radius_mm[i] > 0))
       throw InputError(fmt::format("{}:{}: angle {} deg, radius {} mm: angles must lie in (0, 360] "
-                                   "and radii be > 0", file.string(), data.source_lines[i],
+                                   "and radii be > 0", file.string(), data.source_line(i),
                                    table.angle_deg[i], table.radius_mm[i]));
   return table;
 }

@@ -98,7 +98,7 @@ double rate_from_time_column(const std::vector<double>& t, const DataTable& tabl
       throw InputError(fmt::format(
           "{}: {}: line {}: t_s is not uniformly spaced (step {} s, mean step {} s); give "
           "input.sample_rate_hz or resample the signal",
-          where, table.file.string(), table.source_lines.empty() ? 0 : table.source_lines[i],
+          where, table.file.string(), table.source_line(i),
           t[i] - t[i - 1], dt));
   return 1.0 / dt;
 }
@@ -246,8 +246,8 @@ void plot_point(const SampledSeries& series, const std::map<std::string, Json>& 
 
 SampledSeries monitor_input_signal(const Json& input) {
   SampledSeries s;
-  s.values = read_signal_column(input.at("file").get<std::string>(),
-                                input.at("column").get<std::string>());
+  s.set_samples(read_signal_column(input.at("file").get<std::string>(),
+                                   input.at("column").get<std::string>()));
   s.sample_interval = 1.0 / input.at("sample_rate_hz").get<double>();
   s.sample_unit = "s";
   s.name = input.at("column").get<std::string>();

@@ -60,15 +60,15 @@ ProfileSpeeds cutting_speeds(const SimulationResult& r, double t) {
   return {mean_speed(r, wheel, from, t), mean_speed(r, work, from, t)};
 }
 
-// The work surface of a snapshot as a closed profile in metres: radius deviation = -(removal so
-// far) over one revolution.
-// One work revolution of radius deviation, the infeed ramp removed: during a plunge the removal
-// rises by a revolution's infeed along the revolution (a spiral with a step at the seam), which
-// would dominate Wt and RONt of waves a few um deep. The plots show the same residual.
+// The work surface of a snapshot as a closed profile in metres: one work revolution of radius
+// deviation, the infeed ramp removed. During a plunge the removal rises by a revolution's infeed
+// along the revolution (a spiral with a step at the seam), which would dominate Wt and RONt of
+// waves a few um deep. The plots show the same residual.
 SampledSeries work_profile(const SurfaceSnapshot& snap) {
   SampledSeries series;
-  series.values = without_infeed_ramp(snap.surface_m[work]).values;
-  for (double& v : series.values) v = -v;  // removal -> radius deviation
+  std::vector<double> radius_m = without_infeed_ramp(snap.surface_m[work]).values;
+  for (double& v : radius_m) v = -v;  // removal -> radius deviation
+  series.set_samples(std::move(radius_m));
   series.sample_interval = 360.0 / static_cast<double>(series.values.size());
   series.sample_unit = "deg";
   series.closed = true;

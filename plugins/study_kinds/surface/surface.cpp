@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <iterator>
+#include <memory>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
@@ -17,6 +20,41 @@ namespace chatterlab::surface {
 namespace fs = std::filesystem;
 
 namespace {
+
+// filtered.csv holds four numbers per sample (about 60 bytes of text): written by default up to
+// this many samples, above it only on request ([parameters] filtered_csv = "always").
+constexpr std::size_t filtered_csv_auto_samples = 1'000'000;
+
+// The kind's own [parameters] keys beside those the surface_profile analysis shares.
+std::vector<ParamSpec> kind_parameter_specs() {
+  std::vector<ParamSpec> specs = parameter_specs();
+  ParamSpec filtered = param_spec(
+      "filtered_csv", ValueKind::string, "1",
+      fmt::format("write filtered.csv (position, profile, waviness, roughness per sample): auto "
+                  "(profiles of up to {} samples), always or never",
+                  filtered_csv_auto_samples));
+  filtered.default_value = "auto";
+  filtered.choices = {"auto", "always", "never"};
+  specs.push_back(filtered);
+  return specs;
+}
+
+// filtered.csv streamed in blocks of rows: the same text csv_text gives, without holding it.
+void write_filtered_csv(const fs::path& path, const SurfaceEvaluation& e, bool closed) {
+  AtomicFileWriter out(path);
+  std::string text = std::string(closed ? "angle_deg" : "x_mm") + ",profile_um,waviness_um,roughness_um\n";
+  constexpr std::size_t rows_per_block = 65536;
+  for (std::size_t first = 0; first < e.samples(); first += rows_per_block) {
+    const std::size_t end = std::min(e.samples(), first + rows_per_block);
+    for (std::size_t i = first; i < end; ++i)
+      fmt::format_to(std::back_inserter(text), "{},{},{},{}\n", e.position(i), e.profile_um[i],
+                     e.waviness_um[i], e.roughness_um(i));
+    out.write(text);
+    text.clear();
+  }
+  out.write(text);
+  out.commit();
+}
 
 // Reports a violated limit: fail(key, message) throws InputError at the key's line.
 using Fail = std::function<void(const std::string& key, const std::string& message)>;
@@ -93,14 +131,21 @@ void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {
   Json input = validated_table(document, "input", input_specs(), sources);
   Json filter = validated_table(document, "filter", filter_specs(), sources);
   Json process = validated_table(document, "process", process_specs(), sources);
-  Json parameters = validated_table(document, "parameters", parameter_specs(), sources);
+  Json parameters = validated_table(document, "parameters", kind_parameter_specs(), sources);
   const Fail fail = [&](const std::string& key, const std::string& what) {
     throw InputError(fmt::format("{}: {}", sources.locate(key).str(), what));
   };
 
   const fs::path file = kit::resolve_data_file(input["file"], "input.file", sources);
   input["file"] = file.string();
-  const DataTable table = kit::read_table_at(file, "input.file", sources);
+  // The run's parsed table itself, not a copy (a profile of 10^7 samples is 80 MB per column).
+  std::shared_ptr<const DataTable> shared_table;
+  try {
+    shared_table = read_shared_data_table(file);
+  } catch (const InputError& e) {
+    fail("input.file", fmt::format("input.file: {}", e.what()));
+  }
+  const DataTable& table = *shared_table;
   const bool closed = input["closed"].get<bool>();
   if (input["x_column"].is_string()) {
     if (closed) fail("input.x_column", "input.x_column: closed profiles are sampled by angle "
@@ -154,9 +199,9 @@ std::vector<std::string> SurfaceStudy::output_columns(const Json& document) cons
 std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
                                           const PointContext& context) const {
   const Json& input = point_document.at("input");
-  const DataTable table = read_data_table(input.at("file").get<std::string>());
+  const std::shared_ptr<const DataTable> table = read_shared_data_table(input.at("file").get<std::string>());
   const std::string column = input.at("column").get<std::string>();
-  const SampledSeries series = series_from(input, table, column);
+  const SampledSeries series = series_from(input, *table, column);  // a view of the table's column
   const SurfaceEvaluation e =
       evaluate_surface_profile(series, settings_from(point_document, series.values.size()));
   const Json& s = e.summary;
@@ -168,11 +213,16 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
   if (context.artifact_dir.empty()) return out;
 
   const fs::path& dir = context.artifact_dir;
-  write_file_atomically(dir / "filtered.csv",
-                        csv_text({series.closed ? "angle_deg" : "x_mm", "profile_um",
-                                  "waviness_um", "roughness_um"},
-                                 {e.position, e.profile_um, e.waviness_um, e.roughness_um}));
   Json summary = s;
+  const std::string filtered_csv = point_document.at("parameters").at("filtered_csv").get<std::string>();
+  if (filtered_csv == "always" || (filtered_csv == "auto" && e.samples() <= filtered_csv_auto_samples))
+    write_filtered_csv(dir / "filtered.csv", e, series.closed);
+  else
+    summary["filtered_csv"] = fmt::format(
+        "not written: {} samples{} (parameters.filtered_csv = \"always\" writes it)", e.samples(),
+        filtered_csv == "never" ? ", parameters.filtered_csv = \"never\""
+                                : fmt::format(" > {} (parameters.filtered_csv = \"auto\")",
+                                              filtered_csv_auto_samples));
   if (series.closed && point_document.at("filter")["cutoff_mm"].is_number()) {
     summary["filter"]["cutoff_mm"] = point_document.at("filter")["cutoff_mm"];
     summary["filter"]["circumference_mm"] =

@@ -10,7 +10,9 @@
 #include "study_kinds/surface/surface.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
+#include "chatterlab/output_files.hpp"
 #include "chatterlab/signal_io.hpp"
+#include "shared/metrology/surface_report.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::surface {
@@ -54,8 +56,10 @@ TEST(SurfaceEvaluation, OpenSineParametersAndIdentity) {
   s.sample_unit = "mm";
   // 50 whole waves in the evaluation length (the profile without lc/2 = 40 samples each end),
   // even about its centre, so the least-squares line removed as form is zero.
+  std::vector<double> mm;
   for (std::size_t i = 0; i < 20080; ++i)
-    s.values.push_back(2e-3 * std::cos(2 * pi * (static_cast<double>(i) - 10040.0) / 400.0));
+    mm.push_back(2e-3 * std::cos(2 * pi * (static_cast<double>(i) - 10040.0) / 400.0));
+  s.set_samples(std::move(mm));
   SurfaceSettings settings;
   settings.value_to_um = 1e3;
   settings.cutoff_mm = 0.08;  // lambda / lc = 5: transmission 0.9726
@@ -71,7 +75,7 @@ TEST(SurfaceEvaluation, OpenSineParametersAndIdentity) {
   EXPECT_NEAR(j["WSm_mm"].get<double>(), 0.4, 1e-3);
   EXPECT_TRUE(j.contains("motif"));
   for (std::size_t i = 0; i < e.profile_um.size(); ++i)
-    ASSERT_DOUBLE_EQ(e.roughness_um[i], e.profile_um[i] - e.waviness_um[i]);
+    ASSERT_DOUBLE_EQ(e.roughness_um(i), e.profile_um[i] - e.waviness_um[i]);
 }
 
 TEST(SurfaceEvaluation, ClosedProfileRoundnessAndUprTable) {
@@ -79,7 +83,9 @@ TEST(SurfaceEvaluation, ClosedProfileRoundnessAndUprTable) {
   s.closed = true;
   s.sample_unit = "deg";
   s.sample_interval = 0.1;
-  for (std::size_t i = 0; i < 3600; ++i) s.values.push_back(lobes(i));
+  std::vector<double> um;
+  for (std::size_t i = 0; i < 3600; ++i) um.push_back(lobes(i));
+  s.set_samples(std::move(um));
   SurfaceSettings settings;
   settings.cutoff_upr = 150;
   const Json j = evaluate_surface(s, settings);
@@ -103,7 +109,7 @@ TEST(SurfaceEvaluation, RejectsTooFewSamplesPerCutoff) {
   s.closed = true;
   s.sample_unit = "deg";
   s.sample_interval = 1.0;
-  s.values.assign(360, 0.0);
+  s.set_samples(std::vector<double>(360, 0.0));
   SurfaceSettings settings;
   settings.cutoff_upr = 60;  // 6 samples per cut-off
   EXPECT_THROW(evaluate_surface(s, settings), InputError);
@@ -115,7 +121,9 @@ TEST(SurfaceEvaluation, AnalysisPluginEvaluatesASimulatedWorkSurface) {
   s.closed = true;
   s.sample_unit = "deg";
   s.sample_interval = 0.1;
-  for (std::size_t i = 0; i < 3600; ++i) s.values.push_back(lobes(i) * 1e-6);
+  std::vector<double> m;
+  for (std::size_t i = 0; i < 3600; ++i) m.push_back(lobes(i) * 1e-6);
+  s.set_samples(std::move(m));
   const auto& entry = analysis_registry().at("surface_profile");
   const auto analysis = entry.create(ParamValues(
       validate_params(Json{{"unit", "m"}, {"cutoff_upr", 150}}, entry.info.params, "analysis",
@@ -152,6 +160,50 @@ TEST_F(SurfaceStudyInput, RunPointWritesFilteredCsvAndSummary) {
   // 0.4 mm waves under a 0.8 mm cut-off: robust regression transmission at lambda/lc = 0.5.
   const double a = 2.0 * waviness_transmission(FilterType::robust_gaussian, 0.5);
   EXPECT_NEAR(j["Wq_um"].get<double>(), a / std::sqrt(2.0), 0.02);
+}
+
+TEST_F(SurfaceStudyInput, FilteredCsvIsStreamedAsCsvTextAndOptional) {
+  dir_.write("p.csv", table(6000, waves));
+  SurfaceStudy kind;
+  PointContext context;
+  context.plots = false;
+  // Written (small profile, "auto"): the streamed file is exactly csv_text of the evaluation.
+  {
+    Study study = load_text(dir_, open_study("", "cutoff_mm = 0.8\n"));
+    context.artifact_dir = dir_.path() / "auto";
+    kind.run_point(study.point_document(0), context);
+    const auto table_ptr = read_shared_data_table(dir_.path() / "p.csv");
+    const SurfaceEvaluation e = evaluate_surface_profile(
+        series_from(study.point_document(0).at("input"), *table_ptr, "height_um"),
+        settings_from(study.point_document(0), 6000));
+    std::vector<double> x, roughness;
+    for (std::size_t i = 0; i < e.samples(); ++i) {
+      x.push_back(e.position(i));
+      roughness.push_back(e.roughness_um(i));
+    }
+    const std::vector<double> profile(e.profile_um.begin(), e.profile_um.end());
+    std::ifstream file(dir_.path() / "auto" / "filtered.csv");
+    std::stringstream text;
+    text << file.rdbuf();
+    EXPECT_EQ(text.str(), csv_text({"x_mm", "profile_um", "waviness_um", "roughness_um"},
+                                   {x, profile, e.waviness_um, roughness}));
+    std::ifstream summary(dir_.path() / "auto" / "summary.json");
+    EXPECT_FALSE(Json::parse(summary).contains("filtered_csv"));
+  }
+  // Not written on request; the summary says why and how to get it.
+  {
+    Study study = load_text(dir_, open_study("", "cutoff_mm = 0.8\n\n[parameters]\nfiltered_csv = \"never\"\n"));
+    context.artifact_dir = dir_.path() / "never";
+    kind.run_point(study.point_document(0), context);
+    EXPECT_FALSE(std::filesystem::exists(dir_.path() / "never" / "filtered.csv"));
+    std::ifstream summary(dir_.path() / "never" / "summary.json");
+    EXPECT_EQ(Json::parse(summary).at("filtered_csv"),
+              "not written: 6000 samples, parameters.filtered_csv = \"never\" "
+              "(parameters.filtered_csv = \"always\" writes it)");
+  }
+  EXPECT_NE(load_error(dir_, open_study("", "cutoff_mm = 0.8\n\n[parameters]\nfiltered_csv = \"sometimes\"\n"))
+                .find("parameters.filtered_csv"),
+            std::string::npos);
 }
 
 TEST_F(SurfaceStudyInput, TooFewSamplesPerCutoff) {

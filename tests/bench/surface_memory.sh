@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Peak memory of a `surface` study on one long open profile (issue 23: profiles of 10^7..10^8
+# samples in at most 48 bytes per sample; docs/performance.md, "Surface metrology"). Writes a
+# profile of SAMPLES samples (0.5 um spacing: a 4 mm and a 0.05 mm wave plus noise, "%.6g", one
+# column) to WORK_DIR once, runs `chatterlab run` on it with the FILTER filter (lc = 0.8 mm)
+# under /usr/bin/time -v, and prints the peak resident set, bytes per sample, the output
+# directory's size and the wall time. Not a test: run it by hand, with a BASELINE chatterlab to
+# compare (each run alternates the two).
+# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER [BASELINE]]]
+set -eu
+bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
+mkdir -p "$work"
+data=$work/profile_$samples.csv
+if [ ! -s "$data" ]; then
+  awk -v n="$samples" 'BEGIN {
+    srand(1); pi = atan2(0, -1); print "height_um"
+    for (i = 0; i < n; i++) {
+      x = i * 0.0005
+      printf "%.6g\n", 1.5 * sin(2 * pi * x / 4) + 0.3 * sin(2 * pi * x / 0.05) + 0.1 * (rand() + rand() + rand() - 1.5)
+    }
+  }' >"$data.tmp" && mv "$data.tmp" "$data"
+fi
+study=$work/surface_${samples}_$filter.toml
+cat >"$study" <<EOF
+[study]
+kind = "surface"
+name = "memory: $samples samples, $filter"
+
+[input]
+file = "profile_$samples.csv"
+column = "height_um"
+spacing_mm = 0.0005
+
+[filter]
+type = "$filter"
+cutoff_mm = 0.8
+EOF
+echo "profile: $data ($(stat -c %s "$data") bytes, $samples samples), filter $filter, load $(cut -d' ' -f1 /proc/loadavg)"
+printf '%-9s %14s %14s %14s %8s\n' build "peak RSS kB" "bytes/sample" "output bytes" "wall s"
+for build in new ${baseline:+baseline}; do
+  exe=$bin && [ "$build" = baseline ] && exe=$baseline
+  out=$work/out_${samples}_${filter}_$build
+  rm -rf "$out"
+  /usr/bin/time -v "$exe" run "$study" --out "$out" --no-progress >"$out.log" 2>"$out.time" ||
+    { echo "failed: $out.log $out.time" >&2; exit 1; }
+  peak_kb=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$out.time")
+  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$out.time")
+  printf '%-9s %14s %14.1f %14s %8s\n' "$build" "$peak_kb" "$(echo "$peak_kb * 1024 / $samples" | bc -l)" \
+    "$(du -sb "$out" | cut -f1)" "$wall"
+done
+[ -z "$baseline" ] || cmp -s "$work/out_${samples}_${filter}_new/results.csv" "$work/out_${samples}_${filter}_baseline/results.csv" ||
+  echo "results.csv differs from the baseline's" >&2
