@@ -633,16 +633,12 @@ void stable_window(OptimiseResult& result) {
   result.stable_window_rpm = std::pair{row[lo]->spindle_speed_rpm, row[hi]->spindle_speed_rpm};
 }
 
-}  // namespace
-
-OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const Replan& replan,
-                        double baseline_time_s, const planner::Generatrix& generatrix,
-                        const RootSettings& roots, const RiskThresholds& thresholds,
-                        const OptimiseSettings& settings) {
-  OptimiseResult result;
-  RootSettings coarse = roots;
-  coarse.condition_tolerance = settings.condition_tolerance;
-  // 1. The candidates and their plans (the planner runs serially, once per planning speed).
+// The candidates (amplitude ratio x spindle speed, in increasing speed per amplitude) and their
+// plans at the spindle speed. The planner runs serially, once per planning speed (a modulated
+// candidate is planned at its lowest speed).
+std::vector<std::vector<planner::SegmentConditions>> candidates_and_plans(const Replan& replan,
+                                                                        const OptimiseSettings& settings,
+                                                                        std::vector<Candidate>& candidates) {
   std::map<double, std::vector<planner::SegmentConditions>> plans;  // by planning speed
   std::vector<std::vector<planner::SegmentConditions>> candidate_plans;
   for (double a : settings.amplitude_ratios) {
@@ -660,10 +656,25 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
       if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
       std::vector<planner::SegmentConditions> plan = it->second;
       for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
-      result.candidates.push_back(c);
+      candidates.push_back(c);
       candidate_plans.push_back(std::move(plan));
     }
   }
+  return candidate_plans;
+}
+
+}  // namespace
+
+OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const Replan& replan,
+                        double baseline_time_s, const planner::Generatrix& generatrix,
+                        const RootSettings& roots, const RiskThresholds& thresholds,
+                        const OptimiseSettings& settings) {
+  OptimiseResult result;
+  RootSettings coarse = roots;
+  coarse.condition_tolerance = settings.condition_tolerance;
+  // 1. The candidates and their plans.
+  std::vector<std::vector<planner::SegmentConditions>> candidate_plans =
+      candidates_and_plans(replan, settings, result.candidates);
   // 2. Every rating (candidate x speed factor of the band, the nominal one also being the
   // candidate's nominal rating) is independent: they run in parallel, each one's groups serially
   // (nested), the largest first. Each rating is deterministic, so the results do not depend on
