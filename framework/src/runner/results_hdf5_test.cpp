@@ -269,7 +269,7 @@ TEST(Hdf5Results, CsvAndHdf5OfAStabilityMapHoldTheSameNumbers) {
     }
   }
   EXPECT_EQ(numbers, 5u);  // growth rate, frequency, stable, certified, certified real part
-  EXPECT_EQ(texts, 2u);    // certificate, status
+  EXPECT_EQ(texts, 3u);    // certificate, route, status
   // The axes' values, the study file and the provenance.
   for (std::size_t a = 0; a < 2; ++a) {
     const std::vector<double> axis = read_numbers(file, "grid/" + header[a]);
