@@ -1,5 +1,7 @@
 #include "delay/determinant.hpp"
 
+#include "chatterlab/complex_determinant.hpp"
+
 namespace chatterlab::delay_detail {
 
 Complex eliminate(Complex* a, Complex* rhs, std::size_t n) {
@@ -64,3 +66,13 @@ CharacteristicValue determinant_and_derivative(Complex* m, Complex* dm, std::siz
 }
 
 }  // namespace chatterlab::delay_detail
+
+namespace chatterlab {
+
+Complex complex_determinant(Complex* a, std::size_t n) { return delay_detail::determinant(a, n); }
+
+CharacteristicValue complex_determinant_and_derivative(Complex* m, Complex* dm, std::size_t n) {
+  return delay_detail::determinant_and_derivative(m, dm, n);
+}
+
+}  // namespace chatterlab

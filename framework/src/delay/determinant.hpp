@@ -10,17 +10,19 @@
 
 namespace chatterlab::delay_detail {
 
-// Storage for `size` complex numbers: on the stack up to N, else on the heap.
+// Storage for `size` complex numbers: on the stack up to N, else on the heap. Left uninitialised
+// (callers write before they read): a std::array<Complex, N> would zero-fill N complex numbers on
+// every evaluation.
 template <std::size_t N>
 class Scratch {
  public:
   explicit Scratch(std::size_t size) {
     if (size > N) heap_.resize(size);
   }
-  Complex* data() { return heap_.empty() ? stack_.data() : heap_.data(); }
+  Complex* data() { return heap_.empty() ? reinterpret_cast<Complex*>(stack_) : heap_.data(); }
 
  private:
-  std::array<Complex, N> stack_;
+  alignas(Complex) unsigned char stack_[N * sizeof(Complex)];
   std::vector<Complex> heap_;
 };
 

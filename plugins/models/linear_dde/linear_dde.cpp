@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "chatterlab/complex_determinant.hpp"
 #include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/param_table.hpp"
@@ -41,70 +42,6 @@ class Scratch {
 
 // log z without clog's extra-precision path (z is finite and nonzero here).
 Complex logarithm(Complex z) { return {0.5 * std::log(std::norm(z)), std::arg(z)}; }
-
-// Gaussian elimination with partial pivoting of a (row-major n x n), in place: a becomes U above
-// the diagonal; the same row operations are applied to `rhs` (n x n, may be null), which becomes
-// L^{-1} P rhs. Returns det(a), or 0 when a pivot is exactly 0 (then a is left half reduced).
-Complex eliminate(Complex* a, Complex* rhs, std::size_t n) {
-  Complex det = 1.0;
-  for (std::size_t col = 0; col < n; ++col) {
-    std::size_t pivot = col;
-    for (std::size_t r = col + 1; r < n; ++r)
-      if (std::norm(a[r * n + col]) > std::norm(a[pivot * n + col])) pivot = r;
-    if (a[pivot * n + col] == Complex(0.0)) return 0.0;
-    if (pivot != col) {
-      std::swap_ranges(a + col * n, a + col * n + n, a + pivot * n);
-      if (rhs) std::swap_ranges(rhs + col * n, rhs + col * n + n, rhs + pivot * n);
-      det = -det;
-    }
-    const Complex p = a[col * n + col];
-    det *= p;
-    for (std::size_t r = col + 1; r < n; ++r) {
-      const Complex f = a[r * n + col] / p;
-      for (std::size_t c = col + 1; c < n; ++c) a[r * n + c] -= f * a[col * n + c];
-      if (rhs)
-        for (std::size_t c = 0; c < n; ++c) rhs[r * n + c] -= f * rhs[col * n + c];
-    }
-  }
-  return det;
-}
-
-Complex determinant(Complex* a, std::size_t n) { return eliminate(a, nullptr, n); }
-
-// det(M) and d det(M) = det(M) tr(M^{-1} dM) (Jacobi) for n >= 3. m, dm row-major, destroyed;
-// `scratch` holds 3 n^2 entries.
-CharacteristicValue determinant_and_derivative(Complex* m, Complex* dm, Complex* scratch,
-                                               std::size_t n) {
-  const std::size_t nn = n * n;
-  Complex* m_original = scratch;        // kept for the singular fallback
-  Complex* dm_original = scratch + nn;
-  Complex* work = scratch + 2 * nn;
-  std::copy(m, m + nn, m_original);
-  std::copy(dm, dm + nn, dm_original);
-  const Complex det = eliminate(m, dm, n);
-  const bool singular = det == Complex(0.0);
-  if (!singular) {
-    // Back substitution U X = L^{-1} P dM column by column; tr X = tr(M^{-1} dM).
-    Complex trace = 0.0;
-    for (std::size_t c = 0; c < n; ++c) {
-      for (std::size_t r = n; r-- > 0;) {
-        Complex v = dm[r * n + c];
-        for (std::size_t k = r + 1; k < n; ++k) v -= m[r * n + k] * dm[k * n + c];
-        dm[r * n + c] = v / m[r * n + r];
-      }
-      trace += dm[c * n + c];
-    }
-    return {det, det * trace};
-  }
-  // Exactly singular M (s is an exact root): d det = sum_j det(M with column j taken from dM).
-  Complex derivative = 0.0;
-  for (std::size_t j = 0; j < n; ++j) {
-    std::copy(m_original, m_original + nn, work);
-    for (std::size_t r = 0; r < n; ++r) work[r * n + j] = dm_original[r * n + j];
-    derivative += determinant(work, n);
-  }
-  return {0.0, derivative};
-}
 
 double induced_norm(const std::vector<double>& a, std::size_t n, bool by_rows) {
   double worst = 0.0;
@@ -215,14 +152,14 @@ CharacteristicValue LinearDdeCharacteristic::evaluate(Complex s) const {
     return {m[0] * m[3] - m[1] * m[2], dm[0] * m[3] + m[0] * dm[3] - dm[1] * m[2] - m[1] * dm[2]};
   }
   const std::size_t nn = n_ * n_;
-  Scratch<5 * 36> storage(5 * nn);  // M, M' and the 3 n^2 scratch of the general path
+  Scratch<2 * 36> storage(2 * nn);  // M and M'; no allocation up to 6 x 6
   Complex* m = storage.data();
   Complex* dm = m + nn;
   fill(s, m, dm, delays_.size());
   switch (n_) {
     case 1: return {m[0], dm[0]};
     case 2: return {m[0] * m[3] - m[1] * m[2], dm[0] * m[3] + m[0] * dm[3] - dm[1] * m[2] - m[1] * dm[2]};
-    default: return determinant_and_derivative(m, dm, m + 2 * nn, n_);
+    default: return complex_determinant_and_derivative(m, dm, n_);
   }
 }
 
@@ -250,7 +187,7 @@ void LinearDdeCharacteristic::chain_factors(Complex s, std::vector<Complex>& roo
     std::vector<Complex> work(nn), values(points);
     for (std::size_t j = 0; j < points; ++j) {
       for (std::size_t i = 0; i < nn; ++i) work[i] = base[i] - a[i] * unit_roots_[j];
-      values[j] = determinant(work.data(), n_);
+      values[j] = complex_determinant(work.data(), n_);
     }
     for (std::size_t k = 0; k < points; ++k) {
       Complex c = 0.0;
