@@ -16,36 +16,24 @@
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "study_run_bench.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
 
-fs::path source(const std::string& relative) { return fs::path(CHATTERLAB_SOURCE_DIR) / relative; }
+using chatterlab::bench::source_path;
 
 void run(benchmark::State& state, const chatterlab::Study& study, const std::string& name) {
-  chatterlab::RunOptions options;
-  options.out_dir = fs::temp_directory_path() / ("chatterlab_floquet_bench_" + name);
-  options.threads = 2;
-  options.progress = false;
-  options.plots = false;
-  double points = 0;
-  for (auto _ : state) {
-    const chatterlab::RunSummary summary = chatterlab::run_study(study, options);
-    if (summary.failed > 0) state.SkipWithError("grid points failed");
-    points += static_cast<double>(summary.points);
-  }
-  state.counters["points"] = points;
-  state.counters["points_per_s"] = benchmark::Counter(points, benchmark::Counter::kIsRate);
+  chatterlab::bench::run_study_iterations(state, study, "floquet_" + name, 2);
 }
 
 void BM_FloquetMap(benchmark::State& state) {
-  run(state, chatterlab::load_study(source("studies/floquet_wheel_speed.toml")), "floquet");
+  run(state, chatterlab::load_study(source_path("studies/floquet_wheel_speed.toml")), "floquet");
 }
 
 // The simulated map on the Floquet map's grid: the shape axis fixed to sinusoidal.
 void BM_SimulatedMapSameGrid(benchmark::State& state) {
-  chatterlab::Study study = chatterlab::load_study(source("studies/suppression_wheel_speed.toml"));
+  chatterlab::Study study = chatterlab::load_study(source_path("studies/suppression_wheel_speed.toml"));
   for (auto& axis : study.grid)
     if (axis.key == "suppression.shape") axis.values = {chatterlab::Json("sinusoidal")};
   run(state, study, "simulated");
@@ -53,7 +41,7 @@ void BM_SimulatedMapSameGrid(benchmark::State& state) {
 
 // One Floquet point (a = 0.05): its period sets the steps, the delay the monodromy's dimension.
 void BM_FloquetPoint(benchmark::State& state) {
-  const chatterlab::Study study = chatterlab::load_study(source("studies/floquet_wheel_speed.toml"));
+  const chatterlab::Study study = chatterlab::load_study(source_path("studies/floquet_wheel_speed.toml"));
   const auto kind = chatterlab::study_kind_registry().at("stability_map").create(chatterlab::ParamValues());
   chatterlab::Json point = study.point_document(0);
   point["suppression"]["amplitude_ratio"] = 0.05;

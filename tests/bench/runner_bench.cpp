@@ -13,6 +13,7 @@
 
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
+#include "study_run_bench.hpp"
 
 namespace {
 
@@ -50,26 +51,13 @@ const chatterlab::Study& study(const fs::path& file) {
 }
 
 void run_grid(benchmark::State& state, const std::string& name, const fs::path& file) {
-  const chatterlab::Study& s = study(file);
-  chatterlab::RunOptions options;
-  options.out_dir = bench_dir() / ("out_" + name);
-  options.threads = static_cast<int>(state.range(0));
-  options.progress = false;
-  options.plots = false;
-  double points = 0;
-  for (auto _ : state) {
-    chatterlab::RunSummary summary = chatterlab::run_study(s, options);
-    if (summary.failed > 0) state.SkipWithError("grid points failed");
-    points += static_cast<double>(summary.points);
-  }
-  state.counters["points_per_s"] = benchmark::Counter(points, benchmark::Counter::kIsRate);
-  state.counters["threads"] = static_cast<double>(options.threads);
+  chatterlab::bench::run_study_iterations(state, study(file), "runner_" + name, static_cast<int>(state.range(0)));
 }
 
 // MODELS.md G1 at grinding scale: work period Tw = 60/55 s against the 305.6 Hz mode's 3.3 ms
 // (ratio ~330); work 40..70 rpm x wheel 1300..1600 rpm, 15 x 20 points (the CLI resume study).
 void BM_StabilityMapPlunge(benchmark::State& state) {
-  run_grid(state, "plunge", fs::path(CHATTERLAB_SOURCE_DIR) / "tests/cli/studies/resume_grid.toml");
+  run_grid(state, "plunge", chatterlab::bench::source_path("tests/cli/studies/resume_grid.toml"));
 }
 void BM_StabilityMapLinearDde(benchmark::State& state) {
   fs::path file = bench_dir() / "linear_dde.toml";

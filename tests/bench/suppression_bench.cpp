@@ -13,33 +13,21 @@
 #include "chatterlab/runner.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "study_run_bench.hpp"
 
 namespace {
 
-namespace fs = std::filesystem;
 
-fs::path source(const std::string& relative) { return fs::path(CHATTERLAB_SOURCE_DIR) / relative; }
+using chatterlab::bench::source_path;
 
 void BM_SuppressionMapStudy(benchmark::State& state, const std::string& name) {
-  const chatterlab::Study study = chatterlab::load_study(source("studies/" + name + ".toml"));
-  chatterlab::RunOptions options;
-  options.out_dir = fs::temp_directory_path() / ("chatterlab_suppression_bench_" + name);
-  options.threads = 2;
-  options.progress = false;
-  options.plots = false;
-  double points = 0;
-  for (auto _ : state) {
-    const chatterlab::RunSummary summary = chatterlab::run_study(study, options);
-    if (summary.failed > 0) state.SkipWithError("grid points failed");
-    points += static_cast<double>(summary.points);
-  }
-  state.counters["points"] = points;
-  state.counters["points_per_s"] = benchmark::Counter(points, benchmark::Counter::kIsRate);
+  const chatterlab::Study study = chatterlab::load_study(source_path("studies/" + name + ".toml"));
+  chatterlab::bench::run_study_iterations(state, study, "suppression_" + name, 2);
 }
 
 // One point of the wheel-speed map (a = 0.1, 1 Hz sinusoidal, 50 revolutions), caches warm.
 void BM_SuppressionPoint(benchmark::State& state) {
-  const chatterlab::Study study = chatterlab::load_study(source("studies/suppression_wheel_speed.toml"));
+  const chatterlab::Study study = chatterlab::load_study(source_path("studies/suppression_wheel_speed.toml"));
   const auto kind = chatterlab::study_kind_registry().at("suppression_map").create(chatterlab::ParamValues());
   chatterlab::Json point = study.point_document(0);
   point["suppression"]["amplitude_ratio"] = 0.1;
