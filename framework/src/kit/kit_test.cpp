@@ -2,6 +2,7 @@
 // the struct), validation messages, reading and writing; axis labels from key names.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <vector>
@@ -185,6 +186,32 @@ TEST(KitPlots, AxisLabelsAreWordsWithTheUnitOfTheKeySuffix) {
   EXPECT_EQ(kit::axis_label("penetration_damping_n_s_per_m"), "penetration damping [N s/m]");
   EXPECT_EQ(kit::axis_label("waviness_um"), "waviness [µm]");
   EXPECT_EQ(kit::axis_label("seed"), "seed");
+}
+
+TEST(KitPlots, DecimationKeepsEachBucketsExtremesInOrder) {
+  // 100,000 samples of a small ripple with a three-sample spike that an every-n-th-sample
+  // thinning at stride 20 would miss (it starts at an odd index): min/max per bucket keeps it.
+  const std::size_t n = 100000;
+  std::vector<double> x(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = 0.5 * static_cast<double>(i);
+    y[i] = (i % 7 == 0 ? 0.1 : -0.1) + (i >= 61237 && i < 61240 ? 3.0 : 0.0);
+  }
+  const plot::Series s = kit::decimated("profile", x, y, 5000);
+  ASSERT_LE(s.x.size(), 2 * 5000u);
+  EXPECT_GE(s.x.size(), 5000u);
+  const auto peak = std::max_element(s.y.begin(), s.y.end());
+  EXPECT_DOUBLE_EQ(*peak, 2.9);  // -0.1 + 3: no spike sample is a multiple of 7
+  EXPECT_DOUBLE_EQ(*std::min_element(s.y.begin(), s.y.end()), -0.1);
+  for (std::size_t k = 1; k < s.x.size(); ++k) ASSERT_LT(s.x[k - 1], s.x[k]) << "not in time order at " << k;
+  // The accessor form evaluates the same points as the vector form.
+  const plot::Series lazy = kit::decimated("profile", n, [&](std::size_t i) { return x[i]; },
+                                           [&](std::size_t i) { return y[i]; }, 5000);
+  EXPECT_EQ(lazy.x, s.x);
+  EXPECT_EQ(lazy.y, s.y);
+  // A short series is drawn whole.
+  EXPECT_EQ(kit::decimated("short", std::vector<double>{0, 1, 2}, std::vector<double>{5, 4, 6}, 5000).y,
+            (std::vector<double>{5, 4, 6}));
 }
 
 }  // namespace

@@ -253,22 +253,8 @@ void plot_column(const std::vector<PlotAxis>& axes, const ResultTable& results,
 
 plot::Series decimated(std::string label, const std::vector<double>& x, const std::vector<double>& y,
                        std::size_t buckets) {
-  plot::Series s{std::move(label), {}, {}, "lines"};
-  const std::size_t n = x.size();
-  const std::size_t per = std::max<std::size_t>(1, n / buckets);
-  for (std::size_t i = 0; i < n; i += per) {
-    std::size_t end = std::min(n, i + per), lo = i, hi = i;
-    for (std::size_t j = i; j < end; ++j) {
-      if (y[j] < y[lo]) lo = j;
-      if (y[j] > y[hi]) hi = j;
-    }
-    for (std::size_t j : {std::min(lo, hi), std::max(lo, hi)}) {
-      s.x.push_back(x[j]);
-      s.y.push_back(y[j]);
-      if (lo == hi) break;
-    }
-  }
-  return s;
+  return decimated(std::move(label), x.size(), [&](std::size_t i) { return x[i]; },
+                   [&](std::size_t i) { return y[i]; }, buckets);
 }
 
 }  // namespace chatterlab::kit

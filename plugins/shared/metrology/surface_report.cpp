@@ -8,6 +8,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/fft.hpp"
+#include "chatterlab/kit/plots.hpp"
 #include "chatterlab/plot.hpp"
 #include "shared/metrology/waviness.hpp"
 
@@ -27,14 +28,6 @@ ParamSpec positive(ParamSpec s) {
   s.min = 0.0;
   s.min_exclusive = true;
   return s;
-}
-
-// value(i) for i = 0, stride, 2 stride, ... < n.
-template <class Value>
-std::vector<double> every(std::size_t n, std::size_t stride, Value&& value) {
-  std::vector<double> out;
-  for (std::size_t i = 0; i < n; i += stride) out.push_back(value(i));
-  return out;
 }
 
 }  // namespace
@@ -229,27 +222,28 @@ void check_uniform(const DataTable& table, const std::string& x_column, const So
 
 void plot_profiles(const SurfaceEvaluation& e, bool closed, const std::string& title,
                    const fs::path& dir) {
-  const std::size_t n = e.samples(), stride = std::max<std::size_t>(1, n / 20000);
+  // Min/max per bucket (kit::decimated), so a short wave or a spike in a long profile stays
+  // visible; at most ~20,000 points per curve.
+  const std::size_t n = e.samples(), buckets = 10000;
+  const auto x_at = [&](std::size_t i) { return e.position(i); };
   const std::string x_label = closed ? "angle [deg]" : "x [mm]";
-  const auto x = every(n, stride, [&](std::size_t i) { return e.position(i); });
   plot::Curves profile;
   profile.title = title + ": profile and waviness (filter mean line)";
   profile.x_label = x_label;
   profile.y_label = "height [um]";
-  profile.series.push_back({"profile", x, every(n, stride, [&](std::size_t i) { return e.profile_um[i]; }), "lines"});
+  profile.series.push_back(kit::decimated("profile", n, x_at, [&](std::size_t i) { return e.profile_um[i]; }, buckets));
   const Json& filter = e.summary.at("filter");
   const std::string cutoff = filter.contains("cutoff_upr")
                                  ? fmt::format("{} UPR", filter["cutoff_upr"].get<double>())
                                  : fmt::format("lc = {} mm", filter["cutoff_mm"].get<double>());
-  profile.series.push_back({fmt::format("waviness ({} filter, {})",
-                                        filter["type"].get<std::string>(), cutoff),
-                            x, every(n, stride, [&](std::size_t i) { return e.waviness_um[i]; }), "lines"});
+  profile.series.push_back(kit::decimated(fmt::format("waviness ({} filter, {})", filter["type"].get<std::string>(), cutoff),
+                                          n, x_at, [&](std::size_t i) { return e.waviness_um[i]; }, buckets));
   plot::render(profile, dir, "profile");
   plot::Curves roughness;
   roughness.title = title + ": roughness (profile - waviness)";
   roughness.x_label = x_label;
   roughness.y_label = "roughness [um]";
-  roughness.series.push_back({"roughness", x, every(n, stride, [&](std::size_t i) { return e.roughness_um(i); }), "lines"});
+  roughness.series.push_back(kit::decimated("roughness", n, x_at, [&](std::size_t i) { return e.roughness_um(i); }, buckets));
   roughness.reference_y = 0.0;
   roughness.reference_label = "mean line";
   plot::render(roughness, dir, "roughness");

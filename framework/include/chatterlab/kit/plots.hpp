@@ -107,8 +107,36 @@ void plot_measured_machine(const MeasuredMachine& machine, const std::string& ti
                            const std::filesystem::path& out_dir, Figures& figures);
 
 // At most ~2 x buckets points of a long series, for a plot: the minimum and maximum of each
-// bucket in time order, so the envelope of a fast oscillation stays visible.
+// bucket in time order, so the envelope of a fast oscillation stays visible (taking every n-th
+// sample instead would let a short wave or a spike vanish from the picture).
 plot::Series decimated(std::string label, const std::vector<double>& x, const std::vector<double>& y,
                        std::size_t buckets = 2000);
+
+// The same for a series given by accessors x_at(i), y_at(i), i < n, evaluated once per sample,
+// for series that are computed on the fly (a profile of 10^7 samples is not copied to be drawn).
+template <class XAt, class YAt>
+plot::Series decimated(std::string label, std::size_t n, XAt&& x_at, YAt&& y_at,
+                       std::size_t buckets = 2000) {
+  plot::Series s{std::move(label), {}, {}, "lines"};
+  const std::size_t per = n / buckets > 1 ? n / buckets : 1;
+  for (std::size_t i = 0; i < n; i += per) {
+    const std::size_t end = i + per < n ? i + per : n;
+    std::size_t lo = i, hi = i;
+    double y_lo = y_at(i), y_hi = y_lo;
+    for (std::size_t j = i + 1; j < end; ++j) {
+      const double y = y_at(j);
+      if (y < y_lo) lo = j, y_lo = y;
+      if (y > y_hi) hi = j, y_hi = y;
+    }
+    const bool lo_first = lo <= hi;
+    s.x.push_back(x_at(lo_first ? lo : hi));
+    s.y.push_back(lo_first ? y_lo : y_hi);
+    if (lo != hi) {
+      s.x.push_back(x_at(lo_first ? hi : lo));
+      s.y.push_back(lo_first ? y_hi : y_lo);
+    }
+  }
+  return s;
+}
 
 }  // namespace chatterlab::kit
