@@ -534,10 +534,15 @@ std::vector<std::string> doubts_about(double median, const Estimate& head,
 
 // The linear region of the selected curve closest to the median, in samples.
 std::string central_region(const CurveSet& set, const ScanPlan& plan, double median) {
+  // With an even number of slopes the median lies halfway between the two middle ones, so two
+  // curves are equally close; their slopes differ in the last bits with the threads' summation
+  // order. Closeness within 1e-9 relative counts as a tie, and a tie keeps the curve that comes
+  // first (smallest dimension, then size), so the text is the same on every run.
+  const double tie = 1e-9 * std::max(std::abs(median), 1e-300);
   const CurveResult* central = nullptr;
   for (const auto& c : set.kantz)
     if (c.selected &&
-        (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median)))
+        (!central || std::abs(c.fit.slope - median) < std::abs(central->fit.slope - median) - tie))
       central = &c;
   return fmt::format("samples {:.0f}-{:.0f}", double(central->fit.begin * plan.stride),
                      double((central->fit.end - 1) * plan.stride));
