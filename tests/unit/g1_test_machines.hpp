@@ -8,8 +8,9 @@
 namespace chatterlab::testing {
 
 // The reference G1 grinder of studies/stability_chart.toml and
-// studies/simulate_regeneration_dominance.toml: one 250 Hz mode; the rightmost root grows at
-// 4.79 /s (plunge_regenerative).
+// studies/simulate_regeneration_dominance.toml (reference_g1_case() of
+// models/plunge_regenerative/plunge_time_domain.hpp as a table): one 250 Hz mode; the rightmost
+// root grows at 4.79 /s (plunge_regenerative).
 inline constexpr const char* g1_reference_machine = R"(wheel_speed_rpm = 1450
 work_speed_rpm = 55
 contact_stiffness_n_per_m = 1.0e8
