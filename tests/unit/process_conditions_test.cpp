@@ -14,6 +14,7 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/process_conditions.hpp"
 #include "chatterlab/study.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -22,14 +23,8 @@ namespace {
 // feed_risk's test model (one mode, wheel chain off) with both regenerations on.
 Json model_table(const std::string& type, const std::string& extra = "") {
   testing::TempDir dir;
-  const std::string text = "[study]\nkind = \"stability_map\"\n[model]\ntype = \"" + type + R"("
-wheel_speed_rpm = 1450
-work_speed_rpm = 300
-contact_stiffness_n_per_m = 2.0e7
-wheel_wear_stiffness_n_per_m = 2.0e9
-work_removal_stiffness_n_per_m = 1.6e6
-modes = [ { frequency_hz = 150.0, damping_ratio = 0.03, stiffness_n_per_m = 2.0e7 } ]
-)" + extra;
+  const std::string text =
+      "[study]\nkind = \"stability_map\"\n" + testing::model_table_toml(type, testing::g1_feed_risk_machine, extra);
   return load_study(dir.write("m.toml", text)).document["model"];
 }
 

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <optional>
 
+#include "chatterlab/delay_chains.hpp"
 #include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "delay/determinant.hpp"
@@ -241,74 +242,28 @@ void DelayCharacteristic::Impl::neutral_lattice_guesses(double omega, std::vecto
 
 void DelayCharacteristic::Impl::retarded_chain_guesses(double omega, std::vector<Complex>& guesses) const {
   if (!retarded_longest || retarded_degree == 0) return;
-  // Retarded chains of the longest retarded delay tau (the method linear_dde introduced): a root
-  // satisfies z = e^{-tau s} with z a root of det(M0(s) - C z), a polynomial of degree <= rank C
-  // (M0: Delta without that delay's term), i.e. s = (2 pi j m - Log z(s)) / tau. For large tau the
-  // right side varies slowly with s: one fixed-point step from the lattice point lands next to the
-  // root of chain m, and Newton on E finishes. One guess per root of the band.
+  // Retarded chains of the longest retarded delay tau (the method linear_dde introduced;
+  // chatterlab/delay_chains.hpp): the chain factors are the roots z of det(M0(s) - C z), a
+  // polynomial of degree <= rank C (M0: Delta without that delay's term). One guess per root of
+  // the band, from one fixed-point step.
   const std::size_t k = *retarded_longest, n = dense.size(), nn = n * n;
   const double tau = reduced.delays[k];
   const std::size_t points = retarded_degree + 1;
-  std::vector<Complex> unit(points);
-  for (std::size_t j = 0; j < points; ++j)
-    unit[j] = std::polar(1.0, kTwoPi * static_cast<double>(j) / static_cast<double>(points));
+  const std::vector<Complex> unit = unit_roots(points);
   std::vector<Complex> base(nn), coefficient(nn), work(nn), values(points), poly(points);
-  auto chain_factors = [&](Complex s, std::vector<Complex>& roots) {
-    roots.clear();
+  const ChainFactors chain_factors = [&](Complex s, std::vector<Complex>& roots) {
     dense.fill(s, base.data(), nullptr, k);
     dense.delayed_coefficient(k, s, coefficient.data());
-    // Values at the roots of unity, then the inverse discrete Fourier transform (exact for a
-    // polynomial of degree < points).
+    // Values at the roots of unity, then the coefficients (exact for a polynomial of degree <
+    // points).
     for (std::size_t j = 0; j < points; ++j) {
       for (std::size_t i = 0; i < nn; ++i) work[i] = base[i] - coefficient[i] * unit[j];
       values[j] = delay_detail::determinant(work.data(), n);
     }
-    double largest = 0.0;
-    for (std::size_t p = 0; p < points; ++p) {
-      Complex c = 0.0;
-      for (std::size_t j = 0; j < points; ++j) c += values[j] * std::conj(unit[(j * p) % points]);
-      poly[p] = c / static_cast<double>(points);
-      largest = std::max(largest, std::norm(poly[p]));
-    }
-    std::size_t degree = points - 1;
-    while (degree > 0 && std::norm(poly[degree]) <= 1e-24 * largest) --degree;
-    if (degree == 1) {
-      roots.push_back(-poly[0] / poly[1]);
-    } else if (degree == 2) {
-      const Complex b = poly[1], disc = std::sqrt(b * b - 4.0 * poly[2] * poly[0]);
-      const Complex q = -0.5 * (b + ((std::conj(b) * disc).real() >= 0.0 ? disc : -disc));
-      if (q != Complex(0.0)) roots = {q / poly[2], poly[0] / q};
-    } else if (degree > 2) {
-      const auto d = static_cast<Index>(degree);
-      Eigen::MatrixXcd companion = Eigen::MatrixXcd::Zero(d, d);
-      for (Index i = 0; i < d; ++i) {
-        companion(0, i) = -poly[degree - 1 - static_cast<std::size_t>(i)] / poly[degree];
-        if (i + 1 < d) companion(i + 1, i) = 1.0;
-      }
-      Eigen::ComplexEigenSolver<Eigen::MatrixXcd> solver(companion, false);
-      if (solver.info() == Eigen::Success)
-        for (const auto& z : solver.eigenvalues()) roots.push_back(z);
-    }
-    std::erase_if(roots, [](Complex z) { return !(std::norm(z) > 0.0) || !std::isfinite(std::norm(z)); });
+    coefficients_from_unit_root_values(values, unit, poly);
+    nonzero_polynomial_roots(poly, roots);
   };
-  const long lattice_points = static_cast<long>(omega * tau / kTwoPi) + 2;
-  std::vector<Complex> start_factors, factors;
-  for (long m = 0; m < lattice_points; ++m) {
-    const Complex lattice(0.0, kTwoPi * static_cast<double>(m));
-    chain_factors(lattice / tau, start_factors);
-    for (Complex z : start_factors) {
-      Complex s = (lattice - logarithm(z)) / tau;
-      chain_factors(s, factors);
-      if (!factors.empty()) {
-        // Follow the same chain: the factor nearest the previous one (relative distance).
-        z = *std::min_element(factors.begin(), factors.end(), [&](Complex p, Complex q) {
-          return std::norm(p / z - 1.0) < std::norm(q / z - 1.0);
-        });
-        s = (lattice - logarithm(z)) / tau;
-      }
-      if (std::isfinite(s.real()) && std::isfinite(s.imag())) guesses.push_back(s);
-    }
-  }
+  append_chain_guesses(tau, omega, 1, chain_factors, guesses);
 }
 
 // ------------------------------------------------------------------ public class

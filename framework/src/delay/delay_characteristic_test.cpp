@@ -17,6 +17,7 @@
 #include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/roots.hpp"
+#include "unit/root_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -25,30 +26,9 @@ using Eigen::MatrixXd;
 using LongComplex = std::complex<long double>;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-using ScalarFunction = std::function<std::pair<LongComplex, LongComplex>(LongComplex)>;
-
-std::optional<LongComplex> long_double_newton(const ScalarFunction& f, LongComplex s) {
-  for (int i = 0; i < 100; ++i) {
-    auto [value, derivative] = f(s);
-    const LongComplex step = value / derivative;
-    s -= step;
-    if (!std::isfinite(static_cast<double>(std::abs(s)))) return std::nullopt;
-    if (std::abs(step) <= 1e-18L * std::max(std::abs(s), 1.0L)) return s;
-  }
-  return std::nullopt;
-}
-
-LongComplex brute_force_rightmost(const ScalarFunction& f, double band, double re_min, double re_max, double step) {
-  std::optional<LongComplex> best;
-  for (double x = re_min; x <= re_max; x += step)
-    for (double y = 0.0; y <= band; y += step)
-      if (auto r = long_double_newton(f, LongComplex(x, y))) {
-        const LongComplex root(r->real(), std::abs(r->imag()));
-        if (root.imag() <= band && (!best || root.real() > best->real())) best = root;
-      }
-  if (!best) ADD_FAILURE() << "brute force found no root";
-  return best.value_or(0.0L);
-}
+using testing::brute_force_rightmost;
+using testing::long_double_newton;
+using testing::ScalarFunction;
 
 RightmostRoot rightmost(const CharacteristicFunction& e, double band_hz) {
   RootSearchOptions options;

@@ -36,7 +36,7 @@ CharacteristicValue determinant_and_derivative(Complex* m, Complex* dm, std::siz
     default: break;
   }
   const std::size_t nn = n * n;
-  Scratch<3 * 64> storage(3 * nn);
+  ComplexScratch<3 * 64> storage(3 * nn);
   Complex* m_original = storage.data();  // kept for the singular fallback
   Complex* dm_original = m_original + nn;
   Complex* work = m_original + 2 * nn;

@@ -7,24 +7,9 @@
 #include <vector>
 
 #include "chatterlab/characteristic.hpp"
+#include "chatterlab/complex_determinant.hpp"
 
 namespace chatterlab::delay_detail {
-
-// Storage for `size` complex numbers: on the stack up to N, else on the heap. Left uninitialised
-// (callers write before they read): a std::array<Complex, N> would zero-fill N complex numbers on
-// every evaluation.
-template <std::size_t N>
-class Scratch {
- public:
-  explicit Scratch(std::size_t size) {
-    if (size > N) heap_.resize(size);
-  }
-  Complex* data() { return heap_.empty() ? reinterpret_cast<Complex*>(stack_) : heap_.data(); }
-
- private:
-  alignas(Complex) unsigned char stack_[N * sizeof(Complex)];
-  std::vector<Complex> heap_;
-};
 
 // Gaussian elimination with partial pivoting of a (row-major n x n), in place: a becomes U above
 // the diagonal; the same row operations are applied to `rhs` (n x n, may be null), which becomes

@@ -90,7 +90,7 @@ void DenseEvaluator::delayed_coefficient(std::size_t k, Complex s, Complex* out)
 
 CharacteristicValue DenseEvaluator::operator()(Complex s) const {
   const std::size_t nn = n_ * n_;
-  Scratch<2 * 64> storage(2 * nn);
+  ComplexScratch<2 * 64> storage(2 * nn);
   Complex* m = storage.data();
   Complex* dm = m + nn;
   fill(s, m, dm);
@@ -265,7 +265,7 @@ std::optional<ModalEvaluator> ModalEvaluator::make(const ReducedSystem& s) {
 CharacteristicValue ModalEvaluator::operator()(Complex s) const {
   const std::size_t dd = d_ * d_, powers = delays_.size() + 1;
   // C_k = sum_i N_ik / (s - lambda_i) and D_k = sum_i N_ik / (s - lambda_i)^2 (minus C_k').
-  Scratch<4 * 16> storage(4 * dd * powers);
+  ComplexScratch<4 * 16> storage(4 * dd * powers);
   Complex* c = storage.data();
   Complex* dc = c + dd * powers;
   Complex* r = dc + dd * powers;

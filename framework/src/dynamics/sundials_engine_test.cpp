@@ -16,6 +16,7 @@
 #include "chatterlab/study.hpp"
 #include "dynamics/sundials_engine.hpp"
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
+#include "unit/g1_test_machines.hpp"
 
 namespace chatterlab {
 namespace {
@@ -102,18 +103,9 @@ TEST(SundialsChecks, ARefusedSetUpIsARecordedPointFailureOfAStudy) {
   const fs::path dir = fs::temp_directory_path() / "chatterlab_sundials_checks";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::ofstream(dir / "study.toml") << R"(
-[study]
-kind = "simulate"
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1450
-work_speed_rpm = 55
-contact_stiffness_n_per_m = 1e8
-wheel_wear_stiffness_n_per_m = 1e9
-work_removal_stiffness_n_per_m = 2e8
-modes = [{ frequency_hz = 250.0, damping_ratio = 0.05, stiffness_n_per_m = 5e7 }]
-[simulation]
+  std::ofstream(dir / "study.toml") << "[study]\nkind = \"simulate\"\n"
+                                     << testing::model_table_toml("plunge_regenerative", testing::g1_reference_machine)
+                                     << R"([simulation]
 duration_s = 0.05
 sample_rate_hz = 5000
 [grid]

@@ -477,10 +477,7 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
   out["kaplan_yorke_dimension"] = std::isfinite(g.kaplan_yorke) ? Json(g.kaplan_yorke) : Json();
   out["evolution_steps"] = fit.evolution_steps;
   out["neighbours"] = fit.neighbours_for(fit.dimension);
-  out["delay_samples"] = embedding.delay;
-  out["embedding_dimension"] = embedding.dimension;
-  out["theiler_window_samples"] = embedding.theiler;
-  out["embedding_source"] = embedding.source;
+  add_embedding_fields(out, embedding);
   return out;
 }
 

@@ -416,10 +416,7 @@ Json Surrogates::analyse(const SampledSeries& series, const Json& context) const
   };
   run_tests(x, s, std::uint64_t(params_.integer("seed")), error_of, tests);
   Json out = tests_json(tests, x.size());
-  out["delay_samples"] = embedding.delay;
-  out["embedding_dimension"] = embedding.dimension;
-  out["theiler_window_samples"] = embedding.theiler;
-  out["embedding_source"] = embedding.source;
+  add_embedding_fields(out, embedding);
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/complex_determinant.hpp"
+#include "chatterlab/delay_chains.hpp"
 #include "chatterlab/delay_system.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/param_table.hpp"
@@ -23,25 +24,6 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kSweepFraction = 0.5;
 // Fixed-point steps on the chain equation s = (2 pi j m - Log z(s)) / tau before Newton.
 constexpr int kChainFixedPointSteps = 1;
-
-// Storage for `size` complex numbers: on the stack up to N (no allocation per evaluation for small
-// systems), else on the heap. Left uninitialised (callers write before they read): a
-// std::array<Complex, N> zero-fills N complex numbers on every evaluation, 2.9 kB here.
-template <std::size_t N>
-class Scratch {
- public:
-  explicit Scratch(std::size_t size) {
-    if (size > N) heap_.resize(size);
-  }
-  Complex* data() { return heap_.empty() ? reinterpret_cast<Complex*>(stack_) : heap_.data(); }
-
- private:
-  alignas(Complex) unsigned char stack_[N * sizeof(Complex)];
-  std::vector<Complex> heap_;
-};
-
-// log z without clog's extra-precision path (z is finite and nonzero here).
-Complex logarithm(Complex z) { return {0.5 * std::log(std::norm(z)), std::arg(z)}; }
 
 double induced_norm(const std::vector<double>& a, std::size_t n, bool by_rows) {
   double worst = 0.0;
@@ -97,8 +79,7 @@ LinearDdeCharacteristic::LinearDdeCharacteristic(const LinearDdeParameters& p)
     norm_cols += induced_norm(a, n_, false);
   }
   norm_bound_ = std::min(norm_rows, norm_cols);
-  for (std::size_t j = 0; j <= n_; ++j)
-    unit_roots_.push_back(std::polar(1.0, kTwoPi * static_cast<double>(j) / static_cast<double>(n_ + 1)));
+  unit_roots_ = unit_roots(n_ + 1);
   if (!delays_.empty())
     longest_ = static_cast<std::size_t>(std::max_element(delays_.begin(), delays_.end()) - delays_.begin());
   // s = eigenvalue of A0 is exact for vanishing delayed terms; of A0 + sum A_k for vanishing
@@ -152,7 +133,7 @@ CharacteristicValue LinearDdeCharacteristic::evaluate(Complex s) const {
     return {m[0] * m[3] - m[1] * m[2], dm[0] * m[3] + m[0] * dm[3] - dm[1] * m[2] - m[1] * dm[2]};
   }
   const std::size_t nn = n_ * n_;
-  Scratch<2 * 36> storage(2 * nn);  // M and M'; no allocation up to 6 x 6
+  ComplexScratch<2 * 36> storage(2 * nn);  // M and M'; no allocation up to 6 x 6
   Complex* m = storage.data();
   Complex* dm = m + nn;
   fill(s, m, dm, delays_.size());
@@ -166,9 +147,8 @@ CharacteristicValue LinearDdeCharacteristic::evaluate(Complex s) const {
 void LinearDdeCharacteristic::chain_factors(Complex s, std::vector<Complex>& roots) const {
   // det(M0 - A z), M0 = sI - A0 - (the other delayed terms at s), A = the longest delay's matrix,
   // is a polynomial of degree <= n in z; its roots are the chains' values of z = e^{-tau s}.
-  roots.clear();
   const std::size_t nn = n_ * n_, points = n_ + 1;
-  Scratch<36 + 8> storage(nn + points);
+  ComplexScratch<36 + 8> storage(nn + points);
   Complex* base = storage.data();
   Complex* coefficients = base + nn;
   fill(s, base, nullptr, longest_);
@@ -189,69 +169,23 @@ void LinearDdeCharacteristic::chain_factors(Complex s, std::vector<Complex>& roo
       for (std::size_t i = 0; i < nn; ++i) work[i] = base[i] - a[i] * unit_roots_[j];
       values[j] = complex_determinant(work.data(), n_);
     }
-    for (std::size_t k = 0; k < points; ++k) {
-      Complex c = 0.0;
-      for (std::size_t j = 0; j < points; ++j) c += values[j] * std::conj(unit_roots_[(j * k) % points]);
-      coefficients[k] = c / static_cast<double>(points);
-    }
+    coefficients_from_unit_root_values({values.data(), points}, unit_roots_, {coefficients, points});
   }
-  // (Squared magnitudes throughout: std::abs on complex numbers is glibc's slow hypot.)
-  double largest = 0.0;
-  for (std::size_t k = 0; k < points; ++k) largest = std::max(largest, std::norm(coefficients[k]));
   // Degree = how far the delayed coupling reaches (rank of A for generic M0); rounding leaves
-  // tiny top coefficients.
-  std::size_t degree = points - 1;
-  while (degree > 0 && std::norm(coefficients[degree]) <= 1e-24 * largest) --degree;
-  if (degree == 1) {
-    roots.push_back(-coefficients[0] / coefficients[1]);
-  } else if (degree == 2) {
-    const Complex b = coefficients[1], disc = std::sqrt(b * b - 4.0 * coefficients[2] * coefficients[0]);
-    const Complex q = -0.5 * (b + ((std::conj(b) * disc).real() >= 0.0 ? disc : -disc));
-    if (q != Complex(0.0)) roots = {q / coefficients[2], coefficients[0] / q};
-  } else if (degree > 2) {
-    const auto d = static_cast<Eigen::Index>(degree);
-    Eigen::MatrixXcd companion = Eigen::MatrixXcd::Zero(d, d);
-    for (Eigen::Index i = 0; i < d; ++i) {
-      companion(0, i) = -coefficients[degree - 1 - static_cast<std::size_t>(i)] / coefficients[degree];
-      if (i + 1 < d) companion(i + 1, i) = 1.0;
-    }
-    Eigen::ComplexEigenSolver<Eigen::MatrixXcd> solver(companion, false);
-    if (solver.info() == Eigen::Success)
-      for (const auto& z : solver.eigenvalues()) roots.push_back(z);
-  }
-  std::erase_if(roots, [](Complex z) { return !(std::norm(z) > 0.0) || !std::isfinite(std::norm(z)); });
+  // tiny top coefficients, which nonzero_polynomial_roots does not count.
+  nonzero_polynomial_roots({coefficients, points}, roots);
 }
 
 void LinearDdeCharacteristic::initial_guesses(double max_angular_frequency,
                                               std::vector<Complex>& guesses) const {
   guesses.insert(guesses.end(), eigenvalues_.begin(), eigenvalues_.end());
   if (delays_.empty()) return;  // an ODE: the eigenvalues are the roots
-  // Retarded chains of the longest delay tau: a root satisfies z = e^{-tau s} with z a root of
-  // det(M0(s) - A z) (chain_factors), i.e. s = (2 pi j m - Log z(s)) / tau. For large tau the
-  // right side varies slowly with s, so a fixed-point step from the lattice point 2 pi j m / tau
-  // land next to the root of chain m; Newton on E finishes. One guess per root of the band.
+  // Retarded chains of the longest delay tau (chatterlab/delay_chains.hpp): the chain factors are
+  // the roots z of det(M0(s) - A z). One guess per root of the band.
   const double tau = delays_[longest_];
-  const long lattice_points = static_cast<long>(max_angular_frequency * tau / kTwoPi) + 2;
-  bool any_chain = false;
-  std::vector<Complex> start_factors, factors;
-  for (long m = 0; m < lattice_points; ++m) {
-    const Complex lattice(0.0, kTwoPi * static_cast<double>(m));
-    chain_factors(lattice / tau, start_factors);
-    for (Complex z : start_factors) {
-      Complex s = (lattice - logarithm(z)) / tau;
-      for (int step = 0; step < kChainFixedPointSteps; ++step) {
-        chain_factors(s, factors);
-        if (factors.empty()) break;
-        // Follow the same chain: the factor nearest the previous one (relative distance).
-        z = *std::min_element(factors.begin(), factors.end(), [&](Complex p, Complex q) {
-          return std::norm(p / z - 1.0) < std::norm(q / z - 1.0);
-        });
-        s = (lattice - logarithm(z)) / tau;
-      }
-      if (std::isfinite(s.real()) && std::isfinite(s.imag())) guesses.push_back(s);
-      any_chain = true;
-    }
-  }
+  const bool any_chain = append_chain_guesses(
+      tau, max_angular_frequency, kChainFixedPointSteps,
+      [this](Complex s, std::vector<Complex>& factors) { chain_factors(s, factors); }, guesses);
   if (any_chain) return;
   // No delayed coupling in the longest delay's matrix (all zero): sweep the axis instead.
   const double spacing = kSweepFraction * kTwoPi / tau;

@@ -17,6 +17,7 @@
 #include "chatterlab/registry.hpp"
 #include "chatterlab/roots.hpp"
 #include "models/linear_dde/linear_dde.hpp"
+#include "unit/root_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -26,32 +27,10 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // ---------------------------------------------------------------- independent references
 
-// A scalar quasi-polynomial f(s) and f'(s) in long double (64-bit mantissa, ~1e-19).
-using ScalarFunction = std::function<std::pair<LongComplex, LongComplex>(LongComplex)>;
-
-std::optional<LongComplex> long_double_newton(const ScalarFunction& f, LongComplex s) {
-  for (int i = 0; i < 100; ++i) {
-    auto [value, derivative] = f(s);
-    LongComplex step = value / derivative;
-    s -= step;
-    if (!std::isfinite(static_cast<double>(std::abs(s)))) return std::nullopt;
-    if (std::abs(step) <= 1e-18L * std::abs(s)) return s;
-  }
-  return std::nullopt;
-}
-
-// Rightmost root with 0 <= Im s <= band by brute force: Newton from a dense grid of starts.
-LongComplex brute_force_rightmost(const ScalarFunction& f, double band, double re_min, double re_max) {
-  std::optional<LongComplex> best;
-  for (double x = re_min; x <= re_max; x += 0.05)
-    for (double y = 0.0; y <= band; y += 0.05)
-      if (auto r = long_double_newton(f, LongComplex(x, y))) {
-        LongComplex root(r->real(), std::abs(r->imag()));
-        if (root.imag() <= band && (!best || root.real() > best->real())) best = root;
-      }
-  if (!best) ADD_FAILURE() << "brute force found no root";
-  return best.value_or(0.0L);
-}
+// Scalar quasi-polynomials f(s), f'(s) in long double and their brute-force roots.
+using testing::brute_force_rightmost;
+using testing::long_double_newton;
+using testing::ScalarFunction;
 
 // x'' + 2 zeta x' + x = -sum_k K_k (x - x(t - tau_k)): f(s) = s^2 + 2 zeta s + 1 + sum K_k
 // - sum K_k e^{-tau_k s}.

@@ -16,6 +16,7 @@
 #include "chatterlab/registry.hpp"
 #include "chatterlab/roots.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "models/plunge_regenerative/plunge_time_domain.hpp"
 
 namespace chatterlab {
 namespace {
@@ -23,21 +24,8 @@ namespace {
 using LongComplex = std::complex<long double>;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// MODELS.md G8: M1432 grinder, wheel 1450 rpm, work 55 rpm, seven measured modal frequencies.
-// Modal stiffness/damping are not published: assumed 2e8 N/m and 5 % for every mode.
-PlungeRegenerativeParameters g8(double contact_stiffness) {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = contact_stiffness;
-  p.wheel_wear_stiffness_n_per_m = 5.0e9;
-  p.work_removal_stiffness_n_per_m = 5.0e7;
-  for (double f : {67.56, 102.44, 184.08, 221.11, 255.01, 275.05, 305.60}) p.modes.push_back({f, 0.05, 2.0e8});
-  return p;
-}
-
 PlungeRegenerativeParameters single_mode(double contact_stiffness) {
-  PlungeRegenerativeParameters p = g8(contact_stiffness);
+  PlungeRegenerativeParameters p = g8_assumed_modes(contact_stiffness);
   p.modes = {{184.08, 0.05, 5.0e7}};
   return p;
 }
@@ -106,7 +94,7 @@ std::complex<double> compliance(const PlungeRegenerativeParameters& p, double w)
 
 TEST(PlungeRegenerative, RootsMatchLongDoubleNewtonOnEquation2_16) {
   for (double kc : {1e6, 1e7, 1e8}) {
-    PlungeRegenerativeParameters p = g8(kc);
+    PlungeRegenerativeParameters p = g8_assumed_modes(kc);
     RightmostRoot found = rightmost(p);
     ASSERT_TRUE(found.certified) << found.certificate;
     LongComplex reference = polish(p, found.root);
@@ -121,7 +109,7 @@ TEST(PlungeRegenerative, RootsMatchLongDoubleNewtonOnEquation2_16) {
 }
 
 TEST(PlungeRegenerative, DerivativeAndConjugateSymmetry) {
-  PlungeCharacteristic e(g8(1e7));
+  PlungeCharacteristic e(g8_assumed_modes(1e7));
   for (Complex s : {Complex(-0.01, 1366.0), Complex(0.5, 300.0), Complex(-2.0, 2400.0)}) {
     CharacteristicValue v = e.evaluate(s), c = e.evaluate(std::conj(s));
     EXPECT_LE(std::abs(c.value - std::conj(v.value)), 1e-14 * std::abs(v.value));
@@ -131,9 +119,9 @@ TEST(PlungeRegenerative, DerivativeAndConjugateSymmetry) {
     EXPECT_LE(std::abs(numeric - v.derivative), 1e-6 * std::abs(v.derivative)) << s;
   }
   // The reported root has Im >= 0 and its conjugate is a root too.
-  RightmostRoot found = rightmost(g8(1e7));
+  RightmostRoot found = rightmost(g8_assumed_modes(1e7));
   EXPECT_GE(found.root.imag(), 0.0);
-  LongComplex conjugate = polish(g8(1e7), std::conj(found.root));
+  LongComplex conjugate = polish(g8_assumed_modes(1e7), std::conj(found.root));
   EXPECT_LE(std::abs(Complex(static_cast<double>(conjugate.real()), static_cast<double>(conjugate.imag())) -
                      std::conj(found.root)),
             1e-9 * std::abs(found.root));
@@ -228,7 +216,7 @@ TEST(PlungeRegenerative, RightmostRootIsContinuousAcrossGridNeighbours) {
   // growth rates may differ only by what the step explains (no jumps from a missed root).
   std::vector<double> sigma;
   for (int i = 0; i <= 30; ++i) {
-    RightmostRoot found = rightmost(g8(3e7 * std::pow(1.01, i)));
+    RightmostRoot found = rightmost(g8_assumed_modes(3e7 * std::pow(1.01, i)));
     ASSERT_TRUE(found.certified) << found.certificate;
     sigma.push_back(found.root.real());
   }
@@ -245,7 +233,7 @@ TEST(PlungeRegenerative, RightmostRootIsContinuousAcrossGridNeighbours) {
 // ---------------------------------------------------------------- neutral roots, certificate
 
 TEST(PlungeRegenerative, NeutralRootsAreTheCommonLatticePoints) {
-  PlungeRegenerativeParameters p = g8(1e7);
+  PlungeRegenerativeParameters p = g8_assumed_modes(1e7);
   PlungeCharacteristic e(p);
   // 1450/55 = 290/11: wheel and work lattices meet every 11 * 1450/60 = 265.83 Hz.
   std::vector<Complex> neutral = e.neutral_roots(kTwoPi * 1000.0);
@@ -289,7 +277,7 @@ class GuessesBelow final : public CharacteristicFunction {
 };
 
 TEST(PlungeRegenerative, CertificateCatchesARootTheGuessesMissed) {
-  PlungeRegenerativeParameters p = g8(1e8);
+  PlungeRegenerativeParameters p = g8_assumed_modes(1e8);
   PlungeCharacteristic e(p);
   RightmostRoot truth = rightmost(p);
   ASSERT_TRUE(truth.certified) << truth.certificate;

@@ -26,6 +26,17 @@ PlungeRegenerativeParameters reference_g1_case() {
   return p;
 }
 
+PlungeRegenerativeParameters g8_assumed_modes(double contact_stiffness_n_per_m) {
+  PlungeRegenerativeParameters p;
+  p.wheel_speed_rpm = 1450.0;
+  p.work_speed_rpm = 55.0;
+  p.contact_stiffness_n_per_m = contact_stiffness_n_per_m;
+  p.wheel_wear_stiffness_n_per_m = 5.0e9;
+  p.work_removal_stiffness_n_per_m = 5.0e7;
+  for (double f : {67.56, 102.44, 184.08, 221.11, 255.01, 275.05, 305.60}) p.modes.push_back({f, 0.05, 2.0e8});
+  return p;
+}
+
 PlungeRegenerativeParameters g8_grinder() {
   PlungeRegenerativeParameters p;
   p.wheel_speed_rpm = 1450.0;

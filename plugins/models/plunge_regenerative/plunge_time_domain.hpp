@@ -39,6 +39,10 @@ PlungeRegenerativeParameters reference_g1_case();
 // the G8 grinder of studies/simulate_g8_chatter.toml: the seven measured modes (MODELS.md G8, 3 %
 // damping, stiffnesses of studies/default.toml), kc 2e8, kg 6.3e10, kw 2e7 N/m, 1450/55 rpm.
 PlungeRegenerativeParameters g8_grinder();
+// MODELS.md G8 as the root-finder tests assume it (modal stiffness and damping are not
+// published): the seven measured modes at 2e8 N/m and 5 % damping each, kg 5e9, kw 5e7 N/m,
+// 1450/55 rpm, contact stiffness kc as given.
+PlungeRegenerativeParameters g8_assumed_modes(double contact_stiffness_n_per_m);
 
 // G1's physics as templates over the scalar type (double for the dynamics engine, Dual for the
 // linearisation, chatterlab/derived_model.hpp): the contact law and the modal equations written

@@ -181,18 +181,12 @@ TEST(RightmostRootCrossCheck, RandomWorkOnlyAndBothChainCases) {
   EXPECT_GE(certified, 6);  // the honesty checks above ran on most cases
 }
 
-// MODELS.md G8 (M1432: 1450/55 rpm, seven measured modes; stiffness and damping assumed as in
-// plunge_regenerative_test.cpp), both chains and work only, over the contact stiffness range.
+// MODELS.md G8 (M1432: 1450/55 rpm, seven measured modes; stiffness and damping assumed:
+// g8_assumed_modes), both chains and work only, over the contact stiffness range.
 TEST(RightmostRootCrossCheck, SevenModeG8Delays) {
   for (double contact_stiffness : {5e7, 2e8}) {
     for (bool wheel_chain : {false, true}) {
-      PlungeRegenerativeParameters p;
-      p.wheel_speed_rpm = 1450.0;
-      p.work_speed_rpm = 55.0;
-      p.contact_stiffness_n_per_m = contact_stiffness;
-      p.wheel_wear_stiffness_n_per_m = 5.0e9;
-      p.work_removal_stiffness_n_per_m = 5.0e7;
-      for (double f : {67.56, 102.44, 184.08, 221.11, 255.01, 275.05, 305.60}) p.modes.push_back({f, 0.05, 2.0e8});
+      PlungeRegenerativeParameters p = g8_assumed_modes(contact_stiffness);
       p.wheel_regeneration = wheel_chain;
       EXPECT_TRUE(expect_rightmost_and_honest(p, 500.0));
     }

@@ -196,6 +196,13 @@ EmbeddingChoice choose_embedding(std::span<const double> x, std::size_t max_lag,
 }
 
 
+void add_embedding_fields(Json& result, const EmbeddingParameters& embedding) {
+  result["delay_samples"] = embedding.delay;
+  result["embedding_dimension"] = embedding.dimension;
+  result["theiler_window_samples"] = embedding.theiler;
+  result["embedding_source"] = embedding.source;
+}
+
 EmbeddingParameters resolve_embedding(const ParamValues& params, const SampledSeries& series,
                                       const Json& context) {
   // The automatic choices histogram the samples before any other check: a NaN would index

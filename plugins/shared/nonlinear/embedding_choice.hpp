@@ -49,6 +49,9 @@ struct EmbeddingParameters {
 };
 EmbeddingParameters resolve_embedding(const ParamValues& params, const SampledSeries& series,
                                       const Json& context);
+// Appends the embedding to an analysis result: delay_samples, embedding_dimension,
+// theiler_window_samples, embedding_source.
+void add_embedding_fields(Json& result, const EmbeddingParameters& embedding);
 
 // Defaults of the `embedding` analysis, also used when another analysis embeds without one.
 constexpr int embedding_default_bins = 16;

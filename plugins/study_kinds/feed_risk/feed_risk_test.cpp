@@ -17,6 +17,7 @@
 #include "chatterlab/kit/model.hpp"
 #include "chatterlab/planner/feed_planning.hpp"
 #include "chatterlab/spectrum.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::feed_risk {
@@ -26,19 +27,10 @@ namespace fs = std::filesystem;
 using chatterlab::testing::TempDir;
 using planner::SegmentConditions;
 
-// One structural mode; the work chain chatters at 300 rpm with these stiffnesses (the growth rate
-// is checked to be positive below, so the simulation test sees a growing response).
-constexpr const char* model_toml = R"(
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1450
-work_speed_rpm = 300
-contact_stiffness_n_per_m = 2.0e7
-wheel_wear_stiffness_n_per_m = 2.0e9
-work_removal_stiffness_n_per_m = 1.6e6
-modes = [ { frequency_hz = 150.0, damping_ratio = 0.03, stiffness_n_per_m = 2.0e7 } ]
-wheel_regeneration = false
-)";
+// feed_risk's test machine with the wheel chain off: the work chain chatters at 300 rpm (the
+// growth rate is checked to be positive below, so the simulation test sees a growing response).
+const std::string model_toml =
+    testing::model_table_toml("plunge_regenerative", testing::g1_feed_risk_machine, "wheel_regeneration = false\n");
 
 Json model_table() {
   TempDir dir;
@@ -49,10 +41,9 @@ Json model_table() {
 // The test model as plunge_with_penetration_damping with kd = `kd` (G4's dynamic force).
 Json penetration_damping_table(double kd) {
   TempDir dir;
-  std::string toml = model_toml;
-  toml.replace(toml.find("plunge_regenerative"), std::string("plunge_regenerative").size(),
-               "plunge_with_penetration_damping");
-  toml += "penetration_damping_n_s_per_m = " + std::to_string(kd) + "\n";
+  const std::string toml = testing::model_table_toml(
+      "plunge_with_penetration_damping", testing::g1_feed_risk_machine,
+      "wheel_regeneration = false\npenetration_damping_n_s_per_m = " + std::to_string(kd) + "\n");
   Study s = load_study(dir.write("m.toml", std::string("[study]\nkind = \"stability_map\"\n") + toml));
   return s.document["model"];
 }

@@ -15,6 +15,7 @@
 #include "chatterlab/registry.hpp"
 #include "chatterlab/study.hpp"
 #include "chatterlab/study_kind.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -57,13 +58,7 @@ double root_growth_per_s(const TempDir& dir, const std::string& model) {
 }
 
 // studies/simulate_regeneration_dominance.toml's machine: its root grows at 4.79 /s.
-constexpr const char* dominance_machine = R"(wheel_speed_rpm = 1450
-work_speed_rpm = 55
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 1.0e9
-work_removal_stiffness_n_per_m = 2.0e8
-modes = [{ frequency_hz = 250.0, damping_ratio = 0.05, stiffness_n_per_m = 5.0e7 }]
-)";
+constexpr const char* dominance_machine = testing::g1_reference_machine;
 
 TEST(SimulateFitValidityAccuracy, DefaultsGiveTheRootAndLiftOffIsFlagged) {
   TempDir dir;

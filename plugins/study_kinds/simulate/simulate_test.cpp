@@ -14,6 +14,7 @@
 #include "chatterlab/kit/capabilities.hpp"
 #include "chatterlab/study.hpp"
 #include "study_kinds/simulate/simulate_point.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -21,17 +22,8 @@ namespace {
 
 using testing::TempDir;
 
-constexpr const char* g1_study = R"([study]
-kind = "simulate"
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1450
-work_speed_rpm = 55
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 1.0e9
-work_removal_stiffness_n_per_m = 2.0e8
-modes = [ { frequency_hz = 250.0, damping_ratio = 0.05, stiffness_n_per_m = 5.0e7 } ]
-[simulation]
+const std::string g1_study = "[study]\nkind = \"simulate\"\n" +
+                             testing::model_table_toml("plunge_regenerative", testing::g1_reference_machine) + R"([simulation]
 duration_s = 2.5
 sample_rate_hz = 10000
 one_sided_contact = false
