@@ -87,6 +87,11 @@ Json PlungeRegenerative::parameters_at(const ProcessConditions& reference, const
       plunge_dynamics::parameters_at(parameters_, reference, conditions, scaling));
 }
 
+void PlungeRegenerative::parameter_values_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                                             const ProcessScaling& scaling, std::vector<double>& values) const {
+  plunge_dynamics::parameter_values(plunge_dynamics::parameters_at(parameters_, reference, conditions, scaling), values);
+}
+
 CHATTERLAB_REGISTER_MODEL(PlungeRegenerative);
 
 }  // namespace chatterlab

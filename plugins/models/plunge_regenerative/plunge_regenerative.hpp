@@ -52,6 +52,8 @@ class PlungeRegenerative final : public Model,
   ProcessConditions nominal_conditions() const override;
   Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                      const ProcessScaling& scaling) const override;
+  void parameter_values_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                           const ProcessScaling& scaling, std::vector<double>& values) const override;
 
  private:
   PlungeRegenerativeParameters parameters_;

@@ -10,13 +10,21 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
+// a b as the compiler's inline complex product computes it (re = ac - bd, im = ad + bc), without
+// the C99 Annex G recovery of infinite operands that std::complex's operator* checks for after
+// every product (E is finite wherever the search evaluates it; a non-finite E is refused either
+// way): the same bits, fewer branches in the root search's innermost work.
+Complex times(Complex a, Complex b) {
+  return {a.real() * b.real() - a.imag() * b.imag(), a.real() * b.imag() + a.imag() * b.real()};
+}
+
 // Value and derivative carried together (forward-mode differentiation of the factored E).
 struct Dual {
   Complex value;
   Complex derivative;
 };
 Dual operator*(const Dual& a, const Dual& b) {
-  return {a.value * b.value, a.derivative * b.value + a.value * b.derivative};
+  return {times(a.value, b.value), times(a.derivative, b.value) + times(a.value, b.derivative)};
 }
 Dual operator+(const Dual& a, const Dual& b) { return {a.value + b.value, a.derivative + b.derivative}; }
 Dual scaled(double k, const Dual& a) { return {k * a.value, k * a.derivative}; }
@@ -60,9 +68,10 @@ CharacteristicValue PlungeCharacteristic::evaluate(Complex s) const {
   // Modal product Pi = prod P_i and Q = sum_i (kc/k_i) prod_{j != i} P_j, built incrementally
   // (Q_new = Q P + (kc/k) Pi_old), so a zero of one P_i never has to be divided by.
   Dual product{1.0, 0.0}, coupled{0.0, 0.0};
+  const Complex s_squared = times(s, s), two_s = 2.0 * s;
   for (const Mode& m : modes_) {
-    Dual denominator{s * s * m.inverse_omega_squared + s * m.two_zeta_over_omega + 1.0,
-                     2.0 * s * m.inverse_omega_squared + m.two_zeta_over_omega};
+    Dual denominator{s_squared * m.inverse_omega_squared + s * m.two_zeta_over_omega + 1.0,
+                     two_s * m.inverse_omega_squared + m.two_zeta_over_omega};
     coupled = coupled * denominator + scaled(m.contact_ratio, product);
     product = product * denominator;
   }

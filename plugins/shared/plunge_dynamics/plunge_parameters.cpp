@@ -61,6 +61,16 @@ const ParamTable<PlungeRegenerativeParameters>& plunge_parameters_table() {
   return table;
 }
 
+void parameter_values(const PlungeRegenerativeParameters& p, std::vector<double>& values) {
+  values.clear();
+  values.insert(values.end(), {p.wheel_speed_rpm, p.work_speed_rpm, p.contact_stiffness_n_per_m,
+                               p.wheel_wear_stiffness_n_per_m, p.work_removal_stiffness_n_per_m});
+  for (const StructuralMode& m : p.modes)
+    values.insert(values.end(), {m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
+  values.push_back(p.wheel_regeneration ? 1.0 : 0.0);
+  values.push_back(p.work_regeneration ? 1.0 : 0.0);
+}
+
 Json example_g1_parameters() {
   return Json::parse(R"({
       "wheel_speed_rpm": 1450, "work_speed_rpm": 55,

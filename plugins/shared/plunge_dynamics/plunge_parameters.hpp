@@ -32,6 +32,10 @@ namespace plunge_dynamics {
 // The G1 parameter table: `chatterlab describe plunge_regenerative` prints it.
 const ParamTable<PlungeRegenerativeParameters>& plunge_parameters_table();
 
+// The numbers of plunge_parameters_table().write(p) in the table's order (switches as 0/1):
+// ProcessConditionsModel::parameter_values_at without building the table.
+void parameter_values(const PlungeRegenerativeParameters& p, std::vector<double>& values);
+
 // The family's example (`chatterlab describe plunge_regenerative`): the G8 experiment's speeds and
 // its 184 Hz and 306 Hz modes; the stiffnesses are assumptions of the right order for an external
 // cylindrical grinder (docs/models/plunge_regenerative.md).

@@ -2,10 +2,14 @@
 // S1's thickness factor, "not given" conditions, kd's G4 law; and the stiffness chain's
 // switched-off chains.
 #include "shared/plunge_dynamics/process_scaling.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 #include <limits>
 #include <numbers>
 
@@ -93,6 +97,37 @@ TEST(PlungeProcessScaling, PenetrationDampingFollowsRemovalContactLengthAndWorkS
               std::sqrt((50.0 * 400.0 / 450.0) / 80.0) * 2.0, 1e-14);
   // No radius: v_w ~ n_w (the same part).
   EXPECT_NEAR(penetration_damping_factor(own(), {}, ProcessConditions{0.0, 30.0}, width_only), 2.0, 1e-15);
+}
+
+// The typed parameter values (feed_risk groups 10^5 conditions by them) are bitwise the leaves of
+// the parameter table a model writes, which the interface's default reads: the two routes group
+// alike.
+TEST(PlungeProcessScaling, ParameterValuesAreTheTableLeavesBitwise) {
+  struct TableRoute final : ProcessConditionsModel {
+    PlungeRegenerativeParameters parameters = own();
+    ProcessConditions nominal_conditions() const override { return plunge_dynamics::nominal_conditions(parameters); }
+    Json parameters_at(const ProcessConditions& reference, const ProcessConditions& conditions,
+                       const ProcessScaling& scaling) const override {
+      return plunge_parameters_table().write(plunge_dynamics::parameters_at(parameters, reference, conditions, scaling));
+    }
+  } model;
+  model.parameters.modes.push_back({310.7, 0.031, 1.132e9});
+  model.parameters.wheel_regeneration = false;
+  const ProcessConditions reference{0.0, 0.0, 35.0, 50.0, 400.0};
+  ProcessConditions at = reference;
+  at.work_speed_rpm = 287.3;
+  at.contact_width_mm = 2.137;
+  at.work_radius_mm = 131.9;
+  std::vector<double> from_table, typed;
+  model.parameter_values_at(reference, at, ProcessScaling{}, from_table);
+  parameter_values(plunge_dynamics::parameters_at(model.parameters, reference, at, ProcessScaling{}), typed);
+  ASSERT_EQ(from_table.size(), 5u + 3u * 2u + 2u);
+  ASSERT_EQ(typed.size(), from_table.size());
+  for (std::size_t i = 0; i < typed.size(); ++i)
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(typed[i]), std::bit_cast<std::uint64_t>(from_table[i])) << "value " << i;
+  EXPECT_EQ(typed[1], 287.3);
+  EXPECT_EQ(typed[11], 0.0);  // wheel regeneration off
+  EXPECT_EQ(typed[12], 1.0);
 }
 
 TEST(PlungeStiffnessChain, ChainsSwitchedOffAreInfinitelyStiff) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <exception>
 #include <iterator>
@@ -55,16 +56,16 @@ struct Grouping {
   std::vector<Json> tables;                 // the representative's model table per group
 };
 
-// The cells of every number in a parameter table (positive ones on the log grid; others, and
-// anything that is not a number, exactly), in the table's order.
-void append_cells(const Json& v, double tolerance, std::vector<long long>& key) {
-  if (v.is_object() || v.is_array()) {
-    for (const Json& e : v) append_cells(e, tolerance, key);
-  } else if (v.is_number() && v.get<double>() > 0.0 && std::isfinite(v.get<double>())) {
-    key.push_back(std::llround(std::log(v.get<double>()) / std::max(tolerance, 1e-15)));
-  } else {
-    key.push_back(std::numeric_limits<long long>::min());
-    key.push_back(static_cast<long long>(std::hash<std::string>{}(v.dump())));
+// The cells of every parameter value (positive ones on the log grid; others exactly, by their
+// bits), in the model's order.
+void append_cells(const std::vector<double>& values, double tolerance, std::vector<long long>& key) {
+  for (double v : values) {
+    if (v > 0.0 && std::isfinite(v)) {
+      key.push_back(std::llround(std::log(v) / std::max(tolerance, 1e-15)));
+    } else {
+      key.push_back(std::numeric_limits<long long>::min());
+      key.push_back(std::bit_cast<long long>(v));
+    }
   }
 }
 
@@ -92,14 +93,20 @@ Grouping group_items(const Json& model_table, const ProcessSettings& p, const st
   auto parameters_of = [&](std::size_t i) {
     return process.parameters_at(reference, segment_conditions(p, items[i]), scaling);
   };
-  // The keys in parallel (a plan's candidates rate ~10^5 segments; parameters_at is const), then
-  // the groups in item order, so the representatives are those of a serial pass.
+  // The keys in parallel (a plan's candidates rate ~10^5 segments; the model is const), from the
+  // parameter values without their JSON table; then the groups in item order, so the
+  // representatives are those of a serial pass.
   std::vector<std::vector<long long>> keys(items.size());
   const auto n = static_cast<long>(items.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < n; ++i) {
-    const auto u = static_cast<std::size_t>(i);
-    append_cells(parameters_of(u), tolerance, keys[u]);
+#pragma omp parallel
+  {
+    std::vector<double> values;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      process.parameter_values_at(reference, segment_conditions(p, items[u]), scaling, values);
+      append_cells(values, tolerance, keys[u]);
+    }
   }
   Grouping g;
   std::unordered_map<std::vector<long long>, std::size_t, CellsHash> cells;
@@ -177,11 +184,14 @@ double contact_width_mm(const ProcessSettings& p, const planner::GeneratrixValue
   return std::min(section_width, 2.0 * std::sqrt(h * (2.0 * rho - h)));
 }
 
-SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentConditions& c,
-                           const planner::Generatrix& generatrix) {
+namespace {
+
+// map_segment with the engaged width already known: it depends on the part at the segment's
+// middle only, so the phases of a modulated rating (the same segment at other speeds) share it.
+SegmentProcess map_segment_with_width(const ProcessSettings& p, const planner::SegmentConditions& c,
+                                      double contact_width_mm) {
   SegmentProcess s;
   s.x_mid_mm = 0.5 * (c.x_start_mm + c.x_end_mm);
-  const planner::GeneratrixValue part = generatrix.evaluate(s.x_mid_mm);
   s.radius_mm = c.radius_mm;
   s.work_speed_rpm = c.spindle_speed_rpm;
   const double d_w = 2.0 * c.radius_mm, d_s = p.wheel_diameter_mm;
@@ -190,11 +200,18 @@ SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentCondi
   s.speed_ratio = s.work_surface_speed_m_per_s / v_s;
   s.equivalent_diameter_mm = d_w * d_s / (d_w + d_s);
   s.contact_length_mm = std::sqrt(p.depth_of_cut_mm * s.equivalent_diameter_mm);
-  s.contact_width_mm = contact_width_mm(p, part);
+  s.contact_width_mm = contact_width_mm;
   s.axial_feed_per_rev_mm = std::abs(c.axial_speed_mm_per_s) * 60.0 / c.spindle_speed_rpm;
   s.overlap_ratio = std::max(0.0, 1.0 - s.axial_feed_per_rev_mm / s.contact_width_mm);
-
   return s;
+}
+
+}  // namespace
+
+SegmentProcess map_segment(const ProcessSettings& p, const planner::SegmentConditions& c,
+                           const planner::Generatrix& generatrix) {
+  const planner::GeneratrixValue part = generatrix.evaluate(0.5 * (c.x_start_mm + c.x_end_mm));
+  return map_segment_with_width(p, c, contact_width_mm(p, part));
 }
 
 const ProcessConditionsModel& process_model(const ProcessSettings& p) {
@@ -286,7 +303,8 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
     for (int j = 0; j < phase_count; ++j) {
       planner::SegmentConditions c = plan[k];
       c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / phase_count);
-      items.push_back(phase_count == 1 ? risk.process[k] : map_segment(p, c, generatrix));
+      items.push_back(phase_count == 1 ? risk.process[k]
+                                       : map_segment_with_width(p, c, risk.process[k].contact_width_mm));
     }
   const Grouping g = group_items(model_table, p, items, roots.condition_tolerance);
   const std::vector<RootValue> values = solve_groups(items, g, roots);
