@@ -68,8 +68,16 @@ MatrixXd take(const MatrixXd& m, const std::vector<Index>& rows, const std::vect
 // vector at a time for the Krylov solve, which needs a few dozen products instead of dim.
 class Discretisation {
  public:
-  Discretisation(const PeriodicDelaySystem& system, int steps, const std::vector<Index>& delayed_columns);
+  // `coarser_delays`: the half-step delays of the level with steps / 2 (its grid is every other
+  // point of this one), or null.
+  Discretisation(const PeriodicDelaySystem& system, int steps, const std::vector<Index>& delayed_columns,
+                 const std::vector<std::vector<double>>* coarser_delays = nullptr);
   Index dimension() const { return d_ + ring_ * nh_; }
+  // tau_k(j h / 2), j = 0 .. 2 N, per delay k.
+  const std::vector<std::vector<double>>& half_step_delays() const { return tau_; }
+  // A vector of the level with twice the step (its samples every other one of this level's; the
+  // ones between interpolated linearly) in this level's layout: a start vector for Arnoldi.
+  Eigen::VectorXd refine(const Eigen::VectorXd& coarse) const;
   // out = M^power x for the columns of x (dimension x k).
   void apply(const MatrixXd& x, MatrixXd& out, int power = 1) const;
   MatrixXd monodromy() const {
@@ -129,6 +137,7 @@ class Discretisation {
   std::vector<EndOperators> ends_;
   std::vector<std::uint32_t> mid_of_step_, end_of_step_;
   std::vector<DelayStep> delay_steps_;  // [step * delay_count + k]
+  std::vector<std::vector<double>> tau_;
 };
 
 // c (rows(a) x k, row-major) = (or +=) a * b (b: cols(a) x k, row-major). The blocks are tiny (a
@@ -156,7 +165,8 @@ inline void multiply_rows(const MatrixXd& a, const double* b, double* c, Index k
   }
 }
 
-Discretisation::Discretisation(const PeriodicDelaySystem& system, int steps, const std::vector<Index>& delayed_columns)
+Discretisation::Discretisation(const PeriodicDelaySystem& system, int steps, const std::vector<Index>& delayed_columns,
+                               const std::vector<std::vector<double>>* coarser_delays)
     : system_(system), steps_(steps), h_(system.period_s() / steps), delayed_(delayed_columns) {
   const std::vector<bool> differential = system.differential();
   for (std::size_t i = 0; i < differential.size(); ++i) (differential[i] ? diff_ : alg_).push_back(static_cast<Index>(i));
@@ -174,11 +184,25 @@ Discretisation::Discretisation(const PeriodicDelaySystem& system, int steps, con
 
   // The step maps of one period. Sample index j holds the delayed variables at t = j h.
   BlockCache mid_cache, end_cache;
-  // tau_k at every half step, t = j h / 2 (j = 0 .. 2 N).
-  std::vector<double> half_steps(static_cast<std::size_t>(2 * steps_ + 1));
-  for (std::size_t j = 0; j < half_steps.size(); ++j) half_steps[j] = 0.5 * h_ * static_cast<double>(j);
-  std::vector<std::vector<double>> tau(delay_count_);
-  for (std::size_t k = 0; k < delay_count_; ++k) system_.delays_s(k, half_steps, tau[k]);
+  // tau_k at every half step, t = j h / 2 (j = 0 .. 2 N); the even j from the coarser level.
+  const std::size_t points = static_cast<std::size_t>(2 * steps_ + 1);
+  const bool halves = coarser_delays && coarser_delays->size() == delay_count_ && steps_ % 2 == 0 &&
+                      std::all_of(coarser_delays->begin(), coarser_delays->end(),
+                                  [&](const std::vector<double>& c) { return 2 * c.size() - 1 == points; });
+  std::vector<double> times;
+  for (std::size_t j = halves ? 1 : 0; j < points; j += halves ? 2 : 1) times.push_back(0.5 * h_ * static_cast<double>(j));
+  tau_.resize(delay_count_);
+  std::vector<double> solved;
+  for (std::size_t k = 0; k < delay_count_; ++k) {
+    system_.delays_s(k, times, solved);
+    if (!halves) {
+      tau_[k] = solved;
+      continue;
+    }
+    tau_[k].resize(points);
+    for (std::size_t j = 0; j < points; ++j) tau_[k][j] = j % 2 == 0 ? (*coarser_delays)[k][j / 2] : solved[j / 2];
+  }
+  const std::vector<std::vector<double>>& tau = tau_;
   delay_steps_.resize(static_cast<std::size_t>(steps_) * delay_count_);
   for (int i = 0; i < steps_; ++i) {
     const double t_mid = (i + 0.5) * h_, t_end = (i + 1) * h_;
@@ -279,6 +303,17 @@ Discretisation::MidOperators Discretisation::mid_operators(const Blocks& b) cons
   return out;
 }
 
+Eigen::VectorXd Discretisation::refine(const Eigen::VectorXd& coarse) const {
+  const Index coarse_ring = (coarse.size() - d_) / nh_;
+  Eigen::VectorXd out(dimension());
+  out.head(d_) = coarse.head(d_);
+  auto coarse_sample = [&](Index s) { return coarse.segment(d_ + std::min(s, coarse_ring - 1) * nh_, nh_); };
+  for (Index s = 0; s < ring_; ++s)  // this level's sample s is the coarse one at s / 2
+    out.segment(d_ + s * nh_, nh_) =
+        s % 2 == 0 ? Eigen::VectorXd(coarse_sample(s / 2)) : Eigen::VectorXd(0.5 * (coarse_sample(s / 2) + coarse_sample(s / 2 + 1)));
+  return out;
+}
+
 void Discretisation::apply(const MatrixXd& x, MatrixXd& out, int power) const {
   if (x.cols() == 1) apply_columns<true>(x, out, power);
   else apply_columns<false>(x, out, power);
@@ -312,16 +347,16 @@ void Discretisation::apply_columns(const MatrixXd& x, MatrixXd& out, int power) 
     for (int i = 0; i < steps_; ++i) {
       const DelayStep* steps = &delay_steps_[static_cast<std::size_t>(i) * delay_count_];
       for (Index kk = 0; kk < delays; ++kk) {
-        // u_qk = sum_l w[q][l] s_l
+        // u_qk = sum_l w[q][l] s_l (written once per entry: no accumulation through memory)
         double* u = state + (d_ + 4 * kk * nh_) * k;
-        std::fill(u, u + 4 * block, 0.0);
-        for (Index l = 0; l < 4; ++l) {
-          const double* s = sample_at(now_position, steps[kk].first_mid - i + l);
-          for (std::size_t q = 0; q < 4; ++q) {
-            const double w = steps[kk].mid[q][static_cast<std::size_t>(l)];
-            double* u_q = u + static_cast<Index>(q) * block;
-            for (Index e = 0; e < block; ++e) u_q[e] += w * s[e];
-          }
+        const Index first = steps[kk].first_mid - i;
+        const double *s0 = sample_at(now_position, first), *s1 = sample_at(now_position, first + 1),
+                     *s2 = sample_at(now_position, first + 2), *s3 = sample_at(now_position, first + 3);
+        const auto& w = steps[kk].mid;
+        for (Index e = 0; e < block; ++e) {
+          const double a = s0[e], b = s1[e], c = s2[e], f = s3[e];
+          for (std::size_t q = 0; q < 4; ++q)
+            u[static_cast<Index>(q) * block + e] = w[q][0] * a + w[q][1] * b + w[q][2] * c + w[q][3] * f;
         }
       }
       multiply_rows<kOneColumn>(mids_[mid_of_step_[static_cast<std::size_t>(i)]].step, state, next, k, false);
@@ -329,12 +364,11 @@ void Discretisation::apply_columns(const MatrixXd& x, MatrixXd& out, int power) 
       if (na_ > 0) {
         for (Index kk = 0; kk < delays; ++kk) {
           double* v = next + (d_ + kk * nh_) * k;
-          std::fill(v, v + block, 0.0);
-          for (Index l = 0; l < 4; ++l) {
-            const double* s = sample_at(now_position, steps[kk].first_end - i + l);
-            const double w = steps[kk].end[static_cast<std::size_t>(l)];
-            for (Index e = 0; e < block; ++e) v[e] += w * s[e];
-          }
+          const Index first = steps[kk].first_end - i;
+          const double *s0 = sample_at(now_position, first), *s1 = sample_at(now_position, first + 1),
+                       *s2 = sample_at(now_position, first + 2), *s3 = sample_at(now_position, first + 3);
+          const auto& w = steps[kk].end;
+          for (Index e = 0; e < block; ++e) v[e] = w[0] * s0[e] + w[1] * s1[e] + w[2] * s2[e] + w[3] * s3[e];
         }
         multiply_rows<kOneColumn>(ends_[end_of_step_[static_cast<std::size_t>(i)]].step, next, algebraic.data(), k, false);
       }
@@ -365,6 +399,8 @@ struct Level {
   double eigen_error = 0.0;  // residual bound of the Krylov solve on the growth rate [1/s]
   int excluded = 0;
   std::string eigen_route;
+  Eigen::VectorXd dominant_vector;  // a real vector of the dominant multiplier's invariant subspace (Krylov only)
+  std::vector<std::vector<double>> delays;  // the half-step delays, for the next level
 };
 
 // A multiplier of a family of steady states: within 1e-6 of 1.
@@ -373,7 +409,7 @@ constexpr double kFamilyDistance = 1e-6;
 // stands out from the rest by e^{(sigma_1 - sigma_2) p T} per product even for short periods.
 constexpr double kKrylovHorizon_s = 0.5;
 constexpr Index kKrylovMaxVectors = 80;
-constexpr double kKrylovResidual = 1e-10;  // relative residual of the accepted Ritz pair
+constexpr double kKrylovResidual = 1e-12;  // relative residual of the accepted Ritz pair
 
 // The dominant multiplier from the full spectrum of the dense monodromy (the reference the Krylov
 // solve is tested against, and its fallback).
@@ -406,7 +442,9 @@ void dense_dominant(const Discretisation& discretisation, const PeriodicDelaySys
 // multipliers (|theta - 1| small, themselves converged), with residual |h_{m+1,m} y_m| <=
 // kKrylovResidual |theta|. Its multiplier is the Rayleigh quotient of the Ritz vector under M.
 // False when the Krylov space reaches its limit unconverged (the caller solves densely).
-bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySystem& system, Level& level) {
+// `start`: a start vector (the coarser level's dominant vector refined), else a fixed random one.
+bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySystem& system, const Eigen::VectorXd& start,
+                     Level& level) {
   const Index n = discretisation.dimension();
   const double period = system.period_s();
   const int power = std::max(1, static_cast<int>(std::ceil(kKrylovHorizon_s / period)));
@@ -416,8 +454,10 @@ bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySy
   std::mt19937_64 random(20261127);  // a fixed start: reproducible results
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   for (Index i = 0; i < n; ++i) v(i, 0) = uniform(random);
+  if (start.size() == n && start.norm() > 0.0) v.col(0) = start;
   v.col(0).normalize();
   MatrixXd w;
+  Complex last_dominant = 0.0;  // the dominant Ritz value at the previous check
   for (Index j = 0; j < max_vectors; ++j) {
     discretisation.apply(v.col(j), w, power);
     // Classical Gram-Schmidt, twice (orthogonal to working precision).
@@ -454,15 +494,20 @@ bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySy
       accepted = i;
       break;
     }
-    if (!converged || accepted < 0) {
+    const Complex theta = accepted >= 0 ? ritz.eigenvalues()(accepted) : Complex(0.0);
+    const Complex before = last_dominant;
+    last_dominant = theta;
+    // (The change needs a previous check: the first converged one waits for the next vector.)
+    if (!converged || accepted < 0 || (before == Complex(0.0) && !invariant)) {
       if (invariant) return false;
       continue;
     }
-    const Complex theta = ritz.eigenvalues()(accepted);
     Complex mu = theta;
+    const Eigen::VectorXcd x = v.leftCols(m).cast<Complex>() * ritz.eigenvectors().col(accepted);
+    if (x.real().norm() >= x.imag().norm()) level.dominant_vector = x.real();
+    else level.dominant_vector = x.imag();
     if (power > 1) {
       // mu from the Ritz vector x: mu = x^H M x / x^H x (M applied to Re x and Im x).
-      const Eigen::VectorXcd x = v.leftCols(m).cast<Complex>() * ritz.eigenvectors().col(accepted);
       MatrixXd parts(n, 2), images;
       parts.col(0) = x.real();
       parts.col(1) = x.imag();
@@ -472,27 +517,34 @@ bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySy
     }
     level.multiplier = Complex(mu.real(), std::abs(mu.imag()));
     level.growth = std::log(std::abs(theta)) / (power * period);
-    level.eigen_error = residual(accepted) / std::abs(theta) / (power * period);
+    // The residual bounds the error of a well-conditioned multiplier; the change since the
+    // previous check also sees the conditioning (the step maps are far from normal).
+    const double relative_error = std::max(residual(accepted) / std::abs(theta), std::abs(theta - before) / std::abs(theta));
+    level.eigen_error = relative_error / (power * period);
     level.excluded = excluded;
-    level.eigen_route = fmt::format("Arnoldi on M^{} ({} vectors, relative residual {:.1e})", power, m,
-                                    residual(accepted) / std::abs(theta));
+    level.eigen_route = fmt::format("Arnoldi on M^{} ({} vectors, relative residual {:.1e}, change {:.1e})", power, m,
+                                    residual(accepted) / std::abs(theta), std::abs(theta - before) / std::abs(theta));
     return true;
   }
   return false;
 }
 
+// `coarser`: the level with steps / 2, whose delays and dominant vector this one starts from.
 Level solve_level(const PeriodicDelaySystem& system, int steps, const std::vector<Index>& delayed,
-                  const FloquetSettings& settings) {
-  const Discretisation discretisation(system, steps, delayed);
+                  const FloquetSettings& settings, const Level* coarser = nullptr) {
+  const Discretisation discretisation(system, steps, delayed, coarser ? &coarser->delays : nullptr);
   Level level;
   level.steps = steps;
   level.dimension = static_cast<std::size_t>(discretisation.dimension());
-  if (settings.dense_spectrum || !krylov_dominant(discretisation, system, level)) {
+  const Eigen::VectorXd start = coarser && coarser->dominant_vector.size() > 0
+                                    ? discretisation.refine(coarser->dominant_vector) : Eigen::VectorXd();
+  if (settings.dense_spectrum || !krylov_dominant(discretisation, system, start, level)) {
     const std::string unconverged = settings.dense_spectrum ? "" : "Arnoldi unconverged, ";
     level.excluded = 0;
     dense_dominant(discretisation, system, level);
     level.eigen_route = unconverged + level.eigen_route;
   }
+  level.delays = discretisation.half_step_delays();
   return level;
 }
 
@@ -561,7 +613,7 @@ FloquetResult floquet_growth_rate(const PeriodicDelaySystem& system, const Floqu
   result.growth_rate_error_per_s = std::numeric_limits<double>::infinity();
   while (dimension_at(2 * steps) <= settings.max_dimension) {
     steps *= 2;
-    current = solve_level(system, steps, delayed, settings);
+    current = solve_level(system, steps, delayed, settings, &previous);
     // Order >= 2: the error of the finer level is at most a third of the change between levels;
     // plus the eigenvalue solve's own residual bound (Krylov; 0 for the dense spectrum).
     result.growth_rate_error_per_s = std::abs(current.growth - previous.growth) / 3.0 + current.eigen_error;
