@@ -457,7 +457,7 @@ bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySy
   if (start.size() == n && start.norm() > 0.0) v.col(0) = start;
   v.col(0).normalize();
   MatrixXd w;
-  Complex last_dominant = 0.0;  // the dominant Ritz value at the previous check
+  Eigen::VectorXcd last_ritz;  // the Ritz values at the previous check
   for (Index j = 0; j < max_vectors; ++j) {
     discretisation.apply(v.col(j), w, power);
     // Classical Gram-Schmidt, twice (orthogonal to working precision).
@@ -495,8 +495,12 @@ bool krylov_dominant(const Discretisation& discretisation, const PeriodicDelaySy
       break;
     }
     const Complex theta = accepted >= 0 ? ritz.eigenvalues()(accepted) : Complex(0.0);
-    const Complex before = last_dominant;
-    last_dominant = theta;
+    // The same multiplier at the previous check: its nearest Ritz value then (with two multipliers
+    // of nearly equal modulus the dominant one may have been the other).
+    Complex before = 0.0;
+    for (Index i = 0; i < last_ritz.size(); ++i)
+      if (before == Complex(0.0) || std::abs(last_ritz(i) - theta) < std::abs(before - theta)) before = last_ritz(i);
+    last_ritz = ritz.eigenvalues();
     // (The change needs a previous check: the first converged one waits for the next vector.)
     if (!converged || accepted < 0 || (before == Complex(0.0) && !invariant)) {
       if (invariant) return false;
