@@ -15,7 +15,9 @@
 // argument t - tau(t) (linearised over the step), and the algebraic variables are solved at each
 // step end. The dominant eigenvalue mu of the discretised operator gives the Floquet growth rate
 // ln|mu| / T; the step is halved until two levels agree within the tolerance (the convergence
-// check). docs/derived_stability.md.
+// check). mu comes from Arnoldi's method on the step maps applied to vectors (matrix-free; the
+// dense monodromy and its full spectrum only when Arnoldi does not converge, or on request).
+// docs/derived_stability.md.
 #include <Eigen/Core>
 #include <memory>
 #include <string>
@@ -36,6 +38,13 @@ class PeriodicDelaySystem {
   virtual std::size_t delay_count() const = 0;
   virtual double period_s() const = 0;
   virtual double delay_s(std::size_t k, double t_s) const = 0;  // tau_k(t) > 0
+  // tau_k at each of `times_s` (increasing): the discretisation asks for a whole period at once,
+  // so that a system whose delays are solved (a revolution of a modulated rotor) can start each
+  // solve from the previous ones.
+  virtual void delays_s(std::size_t k, const std::vector<double>& times_s, std::vector<double>& out) const {
+    out.resize(times_s.size());
+    for (std::size_t i = 0; i < times_s.size(); ++i) out[i] = delay_s(k, times_s[i]);
+  }
   virtual double max_delay_s() const = 0;                        // over all k and t
   virtual double min_delay_s() const = 0;
   // A0(t) (n x n) and A_k(t) (n x n each).
@@ -51,7 +60,10 @@ struct FloquetSettings {
   double steps_per_wave = 16.0;     // first level: h <= 1 / (steps_per_wave * frequency_scale_hz)
   double tolerance_per_s = 1e-3;    // accepted error estimate of the growth rate ...
   double relative_tolerance = 1e-3; // ... plus this fraction of |growth rate|
-  std::size_t max_dimension = 3000; // of the discretised monodromy (its eigenvalues cost n^3)
+  std::size_t max_dimension = 3000; // of the discretised monodromy (a dense eigenvalue solve costs n^3)
+  // The dominant multiplier from the full spectrum of the dense monodromy instead of Arnoldi's
+  // method on the step maps (the reference the Krylov solve is tested against; slower).
+  bool dense_spectrum = false;
 };
 
 struct FloquetResult {

@@ -164,6 +164,25 @@ TEST(FloquetAccuracy, DelayedMathieuChartAtTwelvePoints) {
   EXPECT_GE(unstable, 4);
 }
 
+// Arnoldi on the step maps against the full spectrum of the dense monodromy, on the same
+// discretisation: the same dominant multiplier to 1e-10 relative (the Ritz pair is accepted at a
+// relative residual of 1e-12),
+// with a stable and an unstable chart point (the long period: Arnoldi on M itself).
+TEST(Floquet, ArnoldiMultiplierEqualsTheDenseOne) {
+  for (const Mathieu& m : {Mathieu{0.1, 1.0, 1.0, 0.1}, Mathieu{0.1, 0.5, 0.5, -0.1}, Mathieu{0.1, 1.5, 2.0, 0.1}}) {
+    FloquetSettings dense;
+    dense.dense_spectrum = true;
+    const FloquetResult reference = floquet_growth_rate(MathieuSystem(m), dense);
+    const FloquetResult krylov = floquet_growth_rate(MathieuSystem(m));
+    EXPECT_NE(krylov.method.find("Arnoldi on M^1 "), std::string::npos) << krylov.method;
+    EXPECT_NE(reference.method.find("dense eigenvalues"), std::string::npos) << reference.method;
+    EXPECT_EQ(krylov.steps_per_period, reference.steps_per_period);
+    EXPECT_NEAR(krylov.growth_rate_per_s, reference.growth_rate_per_s, 1e-10 / kTwoPi) << krylov.method;
+    EXPECT_LT(std::abs(krylov.multiplier - reference.multiplier), 1e-10 * std::abs(reference.multiplier))
+        << krylov.multiplier << " " << reference.multiplier;
+  }
+}
+
 // ------------------------------------------------------------------ models written once
 
 class G1Model final : public DerivedModel<G1Equations> {
@@ -193,6 +212,31 @@ TEST(Floquet, ConstantSpeedModelIsItsRightmostRoot) {
   EXPECT_TRUE(floquet.converged) << floquet.method;
   EXPECT_NEAR(floquet.growth_rate_per_s, root.root.real(), 5e-3 + 1e-3 * std::abs(root.root.real()))
       << floquet.method;
+}
+
+// The same on G1 under a fast wheel-speed modulation (MODELS.md S2; T = 0.04 s, so Arnoldi works on
+// M^13 and the multiplier is the Rayleigh quotient under M) and at constant speed (the family
+// multiplier 1 of the cumulative removal excluded by both solves).
+TEST(Floquet, ArnoldiOnAPowerOfTheMonodromyEqualsTheDenseSolve) {
+  const G1Model model(wheel_chatter());
+  std::vector<PeriodicProcess> processes(2);
+  processes[0].speed[static_cast<std::size_t>(Rotor::wheel)] =
+      make_modulated_speed(1450.0, SpeedModulation::sinusoidal, 0.05, 25.0);
+  processes[0].period_s = 0.04;
+  processes[1].period_s = 0.5;
+  for (const PeriodicProcess& process : processes) {
+    const auto system = periodic_surface_system(model, process);
+    FloquetSettings dense;
+    dense.dense_spectrum = true;
+    const FloquetResult reference = floquet_growth_rate(*system, dense);
+    const FloquetResult krylov = floquet_growth_rate(*system);
+    EXPECT_NE(krylov.method.find("Arnoldi on M^"), std::string::npos) << krylov.method;
+    EXPECT_EQ(krylov.dimension, reference.dimension);
+    // |mu| to 1e-10 relative: the growth rates to 1e-10 / T.
+    EXPECT_NEAR(krylov.growth_rate_per_s, reference.growth_rate_per_s, 1e-10 / process.period_s) << krylov.method;
+    EXPECT_LT(std::abs(krylov.multiplier - reference.multiplier), 1e-10 * std::abs(reference.multiplier))
+        << krylov.multiplier << " " << reference.multiplier;
+  }
 }
 
 // Least-squares slope of ln max|x| per modulation period, periods starting in [from, to): one

@@ -63,7 +63,21 @@ class SurfacePeriodicSystem final : public PeriodicDelaySystem {
   }
   std::size_t delay_count() const override { return layout_.regenerated.size(); }
   double period_s() const override { return process_.period_s; }
-  double delay_s(std::size_t k, double t) const override { return revolution_time(static_cast<std::size_t>(layout_.regenerated[k]), t); }
+  double delay_s(std::size_t k, double t) const override {
+    const std::size_t r = static_cast<std::size_t>(layout_.regenerated[k]);
+    return revolution_time(r, t, first_guess(r, t));
+  }
+  // Each solve starts from the previous two extrapolated (error O(dt^2 tau''), so one Newton step
+  // and its check instead of four or five from the instantaneous revolution).
+  void delays_s(std::size_t k, const std::vector<double>& times, std::vector<double>& out) const override {
+    const std::size_t r = static_cast<std::size_t>(layout_.regenerated[k]);
+    out.resize(times.size());
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      double guess = first_guess(r, times[i]);
+      if (i >= 2) guess = out[i - 1] + (out[i - 1] - out[i - 2]) * (times[i] - times[i - 1]) / (times[i - 1] - times[i - 2]);
+      out[i] = revolution_time(r, times[i], guess);
+    }
+  }
   double max_delay_s() const override {
     double m = 0.0;
     for (Rotor r : layout_.regenerated) m = std::max(m, longest_[static_cast<std::size_t>(r)]);
@@ -103,20 +117,33 @@ class SurfacePeriodicSystem final : public PeriodicDelaySystem {
     return p;
   }
 
-  // The time of the revolution that ends at t: angle(t) - angle(t - tau) = 2 pi.
-  double revolution_time(std::size_t r, double t) const {
+  // The instantaneous revolution at t: where a solve without a better guess starts.
+  double first_guess(std::size_t r, double t) const {
+    const auto& law = process_.speed[r];
+    return law ? 60.0 / law->rpm(t + shift_[r]) : 60.0 / layout_.nominal_speed_rpm[r];
+  }
+
+  // The time of the revolution that ends at t: angle(t) - angle(t - tau) = 2 pi, by Newton's
+  // method from `guess`, safeguarded by bisection on [shortest, longest]. Newton converges
+  // quadratically (relative error ~ tau |omega'/omega| e^2), so a correction below 1e-11 tau
+  // leaves an error far below 1e-15 tau and ends the solve without another evaluation.
+  double revolution_time(std::size_t r, double t, double guess) const {
     const auto& law = process_.speed[r];
     if (!law) return 60.0 / layout_.nominal_speed_rpm[r];
     const double end = t + shift_[r];
     const double target = law->angle_rad(end) - kTwoPi;
     double lo = shortest_[r], hi = longest_[r];
-    double tau = 60.0 / law->rpm(end);
+    double tau = guess > lo && guess < hi ? guess : 60.0 / law->rpm(end);
     for (int it = 0; it < 60; ++it) {
       const double f = law->angle_rad(end - tau) - target;  // decreasing in tau; zero at the root
       if (f > 0.0) lo = tau;
       else hi = tau;
       const double speed = kTwoPi * law->rpm(end - tau) / 60.0;
-      double next = tau + f / speed;
+      const double step = f / speed;
+      // (Checked before the bracket: f carries the rounding of angles of many revolutions, ~1e-14
+      // tau, so the bracket can close around the root's rounding noise.)
+      if (std::abs(step) <= 1e-11 * tau) return tau + step;
+      double next = tau + step;
       if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
       if (std::abs(next - tau) <= 1e-15 * tau) return next;
       tau = next;
