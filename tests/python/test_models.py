@@ -135,11 +135,28 @@ def test_simulate_returns_numpy_series(default_model):
     assert run.snapshots[0]["work_surface_m"].shape == run.snapshots[0]["angle_deg"].shape
 
 
+@pytest.mark.parametrize("key, value", [("duration_s", -1.0), ("wheel_contact_arc_deg", 120.0),
+                                        ("relative_tolerance", 0.5), ("integrator", "euler")])
+def test_simulate_settings_errors_carry_the_command_line_message(cli, tmp_path, key, value):
+    # The simulate kind's [simulation] table with the same bad value, through `chatterlab validate`.
+    settings = {"duration_s": 0.2, key: value}
+    study = tmp_path / "bad.toml"
+    study.write_text(toml_text({"study": {"kind": "simulate"}, "model": SMALL_G1, "simulation": settings}))
+    run = run_cli(cli, "validate", study)
+    assert run.returncode == 2
+    prefix = f"chatterlab: error: {study}:"
+    assert run.stderr.startswith(prefix), run.stderr
+    expected = re.sub(r"^\d+: ", "", run.stderr[len(prefix):].strip())
+    with pytest.raises(chatterlab.InputError) as caught:
+        chatterlab.simulate(SMALL_G1, **settings)
+    assert str(caught.value) == "simulate: " + expected
+
+
 def test_simulate_refuses_bad_settings(default_model):
-    with pytest.raises(ValueError, match="duration_s must be > 0"):
+    with pytest.raises(chatterlab.InputError, match=r"simulation\.duration_s = -1 \[s\]: out of range, must be > 0"):
         chatterlab.simulate(default_model, -1.0)
-    with pytest.raises(chatterlab.InputError, match="integrator = \"euler\""):
-        chatterlab.simulate(default_model, 0.1, integrator="euler")
+    with pytest.raises(chatterlab.InputError, match="simulation.snapshot_times_s"):
+        chatterlab.simulate(default_model, 0.1, snapshot_times_s=[0.5])
     with pytest.raises(chatterlab.InputError, match="wheel_speed: unknown key 'amplitude'"):
         chatterlab.simulate(default_model, 0.1, wheel_speed={"modulation": "sinusoidal", "amplitude": 0.1})
     with pytest.raises(ValueError, match="amplitude"):
