@@ -10,7 +10,9 @@
 // Found by dynamic_cast<const AnalysisWithArrays*>(&analysis) rather than through a virtual
 // accessor of Analysis (chatterlab/analysis.hpp), so that plugins compiled against a header
 // without it keep their vtable layout. Series whose length the parameters bound (a mutual
-// information curve over lags, correlation sums over radii) stay in the JSON.
+// information curve over lags, correlation sums over radii) stay in the JSON. A series too long
+// for summary files (a filtered profile, as long as the input) can be given to array callers only
+// (add_array_only): merged() leaves it out, so analyse() is unchanged by it.
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +26,7 @@ struct ResultArray {
   std::string key;             // top-level key of the result
   std::vector<double> values;  // booleans as 0 / 1 when `boolean`
   bool boolean = false;        // a flag per window (e.g. an alarm state): JSON true/false
+  bool in_json = true;         // false: for array callers only, not in merged()
 };
 
 struct ResultWithArrays {
@@ -38,9 +41,15 @@ struct ResultWithArrays {
     arrays.push_back({std::move(key), std::move(values), boolean});
   }
 
+  // A series for array callers only (after the result's own keys there): not in merged().
+  void add_array_only(std::string key, std::vector<double> values) {
+    arrays.push_back({std::move(key), std::move(values), false, false});
+  }
+
   // The JSON result, each series as an array under its key (what Analysis::analyse returns).
   Json merged() && {
     for (ResultArray& a : arrays) {
+      if (!a.in_json) continue;
       Json& slot = result[a.key];
       if (a.boolean) {
         slot = Json::array();
