@@ -81,6 +81,22 @@ def test_run_study_of_a_dict_with_progress(default_model, tmp_path):
         assert float(result.results["growth_rate_per_s"][i]) == root.growth_rate_per_s
 
 
+def test_progress_bar_in_a_notebook(default_model, tmp_path, capsys, monkeypatch):
+    # In a notebook (ipykernel loaded) run_study shows a progress bar by default (tqdm's when
+    # installed, else a text line redrawn with carriage returns, which Jupyter shows as one
+    # line); outside a notebook and terminal, none unless asked for.
+    import sys
+    import types
+    study = {"study": {"kind": "stability_map"}, "model": default_model,
+             "grid": {"model.work_speed_rpm": [30.0, 40.0, 50.0]}}
+    chatterlab.run_study(study, tmp_path / "quiet", plots=False)
+    assert "3/3" not in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "ipykernel", types.ModuleType("ipykernel"))
+    chatterlab.run_study(study, tmp_path / "notebook", plots=False)
+    shown = capsys.readouterr().err
+    assert "3/3" in shown and "stability_map" in shown
+
+
 @pytest.mark.parametrize("table", ["pandas", "numpy"])
 def test_hdf5_results_give_the_same_table_as_csv(default_model, tmp_path, table):
     # The same 3 x 4 grid written as results.csv and as results.h5 ([output] format = "hdf5"):
