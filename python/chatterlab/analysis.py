@@ -31,17 +31,19 @@ PathLike = Union[str, os.PathLike]
 @dataclass(frozen=True)
 class AnalysisResult(MappingABC):
     """The result of one analysis: the JSON object its plugin returns, as a read-only mapping
-    (``result["delay_samples"]``, ``dict(result)``), with curves (lists of numbers) as numpy
-    arrays. Scalar estimates follow chatterlab's convention ``{"value", "ci_low", "ci_high",
-    "quality", "reason"}``.
+    (``result["delay_samples"]``, ``dict(result)``), with curves as numpy arrays: series with a
+    value per window or sample (window features, detector scores, a bool ``alarm`` array) moved
+    from the library without conversion, shorter curves converted in one pass. Scalar estimates
+    follow chatterlab's convention ``{"value", "ci_low", "ci_high", "quality", "reason"}``.
 
     Attributes:
         name: the analysis plugin.
         result: the plugin's result.
         timing: seconds spent handing the samples to the analysis (``input_s``: a view of the
             array, no copy), whether numpy had to convert the input to a C-contiguous float64
-            array first (``input_converted``), and seconds in the analysis itself
-            (``analyse_s``); the rest of a call is Python.
+            array first (``input_converted``), seconds in the analysis itself (``analyse_s``)
+            and in turning its result into Python objects (``result_s``); the rest of a call
+            is Python.
     """
 
     name: str
@@ -153,7 +155,9 @@ def surface_profile(profile: Any, *, spacing_mm: Optional[float] = None, closed:
 
     An open profile needs spacing_mm (sample spacing) and cutoff_mm; a closed one (closed=True)
     is one revolution of equally spaced samples (cutoff_upr, default 50 UPR). unit: of the
-    values, "um", "mm" or "m"."""
+    values, "um", "mm" or "m". Besides the study kind's summary, the result holds the filtered
+    (waviness) profile ``waviness_um``, one value per input sample, form included (the
+    roughness profile is the input, in um, minus it)."""
     if closed:
         if spacing_mm is not None:
             raise ValueError("a closed profile is one revolution: give no spacing_mm")

@@ -193,10 +193,22 @@ def simulate(model: Mapping[str, Any], duration_s: float, *,
         ``{"schedule": [[t_s, rpm], ...]}`` (piecewise linear, held after the last row).
 
     Raises chatterlab.InputError for a model that does not validate or has no time-domain form,
-    ValueError for settings outside the engine's limits, chatterlab.PointFailure when the
-    integrator fails. A diverging response is not an error: ``diverged`` and ``status`` say so.
+    and for settings outside their limits, with the command line's message for that key of the
+    simulate kind's [simulation] table ("simulate: simulation.duration_s = -1 [s]: out of range,
+    must be > 0 ..."); ValueError for settings only the engine checks (samples_per_wave,
+    max_steps_per_wave, speed laws); chatterlab.PointFailure when the integrator fails. A diverging response is not an error: ``diverged`` and ``status`` say so.
     The GIL is released during the integration.
     """
+    table = {"duration_s": duration_s, "sample_rate_hz": sample_rate_hz,
+             "initial_displacement_m": initial_displacement_m, "initial_velocity_m_per_s": initial_velocity_m_per_s,
+             "initial_waviness_m": initial_waviness_m, "seed": seed, "infeed_rate_m_per_s": infeed_rate_m_per_s,
+             "one_sided_contact": one_sided_contact, "wheel_contact_arc_deg": wheel_contact_arc_deg,
+             "work_contact_arc_deg": work_contact_arc_deg, "relative_tolerance": relative_tolerance,
+             "integrator": integrator, "fixed_steps_per_wave": fixed_steps_per_wave,
+             "divergence_limit_m": divergence_limit_m}
+    if len(snapshot_times_s):
+        table["snapshot_times_s"] = list(snapshot_times_s)
+    _chatterlab.check_simulation(model, table)
     settings = _chatterlab._SimulationSettings(
         duration_s=duration_s, sample_rate_hz=sample_rate_hz, initial_displacement_m=initial_displacement_m,
         initial_velocity_m_per_s=initial_velocity_m_per_s, initial_waviness_m=initial_waviness_m, seed=seed,

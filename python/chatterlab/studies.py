@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 from . import _chatterlab, _progress
-from ._tables import TableKind, read_npy_table, read_table
+from ._tables import TableKind, read_npy_table, read_table, table_from_columns
 
 __all__ = ["Study", "RunResult", "load_study", "run_study", "init_study", "shipped_studies",
            "feed_plan", "feed_risk"]
@@ -81,8 +81,10 @@ class RunResult:
         points, failed, resumed: grid points in all, failed (their reasons in ``meta``), and taken
             over from an earlier run (resume=True).
         exit_code: what ``chatterlab run`` would exit with: 0 every point ok, 1 some failed.
-        results: results.csv (a pandas DataFrame, or a numpy record array without pandas): the
-            grid keys, the kind's outputs and ``status`` per point.
+        results: the results table (a pandas DataFrame, or a numpy record array without
+            pandas): the grid keys, the kind's outputs and ``status`` per point, from
+            results.csv or, for ``[output] format = "hdf5"`` (or "auto" above 100,000 points),
+            results.h5, read by the compiled module into the same columns.
         meta: meta.json (the resolved study, versions, timings, failed points, plot errors).
     """
 
@@ -159,8 +161,18 @@ def run_study(study: StudySource, out: Union[str, os.PathLike, None] = None, *, 
     finally:
         _progress.close(reporter)
     meta = json.loads((out_dir / "meta.json").read_text(encoding="utf-8"))
-    return RunResult(out_dir=out_dir, results=read_table(out_dir / "results.csv", table), meta=meta,
+    return RunResult(out_dir=out_dir, results=_results_table(loaded, out_dir, meta, table), meta=meta,
                      table_kind=table, **summary)
+
+
+def _results_table(study: Study, out_dir: Path, meta: dict, kind: TableKind) -> Any:
+    """results.csv or results.h5 (meta.json's results_file) as one table, with the same columns
+    and values either way: results.h5 through the library's own reader, so no HDF5 package is
+    needed in Python."""
+    if meta.get("results_file") == "results.h5":
+        header, columns = _chatterlab.read_results_h5(study._study, os.fspath(out_dir / "results.h5"))
+        return table_from_columns(header, columns, kind)
+    return read_table(out_dir / "results.csv", kind)
 
 
 @dataclass(frozen=True)

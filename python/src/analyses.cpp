@@ -10,6 +10,7 @@
 
 #include "bindings.hpp"
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 #include "chatterlab/errors.hpp"
 #include "convert.hpp"
 
@@ -22,9 +23,27 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// The result as Python objects: the JSON part through to_python_with_arrays (curves whose length
+// the parameters bound become arrays there), each long series of an analysis with arrays
+// (chatterlab/analysis_arrays.hpp) moved into a numpy array in its place: no JSON value per number.
+py::object result_to_python(ResultWithArrays&& result) {
+  py::object out = to_python_with_arrays(result.result);
+  for (ResultArray& a : result.arrays) {
+    if (a.boolean) {
+      py::array_t<bool> flags(static_cast<py::ssize_t>(a.values.size()));
+      bool* data = flags.mutable_data();
+      for (std::size_t i = 0; i < a.values.size(); ++i) data[i] = a.values[i] != 0.0;
+      out[py::str(a.key)] = std::move(flags);
+    } else {
+      out[py::str(a.key)] = to_numpy(std::move(a.values));
+    }
+  }
+  return out;
+}
+
 // Returns (result, timing): timing holds the seconds spent handing the samples to the analysis
-// (wrapping the numpy buffer in the series: no copy) and in the analysis itself, so callers can
-// see what the call costs beyond it.
+// (wrapping the numpy buffer in the series: no copy), in the analysis itself and in turning its
+// result into Python objects, so callers can see what the call costs beyond the analysis.
 py::tuple analyse(const std::string& name, py::handle values, double sample_interval, const std::string& sample_unit,
                   bool closed, py::handle params, py::handle context, const std::string& series_name,
                   py::handle plot_dir) {
@@ -40,7 +59,7 @@ py::tuple analyse(const std::string& name, py::handle values, double sample_inte
                      sample_unit + " between samples)");
   const std::string plots = plot_dir.is_none() ? std::string() : py::str(plot_dir).cast<std::string>();
 
-  Json result;
+  ResultWithArrays result;
   double input_s = 0.0, analyse_s = 0.0;
   {
     py::gil_scoped_release release;
@@ -58,18 +77,26 @@ py::tuple analyse(const std::string& name, py::handle values, double sample_inte
     series.closed = closed;
     series.name = series_name;
     const Clock::time_point start = Clock::now();
-    result = analysis->analyse(series, earlier);
+    if (const auto* with_arrays = dynamic_cast<const AnalysisWithArrays*>(analysis.get()))
+      result = with_arrays->analyse_with_arrays(series, earlier);
+    else
+      result.result = analysis->analyse(series, earlier);
     analyse_s = seconds_since(start);
     if (!plots.empty()) {
       std::filesystem::create_directories(plots);
-      analysis->plot(result, series, plots);
+      analysis->plot(ResultWithArrays(result).merged(), series, plots);  // a copy: plots read JSON
     }
   }
+  const Clock::time_point result_start = Clock::now();
+  py::object converted_result = result_to_python(std::move(result));
+  result = {};  // the JSON part freed inside the measured time
+  const double result_s = seconds_since(result_start);
   py::dict timing;
   timing["input_s"] = input_s;
   timing["input_converted"] = converted;
   timing["analyse_s"] = analyse_s;
-  return py::make_tuple(to_python_with_arrays(result), timing);
+  timing["result_s"] = result_s;
+  return py::make_tuple(std::move(converted_result), timing);
 }
 
 }  // namespace

@@ -15,6 +15,8 @@
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/model.hpp"
+#include "chatterlab/kit/settings.hpp"
+#include "chatterlab/kit/simulation.hpp"
 #include "convert.hpp"
 
 namespace chatterlab::python {
@@ -105,6 +107,19 @@ std::shared_ptr<const SpeedLaw> speed_law(py::handle law, double nominal_rpm, co
   const double mean = spec.contains("mean_rpm") ? spec["mean_rpm"].get<double>() : nominal_rpm;
   return make_modulated_speed(mean, parse_speed_modulation(spec.value("modulation", std::string("constant"))),
                               spec.value("amplitude_ratio", 0.0), spec.value("frequency_hz", 0.0));
+}
+
+// simulate()'s settings checked as the `simulate` kind checks its [simulation] table: every key
+// against its limits, then across keys for this model (output samples, snapshot times within the
+// duration ...), so that a bad setting raises InputError with the command line's message
+// ("simulate: simulation.duration_s = -1 [s]: out of range, must be > 0 ...").
+void check_simulation(py::handle model, py::handle simulation) {
+  Json document{{"model", to_json(model, "model")}, {"simulation", to_json(simulation, "simulation")}};
+  py::gil_scoped_release release;
+  CallSourceMap sources("simulate");
+  const ValidatedModel validated = validated_model(document, kit::ModelNeeds::time_domain, "simulate");
+  kit::SimulationTable table = kit::validate_settings(document, "simulation", kit::simulation_table(), sources);
+  kit::check_simulation(table, *validated.model->time_domain(), "simulation", sources);
 }
 
 py::dict simulate(py::handle model, const SimulationSettings& settings_in, py::handle wheel_speed,
@@ -262,6 +277,8 @@ void bind_models(py::module_& m) {
            py::arg("work_contact_arc_deg"), py::arg("snapshot_times_s"), py::arg("relative_tolerance"),
            py::arg("integrator"), py::arg("fixed_steps_per_wave"), py::arg("samples_per_wave"), py::arg("max_steps_per_wave"),
            py::arg("divergence_limit_m"));
+  m.def("check_simulation", &check_simulation, py::arg("model"), py::arg("simulation"),
+        "Checks simulate()'s settings as the simulate kind's [simulation] table (InputError with its message).");
   m.def("simulate", &simulate, py::arg("model"), py::arg("settings"), py::arg("wheel_speed") = py::none(),
         py::arg("work_speed") = py::none(), "Time-domain simulation by the dynamics engine; a dict of arrays.");
   m.def("fit_envelope", &fit_envelope, py::arg("t_s"), py::arg("x"), py::arg("start_s"), py::arg("end_s"),

@@ -6,9 +6,11 @@
 #include <condition_variable>
 #include <exception>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <pybind11/stl.h>
 
@@ -114,6 +116,71 @@ py::dict run(const Study& study, const std::string& out_dir, int threads, bool r
   return out;
 }
 
+py::array object_array(const py::list& items) {
+  return py::module_::import("numpy").attr("array")(items, py::arg("dtype") = "O");
+}
+
+// One column of a result table typed as python/chatterlab/_tables.py types a results.csv column:
+// booleans only -> bool; numbers and empty cells -> float64 (empty: NaN); anything else -> text
+// as results.csv writes it (object array of str, empty cells ""). Built here, straight into the
+// arrays: results.h5 is written for grids of 10^5 points and more.
+py::array column_array(const ResultTable& table, std::size_t column) {
+  const std::size_t n = table.rows.size();
+  auto cell = [&](std::size_t row) -> const Json& { return table.rows[row][column]; };
+  bool booleans = true, numbers = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Json& v = cell(i);
+    booleans = booleans && v.is_boolean();
+    numbers = numbers && (v.is_number() || v.is_null());
+  }
+  if (booleans && n > 0) {
+    py::array_t<bool> out(static_cast<py::ssize_t>(n));
+    bool* data = out.mutable_data();
+    for (std::size_t i = 0; i < n; ++i) data[i] = cell(i).get<bool>();
+    return out;
+  }
+  if (numbers) {
+    py::array_t<double> out(static_cast<py::ssize_t>(n));
+    double* data = out.mutable_data();
+    for (std::size_t i = 0; i < n; ++i)
+      data[i] = cell(i).is_null() ? std::numeric_limits<double>::quiet_NaN() : cell(i).get<double>();
+    return out;
+  }
+  py::list text;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Json& v = cell(i);
+    if (v.is_string())
+      text.append(py::str(v.get_ref<const std::string&>()));
+    else if (v.is_boolean())
+      text.append(py::str(v.get<bool>() ? "true" : "false"));
+    else if (v.is_null())
+      text.append(py::str(""));
+    else
+      text.append(py::str(to_python(v)));
+  }
+  return object_array(text);
+}
+
+// results.h5 of a run of `study` as (column names, arrays), the columns of results.csv.
+py::tuple read_results_h5(const Study& study, const std::string& path) {
+  ResultTable table;
+  {
+    py::gil_scoped_release release;
+    table = chatterlab::read_results_h5(study, path);
+  }
+  py::list names, columns;
+  const std::size_t grid = table.grid_columns.size();
+  for (std::size_t c = 0; c < grid + table.output_columns.size(); ++c) {
+    names.append(c < grid ? table.grid_columns[c] : table.output_columns[c - grid]);
+    columns.append(column_array(table, c));
+  }
+  names.append("status");
+  py::list status;
+  for (const std::string& s : table.status) status.append(py::str(s));
+  columns.append(object_array(status));
+  return py::make_tuple(std::move(names), std::move(columns));
+}
+
 }  // namespace
 
 void bind_studies(py::module_& m) {
@@ -131,6 +198,8 @@ void bind_studies(py::module_& m) {
   m.def("run_study", &run, py::arg("study"), py::arg("out_dir"), py::arg("threads") = 0,
         py::arg("resume") = false, py::arg("plots") = true, py::arg("progress") = py::none(),
         py::arg("interval_s") = 0.2);
+  m.def("read_results_h5", &read_results_h5, py::arg("study"), py::arg("path"),
+        "results.h5 of a run of `study` as (column names, numpy arrays): results.csv's columns.");
 }
 
 }  // namespace chatterlab::python

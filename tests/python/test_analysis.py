@@ -64,6 +64,39 @@ def test_analyses_equal_the_signal_analysis_study(cli, source_dir, henon, tmp_pa
     assert_same(spectrum, methods["lyapunov_spectrum"])
 
 
+def test_per_window_series_are_arrays_equal_to_the_study_json(cli, tmp_path):
+    # window_features and rbf_density hand their per-window series to Python as numpy arrays
+    # (chatterlab/analysis_arrays.hpp), not through JSON; a signal_analysis study writes the same
+    # analyses' JSON into summary.json. The two routes agree bit for bit, key order included.
+    rng = np.random.default_rng(5)
+    t = np.arange(20_000) / 10_000.0
+    x = np.sin(2 * math.pi * 73.0 * t) * np.exp(3.0 * t) + 0.2 * rng.standard_normal(len(t))
+    data = tmp_path / "signal.csv"
+    np.savetxt(data, np.column_stack([t, x]), delimiter=",", header="t_s,x", comments="", fmt="%.17g")
+    params = {"window_features": {"window_samples": 10}, "rbf_density": {"hop_samples": 50}}
+    study = tmp_path / "monitor.toml"
+    study.write_text(toml_text({
+        "study": {"kind": "signal_analysis"},
+        "input": {"file": str(data), "column": "x", "sample_rate_hz": 10_000.0},
+        "analysis": {"methods": list(params)},
+        **{f"analysis.{name}": settings for name, settings in params.items()},
+    }))
+    run = run_cli(cli, "run", study, "--out", tmp_path / "out")
+    assert run.returncode == 0, run.stderr
+    import json
+    methods = json.loads((tmp_path / "out" / "summary.json").read_text())["methods"]
+    for name, settings in params.items():
+        result = chatterlab.analyse(name, x, sample_rate_hz=10_000.0, **settings)
+        assert list(result) == list(methods[name]), name
+        for key in ("t_s", "variance", "rho1", "residual_variance", "score", "alarm"):
+            if key in methods[name]:
+                assert isinstance(result[key], np.ndarray), (name, key)
+                np.testing.assert_array_equal(result[key], np.array(methods[name][key]), err_msg=f"{name}.{key}")
+        assert_same({k: v for k, v in result.items()}, methods[name], name)
+    assert len(chatterlab.analyse("window_features", x, window_samples=10)["variance"]) == 2000
+    assert chatterlab.analyse("rbf_density", x, hop_samples=50)["alarm"].dtype == np.bool_
+
+
 def test_henon_known_answers(henon):
     # Henon map (a = 1.4, b = 0.3): delay 1, dimension 2, largest exponent 0.419 per iteration.
     embedding = chatterlab.embedding(henon)
@@ -81,7 +114,7 @@ def test_strided_and_other_dtypes_give_the_same_result(henon):
     assert_same(chatterlab.embedding(strided, delay_samples=1, max_dimension=4), contiguous)
     as_list = chatterlab.embedding(henon.tolist(), delay_samples=1, max_dimension=4)
     assert_same(as_list, contiguous)
-    assert set(contiguous.timing) == {"input_s", "input_converted", "analyse_s"}
+    assert set(contiguous.timing) == {"input_s", "input_converted", "analyse_s", "result_s"}
     # Zero-copy input (issue 24): the analysis reads a float64 C-contiguous array in place; numpy
     # converts strided views and lists once.
     assert contiguous.timing["input_converted"] is False
@@ -142,6 +175,14 @@ def test_waviness_of_a_long_cosine():
     transmission = math.exp(-math.pi * (alpha * 0.8 / 8.0) ** 2)
     assert result["Wt_um"] == pytest.approx(2.0 * transmission, rel=1e-4)
     assert result["WSm_mm"] == pytest.approx(8.0, rel=1e-3)
+    # The filtered profile itself (array callers only, not in summary files): one value per
+    # sample, the cosine times the transmission over the evaluation length (lc/2 left out at each
+    # end), to 0.1 % of the amplitude: the unfiltered cosine is 0.7 % away.
+    waviness_um = result["waviness_um"]
+    assert isinstance(waviness_um, np.ndarray) and waviness_um.shape == profile.shape
+    inside = (x >= result["evaluation_from_mm"]) & (x <= result["evaluation_to_mm"])
+    np.testing.assert_allclose(waviness_um[inside], transmission * profile[inside], rtol=0, atol=1e-3)
+    assert np.abs(profile[inside] - transmission * profile[inside]).max() > 5e-3
     with pytest.raises(ValueError, match="spacing_mm"):
         chatterlab.surface_profile(profile)
 

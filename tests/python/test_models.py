@@ -3,7 +3,9 @@ carry the command line's messages, simulate() returns the engine's series and re
 
 import math
 import re
+import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -133,11 +135,28 @@ def test_simulate_returns_numpy_series(default_model):
     assert run.snapshots[0]["work_surface_m"].shape == run.snapshots[0]["angle_deg"].shape
 
 
+@pytest.mark.parametrize("key, value", [("duration_s", -1.0), ("wheel_contact_arc_deg", 120.0),
+                                        ("relative_tolerance", 0.5), ("integrator", "euler")])
+def test_simulate_settings_errors_carry_the_command_line_message(cli, tmp_path, key, value):
+    # The simulate kind's [simulation] table with the same bad value, through `chatterlab validate`.
+    settings = {"duration_s": 0.2, key: value}
+    study = tmp_path / "bad.toml"
+    study.write_text(toml_text({"study": {"kind": "simulate"}, "model": SMALL_G1, "simulation": settings}))
+    run = run_cli(cli, "validate", study)
+    assert run.returncode == 2
+    prefix = f"chatterlab: error: {study}:"
+    assert run.stderr.startswith(prefix), run.stderr
+    expected = re.sub(r"^\d+: ", "", run.stderr[len(prefix):].strip())
+    with pytest.raises(chatterlab.InputError) as caught:
+        chatterlab.simulate(SMALL_G1, **settings)
+    assert str(caught.value) == "simulate: " + expected
+
+
 def test_simulate_refuses_bad_settings(default_model):
-    with pytest.raises(ValueError, match="duration_s must be > 0"):
+    with pytest.raises(chatterlab.InputError, match=r"simulation\.duration_s = -1 \[s\]: out of range, must be > 0"):
         chatterlab.simulate(default_model, -1.0)
-    with pytest.raises(chatterlab.InputError, match="integrator = \"euler\""):
-        chatterlab.simulate(default_model, 0.1, integrator="euler")
+    with pytest.raises(chatterlab.InputError, match="simulation.snapshot_times_s"):
+        chatterlab.simulate(default_model, 0.1, snapshot_times_s=[0.5])
     with pytest.raises(chatterlab.InputError, match="wheel_speed: unknown key 'amplitude'"):
         chatterlab.simulate(default_model, 0.1, wheel_speed={"modulation": "sinusoidal", "amplitude": 0.1})
     with pytest.raises(ValueError, match="amplitude"):
@@ -146,16 +165,39 @@ def test_simulate_refuses_bad_settings(default_model):
 
 
 def test_the_gil_is_released_while_the_engine_integrates(default_model):
-    # Holding the GIL inside C++ would stop this thread's loop for the whole simulation.
-    finished = threading.Event()
-    worker = threading.Thread(target=lambda: (chatterlab.simulate(default_model, 1.0), finished.set()))
-    worker.start()
-    ticks = 0
-    while not finished.is_set() and worker.is_alive():
-        ticks += 1
-    worker.join()
-    assert finished.is_set()
-    assert ticks > 10_000
+    # Another Python thread counts while this one calls simulate(). With the switch interval set
+    # far beyond the test's length, the interpreter never takes the GIL from a thread: the counter
+    # can only advance while this thread gives the GIL up of its own accord, which between the two
+    # reads of the counter happens only inside the compiled call (gil_scoped_release). A binding
+    # that held the GIL would leave the count at 0 whatever the timing; one that releases it lets
+    # the counter run unless the OS never schedules the counting thread during a call, hence up
+    # to 20 calls (each ~0.1 s of engine time) before concluding.
+    counter = [0]
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            counter[0] += 1
+            time.sleep(0)  # gives the GIL back, so the calling thread can resume
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)
+    ticker = threading.Thread(target=count)
+    try:
+        ticker.start()
+        during = []
+        for _ in range(20):
+            before = counter[0]
+            run = chatterlab.simulate(default_model, 1.0)
+            during.append(counter[0] - before)
+            if during[-1] > 0:
+                break
+    finally:
+        stop.set()
+        sys.setswitchinterval(interval)
+        ticker.join()
+    assert run.status == "completed"
+    assert during[-1] > 0, f"no progress of another thread during {len(during)} calls"
 
 
 def test_roots_from_several_threads_equal_one_thread(default_model):

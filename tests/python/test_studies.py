@@ -81,6 +81,70 @@ def test_run_study_of_a_dict_with_progress(default_model, tmp_path):
         assert float(result.results["growth_rate_per_s"][i]) == root.growth_rate_per_s
 
 
+def test_progress_bar_in_a_notebook(default_model, tmp_path, capsys, monkeypatch):
+    # In a notebook (ipykernel loaded) run_study shows a progress bar by default (tqdm's when
+    # installed, else a text line redrawn with carriage returns, which Jupyter shows as one
+    # line); outside a notebook and terminal, none unless asked for.
+    import sys
+    import types
+    study = {"study": {"kind": "stability_map"}, "model": default_model,
+             "grid": {"model.work_speed_rpm": [30.0, 40.0, 50.0]}}
+    chatterlab.run_study(study, tmp_path / "quiet", plots=False)
+    assert "3/3" not in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "ipykernel", types.ModuleType("ipykernel"))
+    chatterlab.run_study(study, tmp_path / "notebook", plots=False)
+    shown = capsys.readouterr().err
+    assert "3/3" in shown and "stability_map" in shown
+
+
+@pytest.mark.parametrize("table", ["pandas", "numpy"])
+def test_hdf5_results_give_the_same_table_as_csv(default_model, tmp_path, table):
+    # The same 3 x 4 grid written as results.csv and as results.h5 ([output] format = "hdf5"):
+    # run_study returns the same table, column for column (names, dtypes: float64, bool, text),
+    # value for value, bit for bit.
+    if table == "pandas":
+        pandas = pytest.importorskip("pandas")
+    study = {"study": {"kind": "stability_map", "name": "csv or hdf5"}, "model": default_model,
+             "grid": {"model.wheel_speed_rpm": [1400.0, 1500.0, 1600.0],
+                      "model.work_speed_rpm": [30.0, 45.0, 60.0, 75.0]}}
+    as_csv = chatterlab.run_study(study, tmp_path / "csv", threads=2, plots=False, progress=False, table=table)
+    as_hdf5 = chatterlab.run_study({**study, "output": {"format": "hdf5"}}, tmp_path / "hdf5", threads=2,
+                                   plots=False, progress=False, table=table)
+    assert as_hdf5.meta["results_file"] == "results.h5"
+    assert (tmp_path / "hdf5" / "results.h5").is_file() and not (tmp_path / "hdf5" / "results.csv").exists()
+    assert as_csv.points == as_hdf5.points == 12 and as_hdf5.exit_code == 0
+    if table == "pandas":
+        assert isinstance(as_hdf5.results, pandas.DataFrame)
+        pandas.testing.assert_frame_equal(as_hdf5.results, as_csv.results, check_exact=True)
+        columns = list(as_csv.results.columns)
+        dtypes = {c: as_csv.results[c].dtype for c in columns}
+    else:
+        assert isinstance(as_hdf5.results, np.recarray)
+        assert as_hdf5.results.dtype == as_csv.results.dtype
+        columns = list(as_csv.results.dtype.names)
+        for column in columns:
+            np.testing.assert_array_equal(as_hdf5.results[column], as_csv.results[column], err_msg=column)
+        dtypes = {c: as_csv.results[c].dtype for c in columns}
+    assert columns[:2] == ["model.wheel_speed_rpm", "model.work_speed_rpm"] and columns[-1] == "status"
+    # Every kind of column is covered: numbers, booleans and text.
+    assert dtypes["growth_rate_per_s"] == np.float64 and dtypes["stable"] == np.bool_
+    assert dtypes["certificate"] == object
+    assert_table_equals_csv(as_hdf5.results, read_csv_rows_of(as_csv))
+
+
+def read_csv_rows_of(run):
+    return read_csv_rows(run.out_dir / "results.csv")
+
+
+def test_results_h5_of_another_study_is_refused(default_model, tmp_path):
+    study = {"study": {"kind": "stability_map"}, "model": default_model, "output": {"format": "hdf5"},
+             "grid": {"model.work_speed_rpm": [30.0, 45.0]}}
+    chatterlab.run_study(study, tmp_path / "out", plots=False, progress=False)
+    other = chatterlab.load_study({**study, "grid": {"model.work_speed_rpm": [30.0, 50.0]}})
+    with pytest.raises(chatterlab.InputError, match=r"results\.h5: written by another study"):
+        chatterlab._chatterlab.read_results_h5(other._study, str(tmp_path / "out" / "results.h5"))
+
+
 def test_a_bad_study_raises_the_command_line_message_and_writes_nothing(cli, default_model, tmp_path):
     tables = {"study": {"kind": "stability_map"}, "model": default_model,
               "grid": {"model.work_speed_rpm": [30.0, -5.0]}}

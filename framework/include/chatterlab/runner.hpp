@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "chatterlab/study.hpp"
+#include "chatterlab/study_kind.hpp"
 
 namespace chatterlab {
 
@@ -70,6 +71,12 @@ struct RunSummary {
 // InputError after stopping the run when an input file changes while it goes (meta.json then
 // says so; results.csv is not written).
 RunSummary run_study(const Study& study, const RunOptions& options);
+
+// The results.h5 ([output] format = "hdf5") that a run of `study` wrote, read back as the runner
+// assembled it for results.csv: every point in grid order, the grid values from `study`, a failed
+// point's outputs null. The Python API's run_study returns it as its table. Throws InputError
+// naming the file when it cannot be read, is not a chatterlab results.h5, or another study wrote it.
+ResultTable read_results_h5(const Study& study, const std::filesystem::path& results_h5);
 
 // The body of a worker process: `chatterlab __worker FD PID` calls it (main() before anything
 // else, MPI included). Returns the process exit code.

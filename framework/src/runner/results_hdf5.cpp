@@ -18,6 +18,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/input_files.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/runner.hpp"
 #include "study/messages.hpp"
 
 namespace chatterlab::runner {
@@ -639,3 +640,30 @@ Hdf5Results read_hdf5_results(const fs::path& path) {
 }
 
 }  // namespace chatterlab::runner
+
+namespace chatterlab {
+
+ResultTable read_results_h5(const Study& study, const std::filesystem::path& results_h5) {
+  runner::Hdf5Results file;
+  try {
+    file = runner::read_hdf5_results(results_h5);
+  } catch (const std::exception& e) {
+    throw InputError(e.what());
+  }
+  const std::string fingerprint = runner::study_fingerprint(study, file.header.columns);
+  if (file.header.study_fingerprint != fingerprint || file.header.points != study.point_count())
+    throw InputError(fmt::format("{}: written by another study than {} ({} points, fingerprint {})",
+                                 results_h5.string(), study.file.string(), file.header.points,
+                                 file.header.study_fingerprint));
+  std::vector<runner::PointResult> results(study.point_count());
+  for (auto& [point, result] : file.records) {
+    // results.h5 stores a failed point's cells as NaN, FALSE or "" (its status says why);
+    // results.csv leaves them empty: null, as the runner had them.
+    if (runner::outcome_of(result.status) != runner::PointOutcome::ok)
+      for (Json& cell : result.outputs) cell = nullptr;
+    results[point] = std::move(result);
+  }
+  return runner::assemble_results(study, file.header.columns, std::move(results));
+}
+
+}  // namespace chatterlab

@@ -282,6 +282,10 @@ TEST(Hdf5Results, CsvAndHdf5OfAStabilityMapHoldTheSameNumbers) {
   const Json meta = Json::parse(text_file(dir / "h5" / "out" / "meta.json"));
   EXPECT_EQ(back.header.study_fingerprint, meta["study_fingerprint"]);
   EXPECT_EQ(meta["results_file"], "results.h5");
+  // read_results_h5 (chatterlab/runner.hpp, what the Python API's run_study reads): the table
+  // results.csv is written from, to the byte.
+  EXPECT_EQ(format_csv(read_results_h5(h5_study, dir / "h5" / "out" / "results.h5")),
+            text_file(dir / "csv" / "out" / "results.csv"));
 }
 
 TEST(Hdf5Results, AResumedRunEqualsAnUninterruptedOne) {

@@ -451,7 +451,12 @@ monitor::ScoreTrack BpNetworkAnalysis::scores(const SampledSeries& series, Json&
   return track;
 }
 
-Json BpNetworkAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+Json BpNetworkAnalysis::analyse(const SampledSeries& series, const Json& context) const {
+  return analyse_with_arrays(series, context).merged();
+}
+
+ResultWithArrays BpNetworkAnalysis::analyse_with_arrays(const SampledSeries& series,
+                                                        const Json& /*context*/) const {
   return monitor::detector_result(*this, series);
 }
 

@@ -22,6 +22,7 @@
 #include "shared/monitoring/monitor_common.hpp"
 #include "shared/monitoring/features.hpp"
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 
 namespace chatterlab {
 
@@ -100,12 +101,14 @@ LabelledWindows labelled_windows(const SampledSeries& series, std::size_t window
                                  std::array<double, 2> stable_s, std::array<double, 2> onset_s,
                                  double train_fraction);
 
-class BpNetworkAnalysis final : public Analysis, public monitor::Detector {
+class BpNetworkAnalysis final : public Analysis, public AnalysisWithArrays, public monitor::Detector {
  public:
   static PluginInfo info();
   explicit BpNetworkAnalysis(const ParamValues& params);
 
   Json analyse(const SampledSeries& series, const Json& context) const override;
+  // t_s, score and alarm (one value per evaluation) as vectors.
+  ResultWithArrays analyse_with_arrays(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
 

@@ -159,8 +159,14 @@ monitor::ScoreTrack RbfDensityAnalysis::scores(const SampledSeries& series, Json
   return track;
 }
 
-Json RbfDensityAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
-  Json result = monitor::detector_result(*this, series);
+Json RbfDensityAnalysis::analyse(const SampledSeries& series, const Json& context) const {
+  return analyse_with_arrays(series, context).merged();
+}
+
+ResultWithArrays RbfDensityAnalysis::analyse_with_arrays(const SampledSeries& series,
+                                                         const Json& /*context*/) const {
+  ResultWithArrays out = monitor::detector_result(*this, series);
+  Json& result = out.result;
   // Snapshots for plot(): the first window, the window that raised the first alarm, the last one.
   Json snapshots = Json::array();
   snapshots.push_back(snapshot(series, window_ - 1));
@@ -170,7 +176,7 @@ Json RbfDensityAnalysis::analyse(const SampledSeries& series, const Json& /*cont
         series, static_cast<std::size_t>(std::llround(first.get<double>() / series.sample_interval))));
   snapshots.push_back(snapshot(series, series.values.size() - 1));
   result["snapshots"] = std::move(snapshots);
-  return result;
+  return out;
 }
 
 Json RbfDensityAnalysis::snapshot(const SampledSeries& series, std::size_t last_sample) const {

@@ -17,6 +17,7 @@
 
 #include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 
 namespace chatterlab {
 
@@ -37,12 +38,14 @@ struct DensityCriterion {
 // points over [min, max] of the samples plus the centres.
 DensityCriterion density_criterion(std::span<const double> samples, const RbfDensity& density);
 
-class RbfDensityAnalysis final : public Analysis, public monitor::Detector {
+class RbfDensityAnalysis final : public Analysis, public AnalysisWithArrays, public monitor::Detector {
  public:
   static PluginInfo info();
   explicit RbfDensityAnalysis(const ParamValues& params);
 
   Json analyse(const SampledSeries& series, const Json& context) const override;
+  // t_s, score and alarm (one value per evaluation) as vectors.
+  ResultWithArrays analyse_with_arrays(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
 

@@ -51,6 +51,14 @@ Json SurfaceAnalysis::analyse(const SampledSeries& series, const Json& /*context
   return evaluate_surface(series, settings());
 }
 
+ResultWithArrays SurfaceAnalysis::analyse_with_arrays(const SampledSeries& series, const Json& /*context*/) const {
+  SurfaceEvaluation e = evaluate_surface_profile(series, settings());
+  ResultWithArrays out;
+  out.result = std::move(e.summary);
+  out.add_array_only("waviness_um", std::move(e.waviness_um));
+  return out;
+}
+
 void SurfaceAnalysis::plot(const Json& /*result*/, const SampledSeries& series,
                            const fs::path& out_dir) const {
   plot_closed(series, settings(), out_dir);

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 #include "shared/metrology/surface.hpp"
 
 namespace chatterlab::surface {
@@ -15,13 +16,16 @@ namespace chatterlab::surface {
 // plot (and the Wz|f bands with speeds) of a closed profile: surface_profile_polar(.png/.svg),
 // surface_profile_wz_f_bands. The constructor throws InputError on inconsistent [process] keys
 // (one speed without the other, a band with from > to), naming the flat key.
+// For array callers (the Python API) it adds the filtered (waviness) profile, `waviness_um`, one
+// value per input sample, which the summary does not hold (chatterlab/analysis_arrays.hpp).
 // It is the ProfileQualityMeasurement of the build (chatterlab/analysis.hpp): the simulate kind
 // measures its final work surface through that capability.
-class SurfaceAnalysis final : public Analysis, public ProfileQualityMeasurement {
+class SurfaceAnalysis final : public Analysis, public AnalysisWithArrays, public ProfileQualityMeasurement {
  public:
   static PluginInfo info();
   explicit SurfaceAnalysis(const ParamValues& params);
   Json analyse(const SampledSeries& series, const Json& context) const override;
+  ResultWithArrays analyse_with_arrays(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
 

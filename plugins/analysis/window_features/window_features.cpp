@@ -31,19 +31,32 @@ WindowFeaturesAnalysis::WindowFeaturesAnalysis(const ParamValues& params)
       hop_(params.has("hop_samples") ? static_cast<std::size_t>(params.integer("hop_samples"))
                                      : window_) {}
 
-Json WindowFeaturesAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
+Json WindowFeaturesAnalysis::analyse(const SampledSeries& series, const Json& context) const {
+  return analyse_with_arrays(series, context).merged();
+}
+
+ResultWithArrays WindowFeaturesAnalysis::analyse_with_arrays(const SampledSeries& series,
+                                                             const Json& /*context*/) const {
   monitor::require_samples(series, window_,
                            fmt::format("window_features.window_samples = {}", window_));
-  const FeatureSeries fs = feature_series(series.values, window_, hop_, series.sample_interval);
-  Json variance = Json::array(), rho1 = Json::array(), residual = Json::array();
+  FeatureSeries fs = feature_series(series.values, window_, hop_, series.sample_interval);
+  std::vector<double> variance, rho1, residual;
+  variance.reserve(fs.features.size());
+  rho1.reserve(fs.features.size());
+  residual.reserve(fs.features.size());
   for (const auto& f : fs.features) {
     variance.push_back(f.variance);
     rho1.push_back(f.rho1);
     residual.push_back(f.residual_variance);
   }
-  return {{"window_samples", window_}, {"hop_samples", hop_}, {"t_s", fs.t_s},
-          {"variance", std::move(variance)}, {"rho1", std::move(rho1)},
-          {"residual_variance", std::move(residual)}};
+  ResultWithArrays out;
+  out.result["window_samples"] = window_;
+  out.result["hop_samples"] = hop_;
+  out.add("t_s", std::move(fs.t_s));
+  out.add("variance", std::move(variance));
+  out.add("rho1", std::move(rho1));
+  out.add("residual_variance", std::move(residual));
+  return out;
 }
 
 void WindowFeaturesAnalysis::plot(const Json& result, const SampledSeries& series,

@@ -12,15 +12,18 @@
 // consecutive windows. docs/analysis/monitoring.md.
 #include "shared/monitoring/features.hpp"
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 
 namespace chatterlab {
 
-class WindowFeaturesAnalysis final : public Analysis {
+class WindowFeaturesAnalysis final : public Analysis, public AnalysisWithArrays {
  public:
   static PluginInfo info();
   explicit WindowFeaturesAnalysis(const ParamValues& params);
 
   Json analyse(const SampledSeries& series, const Json& context) const override;
+  // t_s, variance, rho1, residual_variance as vectors (one value per window).
+  ResultWithArrays analyse_with_arrays(const SampledSeries& series, const Json& context) const override;
   void plot(const Json& result, const SampledSeries& series,
             const std::filesystem::path& out_dir) const override;
 

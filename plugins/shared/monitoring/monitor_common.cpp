@@ -63,18 +63,18 @@ ParamSpec count_spec(const std::string& key, const std::string& description,
   return spec;
 }
 
-Json detector_result(const Detector& detector, const SampledSeries& series) {
+ResultWithArrays detector_result(const Detector& detector, const SampledSeries& series) {
   detector.check(series);
-  Json result = Json::object();
-  ScoreTrack track = detector.scores(series, result);
+  ResultWithArrays out;
+  ScoreTrack track = detector.scores(series, out.result);
   const AlarmReport report = track_alarms(track, detector.persistence(), end_time_s(series));
-  result["threshold"] = track.threshold;
-  result["persistence_windows"] = detector.persistence();
-  result["t_s"] = track.t_s;
-  result["score"] = track.score;
-  result["alarm"] = report.alarm;
-  result["alarms"] = alarm_json(report);
-  return result;
+  out.result["threshold"] = track.threshold;
+  out.result["persistence_windows"] = detector.persistence();
+  out.add("t_s", std::move(track.t_s));
+  out.add("score", std::move(track.score));
+  out.add("alarm", std::vector<double>(report.alarm.begin(), report.alarm.end()), /*boolean=*/true);
+  out.result["alarms"] = alarm_json(report);
+  return out;
 }
 
 void plot_scores(const Json& result, const std::string& title, const std::string& score_label,

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "chatterlab/analysis.hpp"
+#include "chatterlab/analysis_arrays.hpp"
 #include "chatterlab/params.hpp"
 
 namespace chatterlab::monitor {
@@ -76,9 +77,11 @@ class Detector {
   }
 };
 
-// Detector::check, scores and track_alarms as one JSON result (what analyse() returns):
-// details + {"t_s": [...], "score": [...], "threshold", "alarm": [...], "alarms": alarm_json}.
-Json detector_result(const Detector& detector, const SampledSeries& series);
+// Detector::check, scores and track_alarms as one result (merged: what analyse() returns):
+// details + {"threshold", "persistence_windows", "t_s": [...], "score": [...], "alarm": [...],
+// "alarms": alarm_json}; t_s, score and alarm, one value per evaluation, as arrays
+// (chatterlab/analysis_arrays.hpp).
+ResultWithArrays detector_result(const Detector& detector, const SampledSeries& series);
 
 // Plot of a detector_result(): scores over time, the alarm state (0/1, after persistence) as a
 // step line and the threshold dashed; <stem>.png/.svg in out_dir.
