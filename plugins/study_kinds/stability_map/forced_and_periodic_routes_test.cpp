@@ -131,6 +131,21 @@ TEST(StabilityMapRoutes, G7WithASpeedModulationIsRefused) {
       << message;
 }
 
+// A wheel so slow that one revolution, resolved at the 800 Hz mode, exceeds the monodromy limit.
+TEST(StabilityMapRoutes, G7BeyondTheDiscretisationLimitIsRefused) {
+  TempDir dir;
+  std::string model = g7_model(6.5e6, 0.3);
+  model.replace(model.find("wheel_speed_rpm = 1450"), 22, "wheel_speed_rpm = 100");
+  const std::string message = testing::input_error_of(
+      [&] { load_study(dir.write("study.toml", "[study]\nkind = \"stability_map\"\n" + model)); });
+  EXPECT_NE(message.find("study.toml:"), std::string::npos) << message;
+  EXPECT_NE(message.find("model.type = \"amplitude_modulated\": its Floquet route over one coefficient period: the "
+                         "longest revolution (0.6 s)"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("> 3000"), std::string::npos) << message;
+}
+
 // ------------------------------------------------------------------ against simulation
 
 // The `simulate` kind's fitted growth rate of a bilateral run of the same [model].
