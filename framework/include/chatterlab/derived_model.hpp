@@ -14,7 +14,9 @@
 //
 // and optionally initial_state(disturbance, x), state_scales(displacement_m, scales),
 // highest_frequency_hz(), diagnostics(), angle_state(rotor) and speed_rpm_from_state(rotor, x)
-// (the TimeDomainModel members, dynamics.hpp; angles as states: G5). From that
+// (the TimeDomainModel members, dynamics.hpp; angles as states: G5), and linear_form(t) with
+// linear_forcing(ContactInputOf<double>) for the fixed-step engine's exact propagation of a model
+// that is linear between contact events (dynamics.hpp, LinearForm; G6). From that
 // one definition the framework derives
 //   - the time-domain form the dynamics engine integrates (EquationsTimeDomain: S = double),
 //   - the Jacobian at rest by forward-mode automatic differentiation (S = Dual, dual.hpp),
@@ -198,6 +200,14 @@ class EquationsTimeDomain final : public TimeDomainModel {
   std::vector<std::string> diagnostics() const override {
     if constexpr (requires { eqs_.diagnostics(); }) return eqs_.diagnostics();
     else return {};
+  }
+  std::optional<LinearForm> linear_form(double t_s) const override {
+    if constexpr (requires { eqs_.linear_form(t_s); }) return eqs_.linear_form(t_s);
+    else return std::nullopt;
+  }
+  double linear_forcing(const ContactInput& in) const override {
+    if constexpr (requires { eqs_.linear_forcing(convert(in)); }) return eqs_.linear_forcing(convert(in));
+    else return 0.0;
   }
 
  private:

@@ -12,6 +12,7 @@
 // docs/derived_stability.md.
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "chatterlab/characteristic.hpp"
@@ -58,6 +59,13 @@ class LinearisedModel {
   // surface one revolution ago per regenerated rotor) at `point`: (n + r) x (n + r), by automatic
   // differentiation of the model's own contact law and derivatives.
   virtual JacobianMatrix jacobian(const ProcessPoint& point) const = 0;
+
+  // The period [s] of the linearisation's coefficients at the nominal constant speeds when they
+  // depend on the rotor angles (G7: an unbalance modulates the grinding stiffness once per wheel
+  // revolution); nullopt when they are constant. A model with periodic coefficients has no
+  // characteristic function: its stability is the Floquet growth rate over this period
+  // (floquet.hpp; stability_map takes that route).
+  virtual std::optional<double> coefficient_period_s() const { return std::nullopt; }
 };
 
 // The certified characteristic function (DelayCharacteristic, delay_system.hpp) of the linear

@@ -21,50 +21,25 @@ AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalPar
   return f;
 }
 
-AmplitudeModulatedTimeDomain::AmplitudeModulatedTimeDomain(const AmplitudeModulatedModalParameters& p)
-    : p_(p), omega_(2.0 * std::numbers::pi * p.frequency_hz) {}
+AmplitudeModulatedEquations::AmplitudeModulatedEquations(const AmplitudeModulatedModalParameters& parameters)
+    : p(parameters), omega_rad_s(2.0 * std::numbers::pi * parameters.frequency_hz) {}
 
-void AmplitudeModulatedTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+void AmplitudeModulatedEquations::initial_state(const Disturbance& d, std::span<double> x) const {
   x[0] = d.displacement_m;
   x[1] = d.velocity_m_per_s;
 }
 
-void AmplitudeModulatedTimeDomain::state_scales(double displacement_m, std::span<double> scales) const {
+void AmplitudeModulatedEquations::state_scales(double displacement_m, std::span<double> scales) const {
   scales[0] = displacement_m;
-  scales[1] = displacement_m * omega_;
+  scales[1] = displacement_m * omega_rad_s;
 }
 
-double AmplitudeModulatedTimeDomain::highest_frequency_hz() const {
+double AmplitudeModulatedEquations::highest_frequency_hz() const {
   // Stiffened by at most the series grinding/contact stiffness at full modulation; sidebands add
   // a few wheel rotation frequencies.
-  const double g = p_.grinding_stiffness_n_per_m * (1.0 + p_.modulation_depth);
-  const double series = g / (1.0 + g / p_.contact_stiffness_n_per_m);
-  return 1.5 * p_.frequency_hz * std::sqrt(1.0 + series / p_.stiffness_n_per_m) + 4.0 * p_.wheel_speed_rpm / 60.0;
-}
-
-double AmplitudeModulatedTimeDomain::nominal_speed_rpm(Rotor rotor) const {
-  return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
-}
-
-void AmplitudeModulatedTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
-  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
-  const double g = p_.grinding_stiffness_n_per_m * (1.0 + p_.modulation_depth * std::sin(in.angle_rad[wheel]));
-  const double x1 = in.state[0];
-  const double delayed = in.previous_surface_m[wheel];  // x(t - Tg)
-  const double force = -g * (x1 - p_.overlap_factor * delayed) / (1.0 + g / p_.contact_stiffness_n_per_m);
-  const double x = x1 + force / p_.contact_stiffness_n_per_m;
-  out.penetration_m = 1.0;  // linear perturbation model: always in contact
-  out.normal_force_n = force;
-  out.depth_of_cut_m = x - p_.overlap_factor * delayed;
-  // The stored wheel surface is x(t): the increment over one revolution ago.
-  out.removed_m[wheel] = x - delayed;
-}
-
-void AmplitudeModulatedTimeDomain::derivatives(const ContactInput& in, const ContactOutput& contact,
-                                               std::span<double> dx) const {
-  dx[0] = in.state[1];
-  dx[1] = omega_ * omega_ * (contact.normal_force_n / p_.stiffness_n_per_m - in.state[0]) -
-          2.0 * p_.damping_ratio * omega_ * in.state[1];
+  const double g = p.grinding_stiffness_n_per_m * (1.0 + p.modulation_depth);
+  const double series = g / (1.0 + g / p.contact_stiffness_n_per_m);
+  return 1.5 * p.frequency_hz * std::sqrt(1.0 + series / p.stiffness_n_per_m) + 4.0 * p.wheel_speed_rpm / 60.0;
 }
 
 namespace {
@@ -98,7 +73,8 @@ const ParamTable<AmplitudeModulatedModalParameters>& parameters_table() {
 
 }  // namespace
 
-AmplitudeModulated::AmplitudeModulated(const ParamValues& values) : p_(parameters_table().read(values)) {}
+AmplitudeModulated::AmplitudeModulated(const ParamValues& values)
+    : DerivedModel(AmplitudeModulatedEquations(parameters_table().read(values))) {}
 
 PluginInfo AmplitudeModulated::info() {
   PluginInfo info;

@@ -11,7 +11,14 @@
 // g = kg b (1 + Q sin th_g). A periodic-coefficient DDE: its Floquet solution has a carrier at
 // the chatter frequency and sidebands spaced by the wheel rotation frequency; the time signal
 // beats with the wheel period. Linear perturbation model: contact is never lost (the
-// steady grinding force is not part of it). Docs: docs/models/amplitude_modulated.md.
+// steady grinding force is not part of it). Written once: stability_map reports the Floquet growth
+// rate of its periodic linearisation (route "floquet"). Docs: docs/models/amplitude_modulated.md.
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <span>
+
+#include "chatterlab/derived_model.hpp"
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/model.hpp"
 #include "chatterlab/params.hpp"
@@ -38,37 +45,58 @@ struct AmplitudeModulatedModalParameters {
 // The same model for floquet_growth(): m = k/w^2, c = 2 zeta sqrt(k m).
 AmplitudeModulatedParameters floquet_parameters(const AmplitudeModulatedModalParameters& p);
 
-class AmplitudeModulatedTimeDomain final : public TimeDomainModel {
- public:
-  explicit AmplitudeModulatedTimeDomain(const AmplitudeModulatedModalParameters& p);
-  std::size_t state_size() const override { return 2; }
-  void initial_state(const Disturbance& d, std::span<double> x) const override;
-  void state_scales(double displacement_m, std::span<double> scales) const override;
-  double highest_frequency_hz() const override;
-  bool regenerates(Rotor rotor) const override { return rotor == Rotor::wheel; }
-  double nominal_speed_rpm(Rotor rotor) const override;
-  void contact(const ContactInput& in, ContactOutput& out) const override;
-  void derivatives(const ContactInput& in, const ContactOutput& contact, std::span<double> dx) const override;
-  double displacement_m(std::span<const double> state) const override { return state[0]; }
+// G7 written once (derived_model.hpp): the templated equations give the simulation and, by
+// automatic differentiation, the periodic linearisation whose Floquet growth rate stability_map
+// reports (floquet.hpp). State: x1, x1'; the wheel surface stores x = x1 + x2.
+struct AmplitudeModulatedEquations {
+  AmplitudeModulatedEquations(const AmplitudeModulatedModalParameters& parameters);  // NOLINT: implicit
+  AmplitudeModulatedModalParameters p;
+  double omega_rad_s = 0.0;  // 2 pi frequency_hz
 
- private:
-  AmplitudeModulatedModalParameters p_;
-  double omega_;
+  std::size_t state_size() const { return 2; }
+  void initial_state(const Disturbance& d, std::span<double> x) const;
+  void state_scales(double displacement_m, std::span<double> scales) const;
+  double highest_frequency_hz() const;
+  bool regenerates(Rotor rotor) const { return rotor == Rotor::wheel; }
+  double nominal_speed_rpm(Rotor rotor) const { return rotor == Rotor::wheel ? p.wheel_speed_rpm : p.work_speed_rpm; }
+  double displacement_m(std::span<const double> state) const { return state[0]; }
+
+  template <class S>
+  void contact(const ContactInputOf<S>& in, ContactOutputOf<S>& out) const {
+    constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
+    const double g = p.grinding_stiffness_n_per_m * (1.0 + p.modulation_depth * std::sin(in.angle_rad[wheel]));
+    const S x1 = in.state[0];
+    const S delayed = in.previous_surface_m[wheel];  // x(t - Tg)
+    const S force = -g * (x1 - p.overlap_factor * delayed) / (1.0 + g / p.contact_stiffness_n_per_m);
+    const S x = x1 + force / p.contact_stiffness_n_per_m;
+    out.penetration_m = S(1.0);  // linear perturbation model: always in contact
+    out.normal_force_n = force;
+    out.depth_of_cut_m = x - p.overlap_factor * delayed;
+    // The stored wheel surface is x(t): the increment over one revolution ago.
+    out.removed_m[wheel] = x - delayed;
+  }
+  template <class S>
+  void derivatives(const ContactInputOf<S>& in, const ContactOutputOf<S>& contact, std::span<S> dx) const {
+    dx[0] = in.state[1];
+    dx[1] = omega_rad_s * omega_rad_s * (contact.normal_force_n / p.stiffness_n_per_m - in.state[0]) -
+            2.0 * p.damping_ratio * omega_rad_s * in.state[1];
+  }
 };
 
-class AmplitudeModulated final : public Model {
+class AmplitudeModulated final : public DerivedModel<AmplitudeModulatedEquations> {
  public:
   explicit AmplitudeModulated(const ParamValues& values);
-  explicit AmplitudeModulated(AmplitudeModulatedModalParameters p) : p_(p) {}
+  explicit AmplitudeModulated(const AmplitudeModulatedModalParameters& p) : DerivedModel(AmplitudeModulatedEquations(p)) {}
   static PluginInfo info();
-  std::optional<double> wheel_period_s() const override { return 60.0 / p_.wheel_speed_rpm; }
-  std::unique_ptr<TimeDomainModel> time_domain() const override {
-    return std::make_unique<AmplitudeModulatedTimeDomain>(p_);
-  }
-  const AmplitudeModulatedModalParameters& parameters() const { return p_; }
-
- private:
-  AmplitudeModulatedModalParameters p_;
+  const AmplitudeModulatedModalParameters& parameters() const { return equations().p; }
+  // The grinding stiffness follows the wheel angle: the linearisation's coefficients repeat once
+  // per wheel revolution, so there is no characteristic function (an autonomous root at one
+  // wheel angle would be wrong); the stability is the Floquet growth rate over that period.
+  std::unique_ptr<CharacteristicFunction> characteristic() const override { return nullptr; }
+  std::optional<double> coefficient_period_s() const override { return 60.0 / parameters().wheel_speed_rpm; }
 };
+
+// The engine's view of the equations (tests simulate it directly).
+using AmplitudeModulatedTimeDomain = EquationsTimeDomain<AmplitudeModulatedEquations>;
 
 }  // namespace chatterlab

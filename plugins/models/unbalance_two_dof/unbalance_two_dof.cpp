@@ -8,74 +8,42 @@
 
 namespace chatterlab {
 
-void UnbalanceTwoDofTimeDomain::initial_state(const Disturbance& d, std::span<double> x) const {
+void UnbalanceTwoDofEquations::initial_state(const Disturbance& d, std::span<double> x) const {
   x[0] = d.displacement_m;
   x[1] = d.velocity_m_per_s;
   x[2] = 0.0;
   x[3] = 0.0;
 }
 
-void UnbalanceTwoDofTimeDomain::state_scales(double displacement_m, std::span<double> scales) const {
+void UnbalanceTwoDofEquations::state_scales(double displacement_m, std::span<double> scales) const {
   const double w = 2.0 * std::numbers::pi * highest_frequency_hz();
   // The forced amplitude U w^2 / k sets the scale when it exceeds the disturbance.
-  const double w_g = 2.0 * std::numbers::pi * p_.wheel_speed_rpm / 60.0;
-  const double d = std::max(displacement_m, p_.unbalance_kg_m * w_g * w_g /
-                                                (unbalance::coupling_stiffness_n_per_m(p_) + p_.wheel_support_stiffness_n_per_m));
+  const double w_g = 2.0 * std::numbers::pi * p.wheel_speed_rpm / 60.0;
+  const double d = std::max(displacement_m, p.unbalance_kg_m * w_g * w_g /
+                                                (unbalance::coupling_stiffness_n_per_m(p) + p.wheel_support_stiffness_n_per_m));
   scales[0] = scales[2] = d;
   scales[1] = scales[3] = d * w;
 }
 
-double UnbalanceTwoDofTimeDomain::highest_frequency_hz() const {
-  const double k = unbalance::coupling_stiffness_n_per_m(p_);
-  const double w1 = std::sqrt((k + p_.wheel_support_stiffness_n_per_m) / p_.wheel_mass_kg);
-  const double w2 = std::sqrt((k + p_.work_support_stiffness_n_per_m) / p_.work_mass_kg);
+double UnbalanceTwoDofEquations::highest_frequency_hz() const {
+  const double k = unbalance::coupling_stiffness_n_per_m(p);
+  const double w1 = std::sqrt((k + p.wheel_support_stiffness_n_per_m) / p.wheel_mass_kg);
+  const double w2 = std::sqrt((k + p.work_support_stiffness_n_per_m) / p.work_mass_kg);
   // The coupled frequencies lie below sqrt(w1^2 + w2^2); the forcing is at the wheel speed.
-  return 1.5 * std::max(std::hypot(w1, w2) / (2.0 * std::numbers::pi), p_.wheel_speed_rpm / 60.0);
+  return 1.5 * std::max(std::hypot(w1, w2) / (2.0 * std::numbers::pi), p.wheel_speed_rpm / 60.0);
 }
 
-double UnbalanceTwoDofTimeDomain::nominal_speed_rpm(Rotor rotor) const {
-  return rotor == Rotor::wheel ? p_.wheel_speed_rpm : p_.work_speed_rpm;
-}
-
-void UnbalanceTwoDofTimeDomain::contact(const ContactInput& in, ContactOutput& out) const {
-  constexpr auto work = static_cast<std::size_t>(Rotor::work);
-  const double relative = in.state[0] + in.state[2];
-  out.penetration_m = 1.0;  // linear model: always in contact
-  out.normal_force_n = unbalance::coupling_stiffness_n_per_m(p_) * relative;  // force through the contact spring
-  out.depth_of_cut_m = relative;
-  // The work surface keeps a copy of the relative motion: increment over one revolution ago.
-  out.removed_m[work] = relative - in.previous_surface_m[work];
-}
-
-double UnbalanceTwoDofTimeDomain::linear_forcing(const ContactInput& in) const {
-  constexpr auto wheel = static_cast<std::size_t>(Rotor::wheel);
-  const double w = 2.0 * std::numbers::pi * in.speed_rpm[wheel] / 60.0;
-  return p_.unbalance_kg_m * w * w * std::cos(in.angle_rad[wheel]);
-}
-
-std::optional<LinearForm> UnbalanceTwoDofTimeDomain::linear_form(double /*t_s*/) const {
-  const double k = unbalance::coupling_stiffness_n_per_m(p_);
-  const double m1 = p_.wheel_mass_kg, m2 = p_.work_mass_kg;
+std::optional<LinearForm> UnbalanceTwoDofEquations::linear_form(double /*t_s*/) const {
+  const SurfaceLayout layout = derived_detail::layout_of(state_size(), false, true, p.wheel_speed_rpm, p.work_speed_rpm);
+  const JacobianMatrix jacobian = derived_detail::jacobian(*this, layout, {});
+  const std::size_t n = state_size();
   LinearForm form;
-  form.contact_matrix = {0.0, 1.0, 0.0, 0.0,
-                         -(k + p_.wheel_support_stiffness_n_per_m) / m1, -p_.wheel_damping_n_s_per_m / m1, -k / m1, 0.0,
-                         0.0, 0.0, 0.0, 1.0,
-                         -k / m2, 0.0, -(k + p_.work_support_stiffness_n_per_m) / m2, -p_.work_damping_n_s_per_m / m2};
-  form.contact_input = {0.0, 1.0 / m1, 0.0, 0.0};
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) form.contact_matrix.push_back(jacobian(i, j));
+  form.contact_input = {0.0, 1.0 / p.wheel_mass_kg, 0.0, 0.0};  // F acts on the wheel side (checked by the engine)
   form.free_matrix = form.contact_matrix;  // contact is never lost (penetration 1)
   form.free_input = form.contact_input;
   return form;
-}
-
-void UnbalanceTwoDofTimeDomain::derivatives(const ContactInput& in, const ContactOutput&,
-                                            std::span<double> dx) const {
-  const double force = linear_forcing(in);
-  const double k = unbalance::coupling_stiffness_n_per_m(p_);
-  const double x1 = in.state[0], v1 = in.state[1], x2 = in.state[2], v2 = in.state[3];
-  dx[0] = v1;
-  dx[1] = (force - p_.wheel_damping_n_s_per_m * v1 - (k + p_.wheel_support_stiffness_n_per_m) * x1 - k * x2) / p_.wheel_mass_kg;
-  dx[2] = v2;
-  dx[3] = (-p_.work_damping_n_s_per_m * v2 - (k + p_.work_support_stiffness_n_per_m) * x2 - k * x1) / p_.work_mass_kg;
 }
 
 namespace {
@@ -119,7 +87,33 @@ const ParamTable<UnbalanceTwoDofParameters>& parameters_table() {
 
 }  // namespace
 
-UnbalanceTwoDof::UnbalanceTwoDof(const ParamValues& values) : p_(parameters_table().read(values)) {}
+UnbalanceTwoDof::UnbalanceTwoDof(const ParamValues& values)
+    : DerivedModel(UnbalanceTwoDofEquations(parameters_table().read(values))) {}
+
+std::vector<ClosedFormIndicatorSpec> UnbalanceTwoDof::indicator_specs() const {
+  using P = ClosedFormIndicatorSpec::Predicts;
+  return {{"forced_amplitude_m",
+           "G6 closed form, damped 2 x 2 solve: steady amplitude |X1 + X2| of the relative motion at the wheel speed",
+           false, P::steady_amplitude},
+          {"undamped_relative_amplitude_m",
+           "G6 eq 3-3 (corrected): undamped amplitude of the surface motion (x1 + x2)/(1 + kg/kc), signed", false,
+           P::nothing},
+          {"natural_frequency_1_hz", "G6 eq 3-4 (corrected): lower undamped natural frequency", false, P::nothing},
+          {"natural_frequency_2_hz", "G6 eq 3-4 (corrected): upper undamped natural frequency", false, P::nothing},
+          {"lobes_per_work_revolution", "G6 eq 3-6: Z = n_g/n_w", false, P::nothing}};
+}
+
+std::vector<Json> UnbalanceTwoDof::indicator_values() const {
+  const UnbalanceTwoDofParameters& p = parameters();
+  const unbalance::SteadyState steady = unbalance::unbalance_response(p);
+  const unbalance::NaturalFrequencies n = unbalance::natural_frequencies(p);
+  // Infinite at an undamped resonance: "does not apply" (null), never inf in a table.
+  const auto finite = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+  return {finite(std::abs(steady.wheel_m + steady.work_m)),
+          finite(unbalance::undamped_relative_amplitude_m(p, unbalance::forcing_frequency_rad_s(p))),
+          n.lower_rad_s / (2.0 * std::numbers::pi), n.upper_rad_s / (2.0 * std::numbers::pi),
+          unbalance::lobes_per_revolution(p)};
+}
 
 PluginInfo UnbalanceTwoDof::info() {
   PluginInfo info;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
+#include "study_kinds/simulate/closed_form_columns.hpp"
 #include "study_kinds/simulate/simulate_point.hpp"
 
 namespace chatterlab {
@@ -106,14 +107,20 @@ void Simulate::validate_surface(Json& document, const SourceMap& sources) {
   document["surface"] = std::move(table);
 }
 
-std::vector<std::string> Simulate::output_columns(const Json&) const {
-  return {col_growth, col_fit_valid, col_fit_regime, col_fit_reason, col_frequency, col_max_displacement,
-          col_contact_loss, col_outcome, col_work_wt, col_work_wz, col_work_ront};
+std::vector<std::string> Simulate::output_columns(const Json& document) const {
+  std::vector<std::string> columns{col_growth,           col_fit_valid,    col_fit_regime, col_fit_reason,
+                                   col_frequency,        col_max_displacement, col_contact_loss, col_outcome,
+                                   col_work_wt,          col_work_wz,      col_work_ront};
+  // Closed forms that predict a simulated quantity (G6's forced amplitude), beside it.
+  for (std::string& c : simulate_closed_forms::columns(*kit::build_model(document.at("model"))))
+    columns.push_back(std::move(c));
+  return columns;
 }
 
 std::vector<Json> Simulate::run_point(const Json& document, const PointContext& context) const {
   const SimulateSettings settings = kit::read_settings(document, "simulation", simulate_settings_table());
-  auto model = kit::build_model(document.at("model"))->time_domain();
+  const auto full_model = kit::build_model(document.at("model"));
+  auto model = full_model->time_domain();
   if (!model) throw PointFailure("the model has no time-domain form here");
   const SimulationResult result = run_engine(*model, settings.simulation);
   const simulate_point::PointAnalysis a =
@@ -122,12 +129,19 @@ std::vector<Json> Simulate::run_point(const Json& document, const PointContext& 
       result, document.value("surface", Json::object()), settings.simulation.contact.infeed_rate_m_per_s);
   if (!context.artifact_dir.empty() && (context.single_point() || settings.write_point_files))
     simulate_point::write_point_files(result, a, quality, document, settings, context);
-  return {a.fit ? Json(a.fit->growth_rate_per_s) : Json(), a.validity ? Json(a.validity->valid) : Json(false),
-          a.validity ? to_string(a.validity->regime) : "no fit", a.validity ? a.validity->reason : a.fit_problem,
-          a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz), a.max_displacement,
-          result.end_time_s > 0 ? result.contact_loss_time_s / result.end_time_s : 0.0,
-          result.diverged ? std::string("diverged") : std::string("completed"),
-          quality.wt_um, quality.wz_um, quality.ront_um};
+  std::vector<Json> row{a.fit ? Json(a.fit->growth_rate_per_s) : Json(),
+                        a.validity ? Json(a.validity->valid) : Json(false),
+                        a.validity ? to_string(a.validity->regime) : "no fit",
+                        a.validity ? a.validity->reason : a.fit_problem,
+                        a.peaks.empty() ? Json() : Json(a.peaks.front().frequency_hz),
+                        a.max_displacement,
+                        result.end_time_s > 0 ? result.contact_loss_time_s / result.end_time_s : 0.0,
+                        result.diverged ? std::string("diverged") : std::string("completed"),
+                        quality.wt_um,
+                        quality.wz_um,
+                        quality.ront_um};
+  for (Json& v : simulate_closed_forms::values(*full_model, *model, result)) row.push_back(std::move(v));
+  return row;
 }
 
 void Simulate::write_artifacts(const Study& study, const ResultTable& results, const fs::path& out_dir) const {

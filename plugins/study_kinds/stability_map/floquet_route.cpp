@@ -49,6 +49,23 @@ PeriodicProcess process_of(const Model& model, const Suppression& plugin, double
   return process;
 }
 
+// Why the first level's monodromy is beyond the discretisation's limit, or nullopt.
+std::optional<std::string> dimension_problem(const PeriodicDelaySystem& system) {
+  const FloquetSettings settings;
+  const FloquetLevel first = first_floquet_level(system, settings);
+  if (first.dimension <= settings.max_dimension) return std::nullopt;
+  return fmt::format("the longest revolution ({:.4g} s) at the step that resolves {:.4g} Hz gives a monodromy of "
+                     "dimension {} > {} (the discretisation's limit: its eigenvalues cost n^3)",
+                     system.max_delay_s(), system.frequency_scale_hz(), first.dimension, settings.max_dimension);
+}
+
+// The process of a model with periodic coefficients: its nominal constant speeds, one period.
+PeriodicProcess nominal_process(double period_s) {
+  PeriodicProcess process;
+  process.period_s = period_s;
+  return process;
+}
+
 }  // namespace
 
 void validate(Json& document, const Model& model, const SourceMap& sources) {
@@ -89,15 +106,10 @@ void validate(Json& document, const Model& model, const SourceMap& sources) {
   } catch (const PointFailure& e) {
     refuse(sources, "suppression", fmt::format("[suppression]: {}", e.what()));
   }
-  const FloquetSettings settings;
-  const FloquetLevel first = first_floquet_level(*system, settings);
-  if (first.dimension > settings.max_dimension)
+  if (const auto problem = dimension_problem(*system))
     refuse(sources, "suppression.target",
-           fmt::format("suppression.target = \"{}\": the longest revolution ({:.4g} s) at the step that "
-                       "resolves {:.4g} Hz gives a monodromy of dimension {} > {} (the discretisation's "
-                       "limit: its eigenvalues cost n^3); a faster modulated rotor or suppression_map",
-                       to_string(plugin->target()), system->max_delay_s(), system->frequency_scale_hz(),
-                       first.dimension, settings.max_dimension));
+           fmt::format("suppression.target = \"{}\": {}; a faster modulated rotor or suppression_map",
+                       to_string(plugin->target()), *problem));
   document["suppression"] = std::move(table);
 }
 
@@ -114,6 +126,47 @@ FloquetPoint growth_rate(const Model& model, const Json& suppression_table, cons
     throw PointFailure(e.what());
   }
   out.floquet = floquet_growth_rate(*periodic_surface_system(*linearised, process), settings);
+  return out;
+}
+
+}  // namespace chatterlab::stability_floquet
+
+namespace chatterlab::stability_floquet {
+
+std::optional<double> coefficient_period_s(const Model& model) {
+  const LinearisedModel* linearised = model.linearised();
+  return linearised ? linearised->coefficient_period_s() : std::nullopt;
+}
+
+void validate_periodic_model(const Json& document, const Model& model, const SourceMap& sources) {
+  const std::string model_type = document.at("model").at("type").get<std::string>();
+  if (document.contains("suppression"))
+    refuse(sources, "suppression",
+           fmt::format("[suppression]: model.type = \"{}\" has coefficients that repeat once per {:.4g} s at "
+                       "constant speeds (its Floquet route needs no [suppression]); a speed modulation on top "
+                       "has in general no common period with them, so it has no Floquet multipliers: remove "
+                       "[suppression], or simulate the modulation (suppression_map)",
+                       model_type, *coefficient_period_s(model)));
+  std::unique_ptr<PeriodicDelaySystem> system;
+  try {
+    system = periodic_surface_system(*model.linearised(), nominal_process(*coefficient_period_s(model)));
+  } catch (const PointFailure& e) {
+    refuse(sources, "model.type", fmt::format("model.type = \"{}\": {}", model_type, e.what()));
+  }
+  if (const auto problem = dimension_problem(*system))
+    refuse(sources, "model.type",
+           fmt::format("model.type = \"{}\": its Floquet route over one coefficient period: {}; a faster wheel "
+                       "or simulate",
+                       model_type, *problem));
+}
+
+FloquetPoint periodic_model_growth_rate(const Model& model, const FloquetSettings& settings) {
+  const std::optional<double> period = coefficient_period_s(model);
+  if (!period) throw PointFailure("Floquet: the model's coefficients are not periodic");
+  FloquetPoint out;
+  out.period_s = *period;
+  out.target = "coefficients";
+  out.floquet = floquet_growth_rate(*periodic_surface_system(*model.linearised(), nominal_process(*period)), settings);
   return out;
 }
 

@@ -6,6 +6,7 @@
 // by semi-discretisation (chatterlab/floquet.hpp); the growth rate is ln|mu| / T of the dominant
 // Floquet multiplier mu over one modulation period T. docs/derived_stability.md, "Floquet".
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "chatterlab/floquet.hpp"
@@ -31,5 +32,20 @@ struct FloquetPoint {
 // Throws PointFailure when the discretisation fails.
 FloquetPoint growth_rate(const Model& model, const Json& suppression_table,
                          const FloquetSettings& settings = {});
+
+// ---- models whose linearisation has periodic coefficients at constant speeds (G7)
+
+// The model's coefficient period (LinearisedModel::coefficient_period_s), or nullopt: a study of
+// such a model takes the Floquet route without a [suppression] table.
+std::optional<double> coefficient_period_s(const Model& model);
+
+// Refuses (InputError naming file, line, key, value and the reason) a [suppression] table on such
+// a model (the modulation period and the coefficients' period are in general incommensurate, so
+// the process has no common period) and a monodromy beyond the discretisation's limit.
+void validate_periodic_model(const Json& document, const Model& model, const SourceMap& sources);
+
+// The Floquet growth rate over one coefficient period at the model's nominal constant speeds.
+// Throws PointFailure when the discretisation fails.
+FloquetPoint periodic_model_growth_rate(const Model& model, const FloquetSettings& settings = {});
 
 }  // namespace chatterlab::stability_floquet

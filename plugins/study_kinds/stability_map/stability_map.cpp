@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "chatterlab/closed_form.hpp"
 #include "chatterlab/delay_system.hpp"
@@ -44,6 +45,10 @@ constexpr const char* col_steps = "floquet_steps_per_period";
 constexpr const char* col_dimension = "floquet_dimension";
 
 bool floquet_route(const Json& document) { return document.contains("suppression"); }
+// A model whose linearisation has periodic coefficients at constant speeds (G7) has no
+// characteristic function: every point takes the Floquet route over the coefficients' period.
+bool periodic_model(const Model& model) { return stability_floquet::coefficient_period_s(model).has_value(); }
+bool periodic_model(const Json& document) { return periodic_model(*kit::build_model(document.at("model"))); }
 
 std::string characteristic_route(const CharacteristicFunction& characteristic) {
   return dynamic_cast<const DelayCharacteristic*>(&characteristic) ? "derived" : "characteristic";
@@ -142,6 +147,10 @@ void plot_floquet(const std::vector<kit::PlotAxis>& axes, const Study& study, co
        "modulation stabilises", "modulation destabilises", "growth_rate_change"},
   };
   for (const Spec& spec : specs) {
+    // A model with periodic coefficients has no constant-speed comparison (no change column).
+    if (std::find(results.output_columns.begin(), results.output_columns.end(), spec.column) ==
+        results.output_columns.end())
+      continue;
     kit::ColumnFigure figure{spec.column, title + ": " + spec.what, spec.value_label};
     figure.reference = 0.0;
     figure.reference_label = spec.reference_label;
@@ -183,18 +192,20 @@ void plot_closed_form_margins(const std::vector<kit::PlotAxis>& axes, const Stud
   }
 }
 
-// One point of the Floquet route: the Floquet growth rate ln|mu|/T, its convergence figures, and
-// the constant-speed rightmost root (the same model at its nominal speeds) to compare with.
-std::vector<Json> floquet_point(const Model& model, const Json& document, const kit::StabilitySettings& settings) {
-  const stability_floquet::FloquetPoint f = stability_floquet::growth_rate(model, document.at("suppression"));
+// One point of a Floquet route (floquet_columns order): the Floquet growth rate ln|mu|/T, the
+// constant-speed rightmost root to compare with when there is one (a [suppression] study: the same
+// model at its nominal speeds), and the discretisation's convergence figures.
+std::vector<Json> floquet_row(const Model& model, const stability_floquet::FloquetPoint& f,
+                              std::optional<double> constant_speed_growth_per_s) {
   const double growth = f.floquet.growth_rate_per_s;
-  const RightmostRoot constant = kit::rightmost_root(model, settings);
   std::vector<Json> out{growth};
   if (const auto wheel_period = model.wheel_period_s()) out.emplace_back(growth * *wheel_period / (2.0 * std::numbers::pi));
   out.emplace_back(growth < 0.0);
   out.emplace_back("floquet");
-  out.emplace_back(constant.root.real());
-  out.emplace_back(growth - constant.root.real());
+  if (constant_speed_growth_per_s) {
+    out.emplace_back(*constant_speed_growth_per_s);
+    out.emplace_back(growth - *constant_speed_growth_per_s);
+  }
   out.emplace_back(std::abs(f.floquet.multiplier));
   out.emplace_back(f.period_s);
   out.emplace_back(f.floquet.converged);
@@ -202,6 +213,29 @@ std::vector<Json> floquet_point(const Model& model, const Json& document, const 
   out.emplace_back(f.floquet.steps_per_period);
   out.emplace_back(f.floquet.dimension);
   return out;
+}
+
+std::vector<Json> floquet_point(const Model& model, const Json& document, const kit::StabilitySettings& settings) {
+  const stability_floquet::FloquetPoint f = stability_floquet::growth_rate(model, document.at("suppression"));
+  return floquet_row(model, f, kit::rightmost_root(model, settings).root.real());
+}
+
+// A model with periodic coefficients (G7): one period of its coefficients at constant speeds.
+std::vector<Json> periodic_model_point(const Model& model) {
+  return floquet_row(model, stability_floquet::periodic_model_growth_rate(model), std::nullopt);
+}
+
+// The columns of the Floquet routes: a [suppression] table adds the constant-speed comparison.
+std::vector<std::string> floquet_columns(const Json& document, bool with_constant_speed) {
+  std::vector<std::string> columns{col_growth_rate};
+  if (kit::build_model(document.at("model"))->wheel_period_s()) columns.push_back(col_growth_per_wheel_rev);
+  columns.push_back(col_stable);
+  columns.push_back(col_route);
+  if (with_constant_speed)
+    for (const char* c : {col_constant_growth, col_growth_change}) columns.push_back(c);
+  for (const char* c : {col_multiplier, col_period, col_converged, col_error, col_steps, col_dimension})
+    columns.push_back(c);
+  return columns;
 }
 
 }  // namespace
@@ -212,8 +246,9 @@ PluginInfo StabilityMap::info() {
   info.description =
       "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
       "and a certificate that no root lies further right; with [suppression] (modulated wheel or "
-      "work speed), the Floquet growth rate of the periodic linearisation";
-  info.models_md_ids = "G1, G3, S2, S3";
+      "work speed), or for a model whose coefficients repeat once per revolution (G7), the Floquet "
+      "growth rate of the periodic linearisation";
+  info.models_md_ids = "G1, G3, G5, G6, G7, S2, S3";
   info.params = kit::stability_settings_table().specs();
   info.thread_safety = ThreadSafety::shareable;
   info.example_params = {{"max_frequency_hz", 500.0}};
@@ -221,20 +256,20 @@ PluginInfo StabilityMap::info() {
 }
 
 void StabilityMap::validate(Json& document, const SourceMap& sources) const {
+  if (auto model = kit::validate_model(document, kit::ModelNeeds::nothing, "stability_map", sources);
+      periodic_model(*model)) {
+    kit::validate_settings(document, "stability", kit::stability_settings_table(), sources);
+    stability_floquet::validate_periodic_model(document, *model, sources);
+    return;
+  }
   auto model = kit::validate_model(document, kit::ModelNeeds::characteristic, "stability_map", sources);
   kit::validate_stability(document, *model, sources);
   if (floquet_route(document)) stability_floquet::validate(document, *model, sources);
 }
 
 std::vector<std::string> StabilityMap::output_columns(const Json& document) const {
-  if (floquet_route(document)) {
-    std::vector<std::string> columns{col_growth_rate};
-    if (kit::build_model(document.at("model"))->wheel_period_s()) columns.push_back(col_growth_per_wheel_rev);
-    for (const char* c : {col_stable, col_route, col_constant_growth, col_growth_change, col_multiplier, col_period,
-                          col_converged, col_error, col_steps, col_dimension})
-      columns.push_back(c);
-    return columns;
-  }
+  if (periodic_model(document)) return floquet_columns(document, false);
+  if (floquet_route(document)) return floquet_columns(document, true);
   std::vector<std::string> columns{col_growth_rate, col_chatter_frequency};
   // Growth per wheel revolution (G3) only for models with a wheel.
   if (kit::build_model(document.at("model"))->wheel_period_s())
@@ -252,6 +287,7 @@ std::vector<std::string> StabilityMap::output_columns(const Json& document) cons
 std::vector<Json> StabilityMap::run_point(const Json& point_document,
                                           const PointContext& /*context*/) const {
   auto model = kit::build_model(point_document.at("model"));
+  if (periodic_model(*model)) return periodic_model_point(*model);
   const kit::StabilitySettings settings =
       kit::read_settings(point_document, "stability", kit::stability_settings_table());
   if (floquet_route(point_document)) return floquet_point(*model, point_document, settings);
@@ -283,7 +319,7 @@ void StabilityMap::write_artifacts(const Study& study, const ResultTable& result
   const std::vector<kit::PlotAxis> axes = kit::varying_axes(study);
   if (axes.empty() || axes.size() > 2) return;
   kit::Figures figures;
-  if (floquet_route(study.document)) {
+  if (floquet_route(study.document) || periodic_model(study.document)) {
     plot_floquet(axes, study, results, out_dir, figures);
     figures.finish();
     return;
