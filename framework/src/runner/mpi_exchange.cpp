@@ -57,4 +57,69 @@ std::vector<std::string> gather_to_root(const std::string& text) {
   return out;
 }
 
+namespace {
+// The tag of RecordStream's messages (the scheduler uses one-sided operations, the other
+// functions here collectives: nothing else uses point-to-point tags).
+constexpr int record_tag = 23;
+}  // namespace
+
+RecordStream::RecordStream()
+    : owner_(std::this_thread::get_id()), open_ranks_(mpi_rank() == 0 ? mpi_size() - 1 : 0) {
+  if (distributed()) request_ = new MPI_Request(MPI_REQUEST_NULL);
+}
+
+RecordStream::~RecordStream() {
+  if (request_ == nullptr) return;
+  auto* request = static_cast<MPI_Request*>(request_);
+  if (mpi_active() && *request != MPI_REQUEST_NULL) MPI_Wait(request, MPI_STATUS_IGNORE);
+  delete request;
+}
+
+void RecordStream::send(std::string records) {
+  if (!distributed() || records.empty()) return;
+  auto* request = static_cast<MPI_Request*>(request_);
+  MPI_Wait(request, MPI_STATUS_IGNORE);
+  in_flight_ = std::move(records);
+  MPI_Isend(in_flight_.data(), checked_count(in_flight_.size()), MPI_CHAR, 0, record_tag,
+            MPI_COMM_WORLD, request);
+}
+
+void RecordStream::close() {
+  if (!distributed()) return;
+  MPI_Wait(static_cast<MPI_Request*>(request_), MPI_STATUS_IGNORE);
+  std::string().swap(in_flight_);
+  MPI_Send(nullptr, 0, MPI_CHAR, 0, record_tag, MPI_COMM_WORLD);
+}
+
+bool RecordStream::receive(bool wait, const std::function<void(int, std::string&&)>& take) {
+  MPI_Status status;
+  int arrived = 1;
+  if (wait)
+    MPI_Probe(MPI_ANY_SOURCE, record_tag, MPI_COMM_WORLD, &status);
+  else
+    MPI_Iprobe(MPI_ANY_SOURCE, record_tag, MPI_COMM_WORLD, &arrived, &status);
+  if (!arrived) return false;
+  int count = 0;
+  MPI_Get_count(&status, MPI_CHAR, &count);
+  std::string records(static_cast<std::size_t>(count), '\0');
+  MPI_Recv(records.data(), count, MPI_CHAR, status.MPI_SOURCE, record_tag, MPI_COMM_WORLD,
+           MPI_STATUS_IGNORE);
+  if (records.empty())
+    --open_ranks_;
+  else
+    take(status.MPI_SOURCE, std::move(records));
+  return true;
+}
+
+void RecordStream::poll(const std::function<void(int, std::string&&)>& take) {
+  if (!distributed() || mpi_rank() != 0 || std::this_thread::get_id() != owner_) return;
+  while (open_ranks_ > 0 && receive(false, take)) {
+  }
+}
+
+void RecordStream::drain(const std::function<void(int, std::string&&)>& take) {
+  if (!distributed() || mpi_rank() != 0) return;
+  while (open_ranks_ > 0) receive(true, take);
+}
+
 }  // namespace chatterlab::runner

@@ -3,7 +3,9 @@
 // (or the identity) in a single process, so run_study() has one code path for both cases.
 // Only the thread that initialised MPI calls these (MPI_THREAD_FUNNELED): never from inside an
 // OpenMP region.
+#include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace chatterlab::runner {
@@ -16,5 +18,35 @@ bool all_ranks_agree(bool value);
 
 // Rank 0 receives every rank's text (index = rank); other ranks receive an empty vector.
 std::vector<std::string> gather_to_root(const std::string& text);
+
+// The other ranks' finished points on their way to rank 0 while the grid is computed
+// (docs/architecture.md, "Streaming results"): a rank sends each block's records when the block
+// is done (one send in flight; it holds one block, never its whole share), and rank 0 hands them
+// to its results writer as they arrive. Messages from one rank arrive in the order they were
+// sent, so an empty message closes that rank's stream. Not collective; MPI_THREAD_FUNNELED: only
+// the constructing thread communicates (poll() does nothing on any other thread).
+class RecordStream {
+ public:
+  RecordStream();
+  ~RecordStream();  // waits for a send still in flight
+  RecordStream(const RecordStream&) = delete;
+  RecordStream& operator=(const RecordStream&) = delete;
+
+  // A rank other than 0: sends one block's records (non-empty), after the previous send ended.
+  void send(std::string records);
+  // A rank other than 0, after its last block: closes its stream.
+  void close();
+  // Rank 0: hands every block that has arrived to `take(rank, records)`; does not wait.
+  void poll(const std::function<void(int, std::string&&)>& take);
+  // Rank 0: receives until every other rank has closed its stream.
+  void drain(const std::function<void(int, std::string&&)>& take);
+
+ private:
+  bool receive(bool wait, const std::function<void(int, std::string&&)>& take);
+  std::thread::id owner_;
+  std::string in_flight_;  // the block being sent
+  void* request_ = nullptr;  // MPI_Request of that send, kept out of this header
+  int open_ranks_ = 0;       // rank 0: other ranks whose stream is still open
+};
 
 }  // namespace chatterlab::runner
