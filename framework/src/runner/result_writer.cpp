@@ -192,8 +192,14 @@ void GridOrderWriter::write_ready() {
     } else {
       break;
     }
+    // Inside the loop: a resume takes a whole grid of rows in one call.
+    if (buffer_.size() >= write_block_bytes) write_buffer();
   }
-  if (hdf5_ || (buffer_.size() < write_block_bytes && next_ < study_.point_count())) return;
+  if (next_ == points) write_buffer();
+}
+
+void GridOrderWriter::write_buffer() {
+  if (hdf5_) return;
   if (error_.empty() && file_) {
     try {
       file_->write(buffer_);

@@ -83,6 +83,7 @@ class GridOrderWriter {
   // Everything of a row that needs no lock (formatting, the plot cells).
   Early prepare_row(std::size_t point, PointResult&& result) const;
   void write_ready();  // appends every row whose predecessors are all written; under mutex_
+  void write_buffer();  // the CSV rows formatted so far to the file; under mutex_
   void append(Early&& row);  // the row of point next_; under mutex_
   std::string format_row(std::size_t point, const PointResult& result) const;
 

@@ -25,6 +25,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <span>
 #include <iostream>
 #include <stdexcept>
 
@@ -456,7 +457,9 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     scheduler.serve();  // rank 0's main thread lets MPI progress the other ranks' claims
     stream.poll(take_block);
   };
-  std::vector<std::size_t> block_points;    // the points of this rank's current block
+  // The points of this rank's current block: a view of `todo` (one process: the whole list,
+  // which is not copied).
+  std::span<const std::size_t> block_points;
   std::vector<PointResult> block_results;  // their results when this rank has no writer
   std::atomic<std::size_t> computed_points{0};
   double compute_s = 0.0;
@@ -508,11 +511,10 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     stream.send(std::move(records));
   };
   while (auto block = scheduler.next(points_done.load())) {
-    block_points.assign(todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
-                        todo.begin() + static_cast<std::ptrdiff_t>(block->end));
+    block_points = std::span<const std::size_t>(todo).subspan(block->begin, block->size());
     if (!writer) block_results.assign(block_points.size(), PointResult{});
     if (pool) {
-      pool->run(block_points, [&](std::size_t k, ComputedPoint&& computed) {
+      pool->run(std::vector<std::size_t>(block_points.begin(), block_points.end()), [&](std::size_t k, ComputedPoint&& computed) {
         compute_s += computed.compute_s;
         keep(k, std::move(computed));
         serve();
