@@ -3,6 +3,8 @@
 #include <mpi.h>
 
 #include <climits>
+#include <memory>
+#include <vector>
 #include <stdexcept>
 
 #include "chatterlab/detail/mpi_env.hpp"
@@ -63,31 +65,42 @@ namespace {
 constexpr int record_tag = 23;
 }  // namespace
 
+struct RecordStream::Sending {
+  std::string records;
+  MPI_Request request = MPI_REQUEST_NULL;
+};
+
 RecordStream::RecordStream()
-    : owner_(std::this_thread::get_id()), open_ranks_(mpi_rank() == 0 ? mpi_size() - 1 : 0) {
-  if (distributed()) request_ = new MPI_Request(MPI_REQUEST_NULL);
-}
+    : owner_(std::this_thread::get_id()), open_ranks_(mpi_rank() == 0 ? mpi_size() - 1 : 0) {}
 
 RecordStream::~RecordStream() {
-  if (request_ == nullptr) return;
-  auto* request = static_cast<MPI_Request*>(request_);
-  if (mpi_active() && *request != MPI_REQUEST_NULL) MPI_Wait(request, MPI_STATUS_IGNORE);
-  delete request;
+  if (mpi_active()) reap(/*wait=*/true);
+}
+
+void RecordStream::reap(bool wait) {
+  std::erase_if(in_flight_, [&](const std::unique_ptr<Sending>& sending) {
+    int done = 0;
+    if (wait)
+      MPI_Wait(&sending->request, MPI_STATUS_IGNORE);
+    else
+      MPI_Test(&sending->request, &done, MPI_STATUS_IGNORE);
+    return wait || done != 0;
+  });
 }
 
 void RecordStream::send(std::string records) {
   if (!distributed() || records.empty()) return;
-  auto* request = static_cast<MPI_Request*>(request_);
-  MPI_Wait(request, MPI_STATUS_IGNORE);
-  in_flight_ = std::move(records);
-  MPI_Isend(in_flight_.data(), checked_count(in_flight_.size()), MPI_CHAR, 0, record_tag,
-            MPI_COMM_WORLD, request);
+  reap(/*wait=*/false);
+  auto sending = std::make_unique<Sending>();
+  sending->records = std::move(records);
+  MPI_Isend(sending->records.data(), checked_count(sending->records.size()), MPI_CHAR, 0,
+            record_tag, MPI_COMM_WORLD, &sending->request);
+  in_flight_.push_back(std::move(sending));
 }
 
 void RecordStream::close() {
   if (!distributed()) return;
-  MPI_Wait(static_cast<MPI_Request*>(request_), MPI_STATUS_IGNORE);
-  std::string().swap(in_flight_);
+  reap(/*wait=*/true);
   MPI_Send(nullptr, 0, MPI_CHAR, 0, record_tag, MPI_COMM_WORLD);
 }
 

@@ -4,6 +4,7 @@
 // Only the thread that initialised MPI calls these (MPI_THREAD_FUNNELED): never from inside an
 // OpenMP region.
 #include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,8 +22,9 @@ std::vector<std::string> gather_to_root(const std::string& text);
 
 // The other ranks' finished points on their way to rank 0 while the grid is computed
 // (docs/architecture.md, "Streaming results"): a rank sends each block's records when the block
-// is done (one send in flight; it holds one block, never its whole share), and rank 0 hands them
-// to its results writer as they arrive. Messages from one rank arrive in the order they were
+// is done, without waiting for rank 0 (which takes them between its own points, possibly long
+// ones: a rank keeps the sends rank 0 has not taken yet, normally one block, never its whole
+// share unless rank 0 is stuck), and rank 0 hands them to its results writer as they arrive. Messages from one rank arrive in the order they were
 // sent, so an empty message closes that rank's stream. Not collective; MPI_THREAD_FUNNELED: only
 // the constructing thread communicates (poll() does nothing on any other thread).
 class RecordStream {
@@ -32,7 +34,7 @@ class RecordStream {
   RecordStream(const RecordStream&) = delete;
   RecordStream& operator=(const RecordStream&) = delete;
 
-  // A rank other than 0: sends one block's records (non-empty), after the previous send ended.
+  // A rank other than 0: sends one block's records (non-empty); does not wait.
   void send(std::string records);
   // A rank other than 0, after its last block: closes its stream.
   void close();
@@ -44,8 +46,9 @@ class RecordStream {
  private:
   bool receive(bool wait, const std::function<void(int, std::string&&)>& take);
   std::thread::id owner_;
-  std::string in_flight_;  // the block being sent
-  void* request_ = nullptr;  // MPI_Request of that send, kept out of this header
+  struct Sending;
+  std::vector<std::unique_ptr<Sending>> in_flight_;  // blocks not yet taken by rank 0
+  void reap(bool wait);  // frees the sends that completed (all of them: waits)
   int open_ranks_ = 0;       // rank 0: other ranks whose stream is still open
 };
 
