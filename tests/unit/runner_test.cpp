@@ -382,14 +382,45 @@ TEST(RunnerResume, OkRecordsWinAndRetryFailedLeavesFailuresToCompute) {
   write(runner::journal_file(out, 10, 0),
         runner::journal_header_line(header) + runner::journal_line(1, ok({2.0})));
   runner::ResumedPoints all = runner::read_journals(out, header, study, false);
-  ASSERT_EQ(all.records.size(), 3u);
-  EXPECT_EQ(all.records[0].second.status, "ok");
-  EXPECT_EQ(all.records[1].second.status, "ok");
-  EXPECT_EQ(all.records[1].second.outputs[0], 2.0);
-  EXPECT_EQ(runner::outcome_of(all.records[2].second.status), runner::PointOutcome::timeout);
+  ASSERT_EQ(all.count(), 3u);
+  EXPECT_FALSE(all.has(3));
+  EXPECT_EQ(all.buffered_records(), 0u);  // found, not read: records are read when taken
+  const PointResult p0 = all.take(0), p1 = all.take(1), p2 = all.take(2);
+  EXPECT_EQ(p0.status, "ok");
+  EXPECT_EQ(p0.outputs[0], 1.0);
+  EXPECT_EQ(p1.status, "ok");
+  EXPECT_EQ(p1.outputs[0], 2.0);
+  EXPECT_EQ(runner::outcome_of(p2.status), runner::PointOutcome::timeout);
+  EXPECT_EQ(p2.elapsed_s, 9.0);
+  // Records stream from the files in grid order: one cannot go back, nor take a point twice.
+  EXPECT_THROW(all.take(1), std::logic_error);
+  EXPECT_THROW(all.take(2), std::logic_error);
   runner::ResumedPoints retry = runner::read_journals(out, header, study, true);
-  ASSERT_EQ(retry.records.size(), 2u);  // the timed-out point 2 is computed again
-  EXPECT_EQ(retry.records[1].first, 1u);
+  ASSERT_EQ(retry.count(), 2u);  // the timed-out point 2 is computed again
+  EXPECT_TRUE(retry.has(1));
+  EXPECT_FALSE(retry.has(2));
+  EXPECT_THROW(retry.take(2), std::logic_error);
+}
+
+// A resume reads the journals line by line and keeps only where each record is: a journal line
+// that changes between the scan and the read is an error, not a silently different result.
+TEST(RunnerResume, AJournalChangedAfterTheScanIsAnError) {
+  Study study = two_axis_study();
+  const std::vector<std::string> columns{"out"};
+  const runner::JournalHeader header{runner::study_fingerprint(study, columns), 6, columns,
+                                     runner::result_inputs(study)};
+  fs::path out = fresh_dir("journal_changed");
+  const fs::path file = runner::journal_file(out, 1, 0);
+  write(file, runner::journal_header_line(header) + runner::journal_line(3, ok({1.0})) +
+                  runner::journal_line(0, ok({7.0})) + "{\"i\":1,\"out\":[2");  // cut by a kill
+  runner::ResumedPoints resumed = runner::read_journals(out, header, study, false);
+  EXPECT_EQ(resumed.count(), 2u);
+  EXPECT_EQ(resumed.truncated_lines, 1u);
+  EXPECT_EQ(resumed.take(0).outputs[0], 7.0);  // the second line, found by its place
+  EXPECT_EQ(resumed.take(3).outputs[0], 1.0);
+  runner::ResumedPoints changed = runner::read_journals(out, header, study, false);
+  write(file, runner::journal_header_line(header) + runner::journal_line(4, ok({1.0})));
+  EXPECT_THROW(changed.take(3), std::runtime_error);
 }
 
 TEST(RunnerResume, FirstDifferenceNamesThePathAndBothValues) {

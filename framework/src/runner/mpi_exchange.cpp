@@ -3,6 +3,8 @@
 #include <mpi.h>
 
 #include <climits>
+#include <memory>
+#include <vector>
 #include <stdexcept>
 
 #include "chatterlab/detail/mpi_env.hpp"
@@ -55,6 +57,82 @@ std::vector<std::string> gather_to_root(const std::string& text) {
     out.push_back(
         all.substr(static_cast<std::size_t>(offsets[r]), static_cast<std::size_t>(counts[r])));
   return out;
+}
+
+namespace {
+// The tag of RecordStream's messages (the scheduler uses one-sided operations, the other
+// functions here collectives: nothing else uses point-to-point tags).
+constexpr int record_tag = 23;
+}  // namespace
+
+struct RecordStream::Sending {
+  std::string records;
+  MPI_Request request = MPI_REQUEST_NULL;
+};
+
+RecordStream::RecordStream()
+    : owner_(std::this_thread::get_id()), open_ranks_(mpi_rank() == 0 ? mpi_size() - 1 : 0) {}
+
+RecordStream::~RecordStream() {
+  if (mpi_active()) reap(/*wait=*/true);
+}
+
+void RecordStream::reap(bool wait) {
+  std::erase_if(in_flight_, [&](const std::unique_ptr<Sending>& sending) {
+    int done = 0;
+    if (wait)
+      MPI_Wait(&sending->request, MPI_STATUS_IGNORE);
+    else
+      MPI_Test(&sending->request, &done, MPI_STATUS_IGNORE);
+    return wait || done != 0;
+  });
+}
+
+void RecordStream::send(std::string records) {
+  if (!distributed() || records.empty()) return;
+  reap(/*wait=*/false);
+  auto sending = std::make_unique<Sending>();
+  sending->records = std::move(records);
+  MPI_Isend(sending->records.data(), checked_count(sending->records.size()), MPI_CHAR, 0,
+            record_tag, MPI_COMM_WORLD, &sending->request);
+  in_flight_.push_back(std::move(sending));
+}
+
+void RecordStream::close() {
+  if (!distributed()) return;
+  reap(/*wait=*/true);
+  MPI_Send(nullptr, 0, MPI_CHAR, 0, record_tag, MPI_COMM_WORLD);
+}
+
+bool RecordStream::receive(bool wait, const std::function<void(int, std::string&&)>& take) {
+  MPI_Status status;
+  int arrived = 1;
+  if (wait)
+    MPI_Probe(MPI_ANY_SOURCE, record_tag, MPI_COMM_WORLD, &status);
+  else
+    MPI_Iprobe(MPI_ANY_SOURCE, record_tag, MPI_COMM_WORLD, &arrived, &status);
+  if (!arrived) return false;
+  int count = 0;
+  MPI_Get_count(&status, MPI_CHAR, &count);
+  std::string records(static_cast<std::size_t>(count), '\0');
+  MPI_Recv(records.data(), count, MPI_CHAR, status.MPI_SOURCE, record_tag, MPI_COMM_WORLD,
+           MPI_STATUS_IGNORE);
+  if (records.empty())
+    --open_ranks_;
+  else
+    take(status.MPI_SOURCE, std::move(records));
+  return true;
+}
+
+void RecordStream::poll(const std::function<void(int, std::string&&)>& take) {
+  if (!distributed() || mpi_rank() != 0 || std::this_thread::get_id() != owner_) return;
+  while (open_ranks_ > 0 && receive(false, take)) {
+  }
+}
+
+void RecordStream::drain(const std::function<void(int, std::string&&)>& take) {
+  if (!distributed() || mpi_rank() != 0) return;
+  while (open_ranks_ > 0) receive(true, take);
 }
 
 }  // namespace chatterlab::runner

@@ -10,7 +10,8 @@ namespace chatterlab::runner {
 
 std::size_t guided_block_size(std::size_t remaining, int ranks, int threads) {
   const std::size_t share = remaining / (4 * static_cast<std::size_t>(std::max(ranks, 1)));
-  return std::min(remaining, std::max(share, static_cast<std::size_t>(std::max(threads, 1))));
+  return std::min(remaining, std::max(std::min(share, max_block_points),
+                                      static_cast<std::size_t>(std::max(threads, 1))));
 }
 
 PointScheduler::PointScheduler(std::size_t points, int threads,

@@ -6,8 +6,9 @@
 // memory) and on RDMA networks the claim completes whatever rank 0 is doing; on networks where
 // one-sided operations need the target's help (plain TCP), rank 0's main thread lends it
 // between its points (serve()). Block sizes are guided (a quarter of an even share of what
-// remains, never below the claiming rank's thread count), so early blocks are large (few claims)
-// and the last ones small (no rank is left with a long tail while the others idle).
+// remains, never below the claiming rank's thread count, never above max_block_points), so early
+// blocks are large (few claims) and the last ones small (no rank is left with a long tail while
+// the others idle).
 //
 // Which rank computes a point never changes a result: rank 0 writes results.csv in grid order.
 // Without MPI, or with one rank, the single block is the whole list.
@@ -30,8 +31,13 @@ struct PointBlock {
   std::size_t size() const { return end - begin; }
 };
 
-// Guided block size: a quarter of an even share of what remains, at least `threads` (every
-// thread of the rank gets a point), at most `remaining`.
+// The largest block: a rank sends each finished block to rank 0, which buffers the blocks that
+// finish ahead of an earlier one, so a block must not grow with the grid (16384 points, one
+// HDF5 chunk row, a few MB of results).
+inline constexpr std::size_t max_block_points = 16'384;
+
+// Guided block size: a quarter of an even share of what remains, at most max_block_points, at
+// least `threads` (every thread of the rank gets a point), at most `remaining`.
 std::size_t guided_block_size(std::size_t remaining, int ranks, int threads);
 
 class PointScheduler {

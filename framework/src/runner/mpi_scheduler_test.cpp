@@ -27,6 +27,8 @@ TEST(MpiScheduler, GuidedBlocksCoverTheListAndShrink) {
       EXPECT_LT(blocks, static_cast<std::size_t>(8 * ranks * 20));  // 4 ranks x ln(10^5) ~ 12
     }
   }
+  // A large grid's blocks stay bounded (rank 0 buffers the blocks that finish early).
+  EXPECT_EQ(guided_block_size(10'000'000, 2, 2), max_block_points);
   EXPECT_EQ(guided_block_size(0, 2, 4), 0u);
   EXPECT_EQ(guided_block_size(3, 2, 4), 3u);
 }

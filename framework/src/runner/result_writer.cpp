@@ -98,60 +98,69 @@ std::string GridOrderWriter::format_row(std::size_t point, const PointResult& re
   return line;
 }
 
-void GridOrderWriter::add(std::size_t point, PointResult&& result) {
+GridOrderWriter::Early GridOrderWriter::prepare_row(std::size_t point, PointResult&& result) const {
   if (!result.done || result.outputs.size() != columns_.size() || point >= study_.point_count())
     throw std::logic_error(fmt::format("runner: point {} has no complete result", point));
-  // Formatting (most of a row's cost) happens outside the lock, on the computing thread.
-  Early pending;
-  if (file_) pending.line = format_row(point, result);
-  Json failure = failed_point(study_, point, result.status, result.elapsed_s);
-  Json notice;
+  Early row;
+  if (file_) row.line = format_row(point, result);
+  row.failure = failed_point(study_, point, result.status, result.elapsed_s);
   if (notice_column_ >= 0) {
     const Json& cell = result.outputs[static_cast<std::size_t>(notice_column_)];
-    if (cell.is_string() && !cell.get_ref<const std::string&>().empty()) notice = cell;
+    if (cell.is_string() && !cell.get_ref<const std::string&>().empty()) row.notice = cell;
   }
   // The plot row of a point on the lattice: its index in the thinned grid (row-major).
   std::ptrdiff_t plot_row = static_cast<std::ptrdiff_t>(point);
   if (!strides_.empty()) {
     const std::vector<std::size_t> index = study_.point_indices(point);
-    std::size_t row = 0;
+    std::size_t r = 0;
     for (std::size_t a = 0; a < index.size() && plot_row >= 0; ++a) {
       if (index[a] % strides_[a] != 0) plot_row = -1;
-      row = row * plot_study_->grid[a].values.size() + index[a] / strides_[a];
+      r = r * plot_study_->grid[a].values.size() + index[a] / strides_[a];
     }
-    if (plot_row >= 0) plot_row = static_cast<std::ptrdiff_t>(row);
+    if (plot_row >= 0) plot_row = static_cast<std::ptrdiff_t>(r);
   }
-  std::vector<Json> plot_cells;
+  row.plot_row = plot_row;
   if (plot_row >= 0) {
     const std::vector<std::size_t> index = study_.point_indices(point);
     for (std::size_t a = 0; a < study_.grid.size(); ++a)
-      plot_cells.push_back(study_.grid[a].values[index[a]]);
+      row.plot_cells.push_back(study_.grid[a].values[index[a]]);
     for (Json& output : result.outputs)
       if (hdf5_)
-        plot_cells.push_back(output);
+        row.plot_cells.push_back(output);
       else
-        plot_cells.push_back(std::move(output));
+        row.plot_cells.push_back(std::move(output));
+    row.plot_status = result.status;
   }
-  if (hdf5_) pending.result = std::move(result);
+  if (hdf5_) row.result = std::move(result);
+  return row;
+}
 
+void GridOrderWriter::add(std::size_t point, PointResult&& result) {
+  // Formatting (most of a row's cost) happens outside the lock, on the computing thread.
+  Early row = prepare_row(point, std::move(result));
   std::lock_guard lock(mutex_);
-  if (!failure.is_null()) failed_.emplace(point, std::move(failure));
-  if (!notice.is_null()) notices_.emplace(point, std::move(notice));
-  if (plot_row >= 0) {
-    plot_table_.rows[static_cast<std::size_t>(plot_row)] = std::move(plot_cells);
-    plot_table_.status[static_cast<std::size_t>(plot_row)] =
-        hdf5_ ? pending.result.status : result.status;
-  }
   if (point != next_) {
-    early_.emplace(point, std::move(pending));
+    early_.emplace(point, std::move(row));
     return;
   }
-  append(std::move(pending));
+  append(std::move(row));
+  write_ready();
+}
+
+void GridOrderWriter::take_resumed_points(ResumedPoints* resumed) {
+  std::lock_guard lock(mutex_);
+  resumed_ = resumed;
   write_ready();
 }
 
 void GridOrderWriter::append(Early&& row) {
-  ++next_;
+  const std::size_t point = next_++;
+  if (!row.failure.is_null()) failed_.emplace(point, std::move(row.failure));
+  if (!row.notice.is_null()) notices_.emplace(point, std::move(row.notice));
+  if (row.plot_row >= 0) {
+    plot_table_.rows[static_cast<std::size_t>(row.plot_row)] = std::move(row.plot_cells);
+    plot_table_.status[static_cast<std::size_t>(row.plot_row)] = std::move(row.plot_status);
+  }
   if (!hdf5_) {
     buffer_ += row.line;
     return;
@@ -165,9 +174,32 @@ void GridOrderWriter::append(Early&& row) {
 }
 
 void GridOrderWriter::write_ready() {
-  for (auto it = early_.begin(); it != early_.end() && it->first == next_; it = early_.erase(it))
-    append(std::move(it->second));
-  if (hdf5_ || (buffer_.size() < write_block_bytes && next_ < study_.point_count())) return;
+  const std::size_t points = study_.point_count();
+  while (next_ < points) {
+    if (auto it = early_.begin(); it != early_.end() && it->first == next_) {
+      append(std::move(it->second));
+      early_.erase(it);
+    } else if (resumed_ && resumed_->has(next_)) {
+      // An earlier session's point, read back now that its row is due.
+      PointResult result;
+      try {
+        result = resumed_->take(next_);
+      } catch (const std::runtime_error& e) {
+        if (error_.empty()) error_ = std::string("cannot read an earlier session's result: ") + e.what();
+        result = {true, std::vector<Json>(columns_.size()), failure_status(e.what()), 0.0};
+      }
+      append(prepare_row(next_, std::move(result)));
+    } else {
+      break;
+    }
+    // Inside the loop: a resume takes a whole grid of rows in one call.
+    if (buffer_.size() >= write_block_bytes) write_buffer();
+  }
+  if (next_ == points) write_buffer();
+}
+
+void GridOrderWriter::write_buffer() {
+  if (hdf5_) return;
   if (error_.empty() && file_) {
     try {
       file_->write(buffer_);
@@ -180,10 +212,10 @@ void GridOrderWriter::write_ready() {
 
 void GridOrderWriter::commit() {
   std::lock_guard lock(mutex_);
+  write_ready();  // the resumed points after the last computed one
   if (next_ != study_.point_count())
     throw std::logic_error(fmt::format("runner: results.csv has {} of {} rows", next_,
                                        study_.point_count()));
-  if (!buffer_.empty()) write_ready();  // the header of a grid whose rows were never written
   if (error_.empty() && hdf5_) {
     try {
       hdf5_->commit();

@@ -19,6 +19,7 @@
 #include "chatterlab/study_kind.hpp"
 #include "runner/results_hdf5.hpp"
 #include "runner/results_io.hpp"
+#include "runner/resume.hpp"
 
 namespace chatterlab::runner {
 
@@ -47,6 +48,11 @@ class GridOrderWriter {
   // by commit(): a grid loop must not unwind from a worker thread.
   void add(std::size_t point, PointResult&& result);
 
+  // The points an earlier session finished (--resume): each is read back from its journal or
+  // results.h5 when its row is due, so they are never all in memory. `resumed` must outlive the
+  // writer's last add() and commit().
+  void take_resumed_points(ResumedPoints* resumed);
+
   // After every point was added: results.csv into place. Throws OutputError.
   void commit();
   // The run is not valid after all (an input file changed): no results file.
@@ -69,8 +75,15 @@ class GridOrderWriter {
   struct Early {
     std::string line;
     PointResult result;
+    Json failure, notice;            // meta.json's entries (null: none)
+    std::ptrdiff_t plot_row = -1;    // its row of the plot table (-1: not on the lattice)
+    std::vector<Json> plot_cells;
+    std::string plot_status;
   };
+  // Everything of a row that needs no lock (formatting, the plot cells).
+  Early prepare_row(std::size_t point, PointResult&& result) const;
   void write_ready();  // appends every row whose predecessors are all written; under mutex_
+  void write_buffer();  // the CSV rows formatted so far to the file; under mutex_
   void append(Early&& row);  // the row of point next_; under mutex_
   std::string format_row(std::size_t point, const PointResult& result) const;
 
@@ -85,6 +98,7 @@ class GridOrderWriter {
   mutable std::mutex mutex_;
   std::size_t next_ = 0;               // the next point to write
   std::map<std::size_t, Early> early_;  // points ahead of next_
+  ResumedPoints* resumed_ = nullptr;    // earlier sessions' points, read when due
   std::string buffer_;                       // rows written in blocks
   std::map<std::size_t, Json> failed_, notices_;
 

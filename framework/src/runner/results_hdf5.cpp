@@ -542,99 +542,129 @@ void Hdf5ResultsWriter::abandon() noexcept {
 
 const fs::path& Hdf5ResultsWriter::temporary_path() const { return impl_->tmp; }
 
-Hdf5Results read_hdf5_results(const fs::path& path) {
-  silence_hdf5_errors();
-  auto fail = [&](const std::string& what) -> std::runtime_error {
-    return std::runtime_error(fmt::format("{}: {}", path.string(), what));
-  };
-  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!file) throw fail("not an HDF5 file (" + hdf5_error_stack() + ")");
-  if (read_text_attribute(file.get(), "chatterlab_results") != "1")
-    throw fail("not a chatterlab results.h5 (no attribute chatterlab_results = 1)");
-  Hdf5Results out;
-  out.header.study_fingerprint = read_text_attribute(file.get(), "study_fingerprint");
-  try {
-    out.header.points = std::stoull(read_text_attribute(file.get(), "points"));
-    for (const Json& c : Json::parse(read_text_attribute(file.get(), "columns")))
-      out.header.columns.push_back(c.get<std::string>());
-    out.header.inputs = Json::parse(read_text_attribute(file.get(), "inputs"));
-  } catch (const std::exception& e) {
-    throw fail(std::string("unreadable attributes: ") + e.what());
-  }
-  Handle status(H5Dopen2(file.get(), "status", H5P_DEFAULT), H5Dclose);
-  if (!status) throw fail("no status dataset");
-  Handle space(H5Dget_space(status.get()), H5Sclose);
-  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
-  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
-  const Layout layout(dims);
-  for (hsize_t d : dims) out.shape.push_back(static_cast<std::size_t>(d));
-  if (layout.points != out.header.points) throw fail("status has another shape than the grid");
-
+struct Hdf5ResultsReader::Impl {
   struct Source {
     Handle dataset;
     H5T_class_t type_class = H5T_NO_CLASS;
     std::size_t width = 0;
   };
-  std::vector<Source> sources;
+  fs::path path;
+  Handle file;
+  JournalHeader header;
+  std::vector<std::size_t> shape;
+  std::unique_ptr<Layout> layout;
+  std::vector<Source> sources;  // one per output column, then status
   std::vector<std::string> links;
-  for (const auto& name : out.header.columns) links.push_back(link_name(name));
-  links.push_back("status");
-  for (const auto& link : links) {
-    Source source;
-    source.dataset = Handle(H5Dopen2(file.get(), link.c_str(), H5P_DEFAULT), H5Dclose);
-    if (!source.dataset) throw fail("no dataset " + link);
+  std::size_t next = 0;
+
+  std::runtime_error fail(const std::string& what) const {
+    return std::runtime_error(fmt::format("{}: {}", path.string(), what));
+  }
+};
+
+Hdf5ResultsReader::Hdf5ResultsReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
+  silence_hdf5_errors();
+  Impl& in = *impl_;
+  in.path = path;
+  in.file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!in.file) throw in.fail("not an HDF5 file (" + hdf5_error_stack() + ")");
+  const hid_t file = in.file.get();
+  if (read_text_attribute(file, "chatterlab_results") != "1")
+    throw in.fail("not a chatterlab results.h5 (no attribute chatterlab_results = 1)");
+  in.header.study_fingerprint = read_text_attribute(file, "study_fingerprint");
+  try {
+    in.header.points = std::stoull(read_text_attribute(file, "points"));
+    for (const Json& c : Json::parse(read_text_attribute(file, "columns")))
+      in.header.columns.push_back(c.get<std::string>());
+    in.header.inputs = Json::parse(read_text_attribute(file, "inputs"));
+  } catch (const std::exception& e) {
+    throw in.fail(std::string("unreadable attributes: ") + e.what());
+  }
+  for (const auto& name : in.header.columns) in.links.push_back(link_name(name));
+  in.links.push_back("status");
+  for (const auto& link : in.links) {
+    Impl::Source source;
+    source.dataset = Handle(H5Dopen2(file, link.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!source.dataset) throw in.fail("no dataset " + link);
     Handle type(H5Dget_type(source.dataset.get()), H5Tclose);
     source.type_class = H5Tget_class(type.get());
     source.width = H5Tget_size(type.get());
-    sources.push_back(std::move(source));
+    in.sources.push_back(std::move(source));
   }
-  out.records.reserve(layout.points);
-  for (std::size_t begin = 0; begin < layout.points;) {
-    const std::size_t end = layout.row_end(begin), count = end - begin;
-    for (std::size_t p = begin; p < end; ++p) {
-      PointResult r;
-      r.done = true;
-      r.outputs.resize(out.header.columns.size());
-      out.records.emplace_back(p, std::move(r));
-    }
-    const hsize_t memory_count = count;
-    Handle memory(H5Screate_simple(1, &memory_count, nullptr), H5Sclose);
-    for (std::size_t c = 0; c < sources.size(); ++c) {
-      Source& source = sources[c];
-      Handle selection = layout.select(source.dataset.get(), begin, end);
-      const bool is_status = c == out.header.columns.size();
-      if (is_status && source.type_class != H5T_STRING) throw fail("status is not text");
-      auto cell = [&](std::size_t i) -> Json& { return out.records[begin + i].second.outputs[c]; };
-      herr_t read = -1;
-      if (source.type_class == H5T_FLOAT) {
-        std::vector<double> values(count);
-        read = H5Dread(source.dataset.get(), H5T_NATIVE_DOUBLE, memory.get(), selection.get(),
-                       H5P_DEFAULT, values.data());
-        for (std::size_t i = 0; i < count && read >= 0; ++i)
-          if (!std::isnan(values[i])) cell(i) = values[i];
-      } else if (source.type_class == H5T_ENUM) {
-        std::vector<std::int8_t> values(count);
-        Handle type = boolean_type();
-        read = H5Dread(source.dataset.get(), type.get(), memory.get(), selection.get(),
-                       H5P_DEFAULT, values.data());
-        for (std::size_t i = 0; i < count && read >= 0; ++i) cell(i) = values[i] != 0;
-      } else if (source.type_class == H5T_STRING) {
-        std::vector<char> buffer(count * source.width);
-        Handle type = text_type(source.width);
-        read = H5Dread(source.dataset.get(), type.get(), memory.get(), selection.get(),
-                       H5P_DEFAULT, buffer.data());
-        for (std::size_t i = 0; i < count && read >= 0; ++i) {
-          const char* text = buffer.data() + i * source.width;
-          std::string value(text, strnlen(text, source.width));
-          if (is_status)
-            out.records[begin + i].second.status = std::move(value);
-          else
-            cell(i) = std::move(value);
-        }
+  if (in.sources.back().type_class != H5T_STRING) throw in.fail("status is not text");
+  Handle space(H5Dget_space(in.sources.back().dataset.get()), H5Sclose);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  for (hsize_t d : dims) in.shape.push_back(static_cast<std::size_t>(d));
+  in.layout = std::make_unique<Layout>(dims);
+  if (in.layout->points != in.header.points) throw in.fail("status has another shape than the grid");
+}
+
+Hdf5ResultsReader::~Hdf5ResultsReader() = default;
+
+const JournalHeader& Hdf5ResultsReader::header() const { return impl_->header; }
+const std::vector<std::size_t>& Hdf5ResultsReader::shape() const { return impl_->shape; }
+std::size_t Hdf5ResultsReader::position() const { return impl_->next; }
+
+std::vector<PointResult> Hdf5ResultsReader::next_chunk_row(bool status_only) {
+  Impl& in = *impl_;
+  const Layout& layout = *in.layout;
+  if (in.next >= layout.points) return {};
+  const std::size_t begin = in.next, end = layout.row_end(begin), count = end - begin;
+  const std::size_t columns = in.header.columns.size();
+  std::vector<PointResult> rows(count);
+  for (PointResult& r : rows) {
+    r.done = true;
+    r.outputs.resize(columns);
+  }
+  const hsize_t memory_count = count;
+  Handle memory(H5Screate_simple(1, &memory_count, nullptr), H5Sclose);
+  for (std::size_t c = status_only ? columns : 0; c < in.sources.size(); ++c) {
+    Impl::Source& source = in.sources[c];
+    Handle selection = layout.select(source.dataset.get(), begin, end);
+    const bool is_status = c == columns;
+    herr_t read = -1;
+    if (source.type_class == H5T_FLOAT) {
+      std::vector<double> values(count);
+      read = H5Dread(source.dataset.get(), H5T_NATIVE_DOUBLE, memory.get(), selection.get(),
+                     H5P_DEFAULT, values.data());
+      for (std::size_t i = 0; i < count && read >= 0; ++i)
+        if (!std::isnan(values[i])) rows[i].outputs[c] = values[i];
+    } else if (source.type_class == H5T_ENUM) {
+      std::vector<std::int8_t> values(count);
+      Handle type = boolean_type();
+      read = H5Dread(source.dataset.get(), type.get(), memory.get(), selection.get(), H5P_DEFAULT,
+                     values.data());
+      for (std::size_t i = 0; i < count && read >= 0; ++i) rows[i].outputs[c] = values[i] != 0;
+    } else if (source.type_class == H5T_STRING) {
+      std::vector<char> buffer(count * source.width);
+      Handle type = text_type(source.width);
+      read = H5Dread(source.dataset.get(), type.get(), memory.get(), selection.get(), H5P_DEFAULT,
+                     buffer.data());
+      for (std::size_t i = 0; i < count && read >= 0; ++i) {
+        const char* text = buffer.data() + i * source.width;
+        std::string value(text, strnlen(text, source.width));
+        if (is_status)
+          rows[i].status = std::move(value);
+        else
+          rows[i].outputs[c] = std::move(value);
       }
-      if (read < 0) throw fail("cannot read dataset " + links[c] + " (" + hdf5_error_stack() + ")");
     }
-    begin = end;
+    if (read < 0) throw in.fail("cannot read dataset " + in.links[c] + " (" + hdf5_error_stack() + ")");
+  }
+  in.next = end;
+  return rows;
+}
+
+Hdf5Results read_hdf5_results(const fs::path& path) {
+  Hdf5ResultsReader reader(path);
+  Hdf5Results out;
+  out.header = reader.header();
+  out.shape = reader.shape();
+  out.records.reserve(out.header.points);
+  for (auto rows = reader.next_chunk_row(); !rows.empty(); rows = reader.next_chunk_row()) {
+    const std::size_t first = reader.position() - rows.size();
+    for (std::size_t i = 0; i < rows.size(); ++i) out.records.emplace_back(first + i, std::move(rows[i]));
   }
   return out;
 }

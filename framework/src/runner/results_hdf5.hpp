@@ -63,7 +63,29 @@ class Hdf5ResultsWriter {
   std::unique_ptr<Impl> impl_;
 };
 
-// results.h5 read back: what a --resume takes over when the journal was removed, and what tests
+// results.h5 read chunk row by chunk row, in grid order: what a --resume streams from (it holds
+// one chunk row, runner::hdf5_chunk_points points at most, never the grid). Not thread-safe.
+class Hdf5ResultsReader {
+ public:
+  // Opens `file` and checks it is a chatterlab results.h5. Throws std::runtime_error naming it.
+  explicit Hdf5ResultsReader(const std::filesystem::path& file);
+  ~Hdf5ResultsReader();
+  Hdf5ResultsReader(const Hdf5ResultsReader&) = delete;
+  Hdf5ResultsReader& operator=(const Hdf5ResultsReader&) = delete;
+
+  const JournalHeader& header() const;         // fingerprint, points, columns, inputs
+  const std::vector<std::size_t>& shape() const;  // the grid's axis sizes ({1} without a grid)
+  // The points of the next chunk row (empty after the last point); with `status_only` their
+  // outputs are null cells and only the status is read. Throws std::runtime_error.
+  std::vector<PointResult> next_chunk_row(bool status_only = false);
+  std::size_t position() const;  // the first point of the next chunk row
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// results.h5 read back whole (tests; --resume streams with Hdf5ResultsReader): what a --resume takes over when the journal was removed, and what tests
 // compare with results.csv. Cells come back as the journal holds them (numbers as doubles, NaN as
 // null, booleans, text); a timeout's elapsed time is not stored (0).
 struct Hdf5Results {

@@ -1,7 +1,7 @@
 // results.h5 ([output] format = "hdf5"): the writer's chunk rows, widening and nulls read back;
 // a linear_dde stability map written as CSV and as HDF5 holds the same numbers (the HDF5 read
 // with the C API here); a resumed HDF5 run equals an uninterrupted one; a complete run drops its
-// journal and resumes from results.h5.
+// journal and resumes from results.h5, which a resume reads one chunk row at a time.
 #include "runner/results_hdf5.hpp"
 
 #include <gtest/gtest.h>
@@ -17,6 +17,7 @@
 #include "chatterlab/runner.hpp"
 #include "runner/output_dir.hpp"
 #include "runner/results_io.hpp"
+#include "runner/resume.hpp"
 
 namespace chatterlab::runner {
 namespace {
@@ -94,6 +95,43 @@ TEST(Hdf5Results, ChunkRowsWideningAndNullsReadBackUnchanged) {
       ASSERT_EQ(got.status, expected.status) << "point " << p;
     }
   }
+}
+
+// --resume streams results.h5: finding the finished points reads no record, and taking them in
+// grid order holds at most one chunk row, whatever the grid; --retry-failed leaves the failed
+// points (every 11th) to compute.
+TEST(Hdf5Results, AResumeReadsResultsH5OneChunkRowAtATime) {
+  const Study study = shaped_study({3, 7, 5000});  // 105,000 points: 7 chunk rows
+  const std::size_t n = study.point_count();
+  const fs::path dir = fresh("streamed");
+  fs::create_directories(dir);
+  {
+    Hdf5ResultsWriter writer(study, {"value", "flag", "label"}, results_path(dir, ResultsFormat::hdf5),
+                             {{"study_fingerprint", "f00"}});
+    for (std::size_t p = 0; p < n; ++p) writer.append(synthetic(p));
+    writer.commit();
+  }
+  const JournalHeader header = Hdf5ResultsReader(dir / "results.h5").header();
+  ResumedPoints all = read_resumable_points(dir, header, study, /*retry_failed=*/false);
+  ASSERT_EQ(all.count(), n);
+  EXPECT_EQ(all.buffered_records(), 0u);
+  std::size_t most = 0;
+  for (std::size_t p = 0; p < n; ++p) {
+    const PointResult got = all.take(p);
+    most = std::max(most, all.buffered_records());
+    const PointResult expected = synthetic(p);
+    ASSERT_EQ(got.outputs, expected.outputs) << "point " << p;
+    ASSERT_EQ(got.status, expected.status) << "point " << p;
+  }
+  EXPECT_GT(most, 0u);
+  EXPECT_LT(most, hdf5_chunk_points);
+  EXPECT_THROW(all.take(n - 1), std::logic_error);
+
+  ResumedPoints ok_only = read_resumable_points(dir, header, study, /*retry_failed=*/true);
+  EXPECT_EQ(ok_only.count(), n - (n + 5) / 11);
+  EXPECT_FALSE(ok_only.has(5));
+  EXPECT_TRUE(ok_only.has(6));
+  EXPECT_EQ(ok_only.take(6).outputs, synthetic(6).outputs);
 }
 
 TEST(Hdf5Results, AutoFormatIsHdf5AboveTheDocumentedSize) {

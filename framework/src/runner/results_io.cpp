@@ -23,10 +23,11 @@ std::string_view without_cr(std::string_view line) {
   return line;
 }
 
-// One journal record, or false when the line is not a consistent record of this journal.
-bool parse_record(std::string_view line, std::size_t points, std::size_t columns,
+}  // namespace
+
+bool parse_journal_record(std::string_view line, std::size_t points, std::size_t columns,
                   std::pair<std::size_t, PointResult>& record) {
-  Json j = Json::parse(line, nullptr, /*allow_exceptions=*/false);
+  Json j = Json::parse(without_cr(line), nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object()) return false;
   auto i = j.find("i");
   auto out = j.find("out");
@@ -47,6 +48,8 @@ bool parse_record(std::string_view line, std::size_t points, std::size_t columns
     record.second.elapsed_s = elapsed->get<double>();
   return true;
 }
+
+namespace {
 
 // Splits text into '\n'-terminated lines; an unterminated tail is reported separately.
 template <class OnLine>
@@ -222,7 +225,7 @@ JournalContents parse_journal_records(std::string_view text, std::size_t points,
   contents.truncated_lines = for_each_line(text, [&](std::string_view line) {
     if (line.empty()) return;
     std::pair<std::size_t, PointResult> record;
-    if (parse_record(line, points, columns, record))
+    if (parse_journal_record(line, points, columns, record))
       contents.records.push_back(std::move(record));
     else
       ++contents.invalid_lines;

@@ -91,6 +91,11 @@ struct JournalContents {
 // (from the header); anything else counts as invalid and is left for recomputation.
 JournalContents parse_journal(std::string_view text);
 
+// One record line (its '\n' removed), or false when it is not a consistent record of a journal
+// of `points` points and `columns` output columns.
+bool parse_journal_record(std::string_view line, std::size_t points, std::size_t columns,
+                          std::pair<std::size_t, PointResult>& record);
+
 // Records only (no header line): the format ranks use to send their points to rank 0.
 JournalContents parse_journal_records(std::string_view text, std::size_t points,
                                       std::size_t columns);

@@ -2,26 +2,63 @@
 // --resume: which points an earlier run into the same directory finished (docs/studies.md,
 // "--resume"), and why a resume is refused when they belong to another computation.
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <filesystem>
 #include <utility>
 #include <vector>
 
 #include "chatterlab/study.hpp"
+#include "runner/results_hdf5.hpp"
 #include "runner/results_io.hpp"
 
 namespace chatterlab::runner {
 
-struct ResumedPoints {
-  std::vector<std::pair<std::size_t, PointResult>> records;  // one per point taken over
-  std::size_t truncated_lines = 0;
-  std::size_t invalid_lines = 0;
+// The points an earlier run finished, found without holding them: a bit per point (taken over
+// or not, ok or not) and, for a record in a journal, its place there (8 bytes); the records
+// themselves are read again, in grid order, when results are written (take()). So a --resume of
+// a 10^6-point run holds about 1 MB where the points' results would take 500 MB.
+class ResumedPoints {
+ public:
+  explicit ResumedPoints(std::size_t points = 0);
+  ~ResumedPoints();
+  ResumedPoints(ResumedPoints&&) noexcept;
+  ResumedPoints& operator=(ResumedPoints&&) noexcept;
+
+  std::size_t count() const { return count_; }  // points taken over
+  bool has(std::size_t point) const { return point < done_.size() && done_[point]; }
+  // The record of a point taken over, read from its journal or results.h5. Points must be
+  // taken in increasing order, each once (std::logic_error otherwise: that is what lets the
+  // reads stream). Throws std::runtime_error when the file cannot be read back.
+  PointResult take(std::size_t point);
+  // Records read ahead and not yet taken (at most one chunk row of results.h5).
+  std::size_t buffered_records() const { return h5_row_.size() - h5_row_next_; }
+
+  std::size_t truncated_lines = 0;  // journal lines cut by a kill
+  std::size_t invalid_lines = 0;    // journal lines that are not a record (recomputed)
+
+ private:
+  friend class ResumeScan;
+  struct JournalCursor;
+  std::vector<bool> done_, ok_;
+  // Per point, where its record is when some record comes from a journal (else empty): none,
+  // results.h5, or (journal index + 1) << 48 | byte offset of its line.
+  std::vector<std::uint64_t> location_;
+  std::size_t count_ = 0;
+  std::size_t columns_ = 0;
+  std::filesystem::path results_h5_;  // empty: none
+  std::vector<std::unique_ptr<JournalCursor>> journals_;
+  std::unique_ptr<Hdf5ResultsReader> h5_;
+  std::vector<PointResult> h5_row_;  // the chunk row of results.h5 being taken
+  std::size_t h5_row_first_ = 0, h5_row_next_ = 0;
+  std::size_t next_ = 0;  // the lowest point take() accepts
 };
 
-// Reads every journal in `out_dir`. Per point, an ok record wins over a failed one, else the
-// latest session's; with `retry_failed`, failed and timed-out points are not taken over (they are
-// computed again). Throws InputError naming the journal and what changed (an input file and its
-// hashes, or the first study value that differs from the earlier run's meta.json) when a journal
-// was written for another computation.
+// Scans every journal in `out_dir` (streaming, one line at a time). Per point, an ok record
+// wins over a failed one, else the latest session's; with `retry_failed`, failed and timed-out
+// points are not taken over (they are computed again). Throws InputError naming the journal and
+// what changed (an input file and its hashes, or the first study value that differs from the
+// earlier run's meta.json) when a journal was written for another computation.
 ResumedPoints read_journals(const std::filesystem::path& out_dir, const JournalHeader& expected,
                             const Study& study, bool retry_failed);
 

@@ -1,15 +1,17 @@
 // run_study(): the grid loop shared by every study kind.
 //
-// Work split: MPI rank r of R computes the points with index % R == r (an interleaved split keeps
-// ranks balanced when cost varies smoothly across the grid); inside a rank OpenMP threads take
-// points dynamically, or, with --isolate or a time limit per point, worker processes do
-// (runner/worker_pool.hpp). Each point's result is queued for this rank's journal as soon as it
-// is known (a writer thread puts it on disk within 0.1 s). Rank 0 alone writes results.csv (in
-// grid order, numbers in round-trip form, no timings or ranks), meta.json and the plots: its own
-// points stream into results.csv as they finish (runner/result_writer.hpp: memory bounded by the
-// rows that finish ahead of an earlier one, not by the grid), the other ranks' points arrive at
-// the end. So the bytes of results.csv depend only on the study, never on ranks,
-// threads, worker processes or interruptions.
+// Work split: MPI ranks claim blocks of the points to compute from a shared counter on rank 0
+// (runner/mpi_scheduler.hpp: guided blocks, so a grid whose cost varies keeps every rank busy);
+// inside a rank OpenMP threads take points dynamically, or, with --isolate or a time limit per
+// point, worker processes do (runner/worker_pool.hpp). Each point's result is queued for this
+// rank's journal as soon as it is known (a writer thread puts it on disk within 0.1 s). Rank 0
+// alone writes results.csv (in grid order, numbers in round-trip form, no timings or ranks),
+// meta.json and the plots: its own points stream into results.csv as they finish, the other
+// ranks send each finished block (runner::RecordStream), and the points of an earlier session
+// are read back from disk when their row is due (runner/resume.hpp). The writer
+// (runner/result_writer.hpp) holds only the rows that finish ahead of an earlier one, not the
+// grid. So the bytes of results.csv depend only on the study, never on ranks, threads, worker
+// processes or interruptions.
 //
 // Order of a run, so that exit code 2 means "nothing was written": everything that can reject the
 // run (the study's output columns, the ranks' input files, starting the worker processes, the
@@ -23,6 +25,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <span>
 #include <iostream>
 #include <stdexcept>
 
@@ -120,7 +123,7 @@ void warn_if_the_disk_is_too_small(const fs::path& out_dir, const GridCost& cost
 struct Preparation {
   int session = 1;
   std::string done;  // one '0'/'1' per point: finished in an earlier session
-  runner::ResumedPoints resumed;                // rank 0 only
+  runner::ResumedPoints resumed;                // rank 0 only: read back as results are written
   std::unique_ptr<runner::OutputLock> lock;     // rank 0 only: held until the run's last write
 };
 
@@ -135,7 +138,8 @@ Preparation prepare_on_root(const RunOptions& options, const JournalHeader& expe
     // A complete HDF5 run keeps no journal (results.h5 holds every point): resume from that.
     prep.resumed =
         runner::read_resumable_points(options.out_dir, expected, study, options.retry_failed);
-    for (const auto& record : prep.resumed.records) prep.done[record.first] = '1';
+    for (std::size_t p = 0; p < expected.points; ++p)
+      if (prep.resumed.has(p)) prep.done[p] = '1';
   }
   // Only now, when the journals were accepted: a refused --resume leaves the old run untouched.
   // A run that is killed leaves meta.json saying so, next to its journal.
@@ -406,16 +410,16 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   std::unique_ptr<JournalWriter> journal = open_journal(options, prep, header);
 
   // Every rank lists the same points; the scheduler hands out blocks of the list (rank 0
-  // coordinates under MPI), and `mine` holds this rank's points in the order it got them.
+  // coordinates under MPI).
   const std::vector<std::size_t> todo = runner::points_to_compute(prep.done, options.shard);
   runner::ProgressBar progress(rank == 0 && options.progress.value_or(runner::stderr_is_terminal()),
                                todo.size());
   runner::PointScheduler scheduler(todo.size(), threads,
                                    [&](std::size_t elsewhere) { progress.points_done(elsewhere); });
-  // Rank 0 streams its points (and the resumed ones) into results.csv as they finish; another
-  // rank keeps its own points for rank 0 (docs/architecture.md, "Streaming results"). A shard
-  // writes no results.csv (`chatterlab merge` does, from the shards' journals), so its rank 0
-  // keeps its points too, for meta.json's failed points.
+  // Rank 0 streams every point (its own, the other ranks', the resumed ones) into results.csv
+  // (docs/architecture.md, "Streaming results"). A shard writes no results.csv (`chatterlab
+  // merge` does, from the shards' journals), so its rank 0 keeps its points, for meta.json's
+  // failed points.
   std::unique_ptr<runner::GridOrderWriter> writer;
   try {
     collectively([&] {
@@ -430,12 +434,33 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
     undo_prepare(options);
     throw;
   }
-  if (writer) {
-    for (auto& [p, r] : prep.resumed.records) writer->add(p, std::move(r));
-    prep.resumed.records = {};  // their count is in prep.done
-  }
-  std::vector<std::size_t> my_points;
-  std::vector<PointResult> mine;  // this rank's points when it has no writer, as my_points
+  if (writer) writer->take_resumed_points(&prep.resumed);
+  // Another rank sends each finished block to rank 0 (runner::RecordStream), whose main thread
+  // hands the blocks to the writer between its own points; a shard's rank 0 keeps them.
+  runner::RecordStream stream;
+  std::vector<std::pair<std::size_t, PointResult>> shard_kept;  // rank 0 of a shard
+  std::string stream_error;  // rank 0: a garbled block (reported after the loop, not thrown in it)
+  auto take_block = [&](int from, std::string&& text) {
+    JournalContents records = runner::parse_journal_records(text, n, columns.size());
+    if (records.invalid_lines + records.truncated_lines > 0) {
+      if (stream_error.empty()) stream_error = fmt::format("runner: garbled results from rank {}", from);
+      return;
+    }
+    for (auto& [p, record] : records.records) {
+      if (writer)
+        writer->add(p, std::move(record));
+      else
+        shard_kept.emplace_back(p, std::move(record));
+    }
+  };
+  auto serve = [&] {
+    scheduler.serve();  // rank 0's main thread lets MPI progress the other ranks' claims
+    stream.poll(take_block);
+  };
+  // The points of this rank's current block: a view of `todo` (one process: the whole list,
+  // which is not copied).
+  std::span<const std::size_t> block_points;
+  std::vector<PointResult> block_results;  // their results when this rank has no writer
   std::atomic<std::size_t> computed_points{0};
   double compute_s = 0.0;
   std::atomic<std::size_t> points_done{0};
@@ -443,13 +468,13 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   std::atomic<std::size_t> output_failures{0};
   runner::InputWatch watch(study.inputs);
   auto keep = [&](std::size_t k, ComputedPoint&& computed) {
-    journal->append(runner::journal_line(my_points[k], computed.result));
+    journal->append(runner::journal_line(block_points[k], computed.result));
     if (computed.output_failed) ++output_failures;
     ++computed_points;
     if (writer)
-      writer->add(my_points[k], std::move(computed.result));
+      writer->add(block_points[k], std::move(computed.result));
     else
-      mine[k] = std::move(computed.result);
+      block_results[k] = std::move(computed.result);
     progress.point_done();
     if (options.on_point_done) options.on_point_done(++points_done, todo.size());
   };
@@ -472,19 +497,29 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
         [](void* journal_writer) { static_cast<JournalWriter*>(journal_writer)->flush_before_dying(); },
         journal.get());
   const Clock::time_point loop_start = Clock::now();
+  // This rank's block when it is done: to rank 0 (another rank), or kept (a shard's rank 0).
+  auto block_done = [&] {
+    if (writer) return;
+    std::string records;
+    for (std::size_t k = 0; k < block_points.size(); ++k) {
+      if (!block_results[k].done) continue;
+      if (rank != 0)
+        records += runner::journal_line(block_points[k], block_results[k]);
+      else
+        shard_kept.emplace_back(block_points[k], std::move(block_results[k]));
+    }
+    stream.send(std::move(records));
+  };
   while (auto block = scheduler.next(points_done.load())) {
-    const std::size_t base = my_points.size();
-    my_points.insert(my_points.end(), todo.begin() + static_cast<std::ptrdiff_t>(block->begin),
-                     todo.begin() + static_cast<std::ptrdiff_t>(block->end));
-    if (!writer) mine.resize(my_points.size());
+    block_points = std::span<const std::size_t>(todo).subspan(block->begin, block->size());
+    if (!writer) block_results.assign(block_points.size(), PointResult{});
     if (pool) {
-      const std::vector<std::size_t> points(my_points.begin() + static_cast<std::ptrdiff_t>(base),
-                                            my_points.end());
-      pool->run(points, [&](std::size_t k, ComputedPoint&& computed) {
+      pool->run(std::vector<std::size_t>(block_points.begin(), block_points.end()), [&](std::size_t k, ComputedPoint&& computed) {
         compute_s += computed.compute_s;
-        keep(base + k, std::move(computed));
-        scheduler.serve();
+        keep(k, std::move(computed));
+        serve();
       }, watch.changed());
+      block_done();
       continue;
     }
     const auto count = static_cast<std::ptrdiff_t>(block->size());
@@ -495,17 +530,23 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
 #pragma omp parallel for schedule(dynamic) num_threads(team) reduction(+ : compute_s)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (watch.changed().load()) continue;  // stopped: the inputs are not what they were
-      const std::size_t index = base + static_cast<std::size_t>(k);
-      guard->started(omp_get_thread_num(), my_points[index]);
-      ComputedPoint computed = runner::compute_point(*kind, study, my_points[index], columns,
+      const std::size_t index = static_cast<std::size_t>(k);
+      guard->started(omp_get_thread_num(), block_points[index]);
+      ComputedPoint computed = runner::compute_point(*kind, study, block_points[index], columns,
                                                      options.out_dir, options.plots);
       guard->finished(omp_get_thread_num());
       compute_s += computed.compute_s;
       keep(index, std::move(computed));
-      scheduler.serve();  // rank 0's main thread lets MPI progress the other ranks' claims
+      serve();
     }
+    block_done();
   }
   const double loop_s = seconds_since(loop_start);
+  // Rank 0 takes the blocks still on their way; the others say they are done.
+  if (rank == 0)
+    stream.drain(take_block);
+  else
+    stream.close();
   pool.reset();
   guard.reset();
   journal->flush();
@@ -516,19 +557,13 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   std::vector<std::string> changes = watch.changes();
   if (changes.empty() && study.inputs) changes = study.inputs->changes();
 
-  // Every rank's new points to rank 0, in the journal's round-trip format.
+  // Every rank's counters to rank 0 (its points went by the stream).
   Json payload = {{"computed", computed_points.load()},
                   {"compute_s", compute_s},
                   {"loop_s", loop_s},
                   {"output_failures", output_failures.load()},
                   {"journal_error", journal->error()},
                   {"input_changes", changes}};
-  if (rank != 0) {
-    std::string records;
-    for (std::size_t k = 0; k < my_points.size(); ++k)
-      if (mine[k].done) records += runner::journal_line(my_points[k], mine[k]);
-    payload["records"] = std::move(records);
-  }
   journal.reset();
   std::vector<std::string> payloads = runner::gather_to_root(runner::json_text(payload));
 
@@ -536,17 +571,18 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
   if (rank == 0) {
     Json result = Json::object();
     try {
+      if (!stream_error.empty()) throw std::logic_error(stream_error);
       std::vector<PointResult> shard_results;  // a shard's points, by grid index
       if (!writer) {
         shard_results.resize(n);
-        for (auto& [p, r] : prep.resumed.records) shard_results[p] = std::move(r);
-        for (std::size_t k = 0; k < my_points.size(); ++k)
-          shard_results[my_points[k]] = std::move(mine[k]);
+        for (std::size_t p = 0; p < n; ++p)
+          if (prep.resumed.has(p)) shard_results[p] = prep.resumed.take(p);
+        for (auto& [p, r] : shard_kept) shard_results[p] = std::move(r);
+        decltype(shard_kept)().swap(shard_kept);
       }
       ComputeStats stats;
       for (std::size_t r = 0; r < payloads.size(); ++r) {
         Json from = Json::parse(payloads[r]);
-        std::string().swap(payloads[r]);  // rank 0 holds every rank's results: one copy at a time
         stats.computed += from["computed"].get<std::size_t>();
         stats.compute_s += from["compute_s"].get<double>();
         stats.per_rank.push_back({{"points", from["computed"]},
@@ -559,24 +595,12 @@ RunSummary run_study(const Study& study, const RunOptions& options) {
           if (std::find(stats.input_changes.begin(), stats.input_changes.end(), change) ==
               stats.input_changes.end())
             stats.input_changes.push_back(change.get<std::string>());
-        if (r == 0) continue;
-        JournalContents records =
-            runner::parse_journal_records(from["records"].get<std::string>(), n, columns.size());
-        if (records.invalid_lines + records.truncated_lines > 0)
-          throw std::logic_error(fmt::format("runner: garbled results from rank {}", r));
-        if (!stats.input_changes.empty()) continue;
-        for (auto& [p, record] : records.records) {
-          if (writer)
-            writer->add(p, std::move(record));
-          else
-            shard_results[p] = std::move(record);
-        }
       }
       if (!stats.input_changes.empty()) {
         if (writer) writer->abandon();
         result["input_error"] = input_changed(meta_in, stats.input_changes);
       } else if (options.shard) {
-        runner::ShardRun shard_run{prep.session, prep.resumed.records.size(), stats.computed,
+        runner::ShardRun shard_run{prep.session, prep.resumed.count(), stats.computed,
                                    stats.compute_s, seconds_since(start), stats.journal_errors,
                                    stats.output_failures > 0
                                        ? fmt::format("{} point(s) could not write their files",
