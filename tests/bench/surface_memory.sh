@@ -5,11 +5,46 @@
 # column) to WORK_DIR once, runs `chatterlab run` on it with the FILTER filter (lc = 0.8 mm)
 # under /usr/bin/time -v, and prints the peak resident set, bytes per sample, the output
 # directory's size and the wall time. Not a test: run it by hand, with a BASELINE chatterlab to
-# compare (each run alternates the two).
-# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER [BASELINE]]]
+# compare (each run alternates the two). FILTER `closed` measures a closed profile instead: one
+# revolution of SAMPLES radii (eccentricity, 26 and 895 lobes plus noise), 50 UPR Gaussian filter,
+# so the roundness evaluation (reference circles, UPR table, Wz|f) runs on all of them.
+# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER|closed [BASELINE]]]
 set -eu
 bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
 mkdir -p "$work"
+if [ "$filter" = closed ]; then
+  data=$work/roundness_$samples.csv
+  if [ ! -s "$data" ]; then
+    awk -v n="$samples" 'BEGIN {
+      srand(1); pi = atan2(0, -1); print "radius_um"
+      for (i = 0; i < n; i++) {
+        t = 2 * pi * i / n
+        printf "%.6g\n", 3 * cos(t - 0.4) + 0.8 * sin(26 * t) + 0.05 * sin(895 * t) + 0.02 * (rand() + rand() + rand() - 1.5)
+      }
+    }' >"$data.tmp" && mv "$data.tmp" "$data"
+  fi
+  study=$work/roundness_$samples.toml
+  cat >"$study" <<EOF
+[study]
+kind = "surface"
+name = "memory: closed profile of $samples samples"
+
+[input]
+file = "roundness_$samples.csv"
+column = "radius_um"
+closed = true
+samples_per_rev = $samples
+unit = "um"
+
+[filter]
+type = "gaussian"
+cutoff_upr = 50
+
+[process]
+wheel_speed_rpm = 1450
+work_speed_rpm = 55
+EOF
+else
 data=$work/profile_$samples.csv
 if [ ! -s "$data" ]; then
   awk -v n="$samples" 'BEGIN {
@@ -35,6 +70,7 @@ spacing_mm = 0.0005
 type = "$filter"
 cutoff_mm = 0.8
 EOF
+fi
 echo "profile: $data ($(stat -c %s "$data") bytes, $samples samples), filter $filter, load $(cut -d' ' -f1 /proc/loadavg)"
 printf '%-9s %14s %14s %14s %8s\n' build "peak RSS kB" "bytes/sample" "output bytes" "wall s"
 for build in new ${baseline:+baseline}; do

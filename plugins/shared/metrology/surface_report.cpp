@@ -322,7 +322,26 @@ void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::
   bands.log_x = true;
   plot::Series low{"low band (forced lobes)", {}, {}, "impulses"},
       high{"high band (chatter)", {}, {}, "impulses"}, other{"outside the bands", {}, {}, "impulses"};
-  for (std::size_t k = 2; k < spectrum.size(); ++k) {
+  // A long closed profile has millions of spectral lines: on the log UPR axis each of ~4000
+  // log-spaced bins is drawn as its largest line (what an impulse plot shows there anyway), so
+  // the plot's size is bounded whatever the profile's; below ~270 UPR every line is its own bin.
+  const std::size_t k_end = spectrum.size();
+  const double bins_per_e = 4000.0 / std::log(std::max(3.0, static_cast<double>(k_end) / 2.0));
+  auto bin_of = [&](std::size_t k) {
+    return static_cast<long long>(std::floor(std::log(static_cast<double>(k) / 2.0) * bins_per_e));
+  };
+  struct Peak {
+    plot::Series* series = nullptr;
+    long long bin = -1;
+    double upr = 0.0, amplitude = -1.0;
+  } peak;
+  auto flush = [&] {
+    if (peak.series == nullptr) return;
+    peak.series->x.push_back(peak.upr);
+    peak.series->y.push_back(peak.amplitude);
+    peak = Peak{};
+  };
+  for (std::size_t k = 2; k < k_end; ++k) {
     const double upr = static_cast<double>(k);
     const double amplitude = (2 * k == n ? 1.0 : 2.0) * std::abs(spectrum[k]) / static_cast<double>(n);
     plot::Series& target =
@@ -332,9 +351,16 @@ void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::
                        upr <= wzf["high"]["to_upr"].get<double>()
                    ? high
                    : other);
-    target.x.push_back(upr);
-    target.y.push_back(amplitude);
+    const long long bin = bin_of(k);
+    if (peak.series != &target || peak.bin != bin) flush();
+    if (amplitude > peak.amplitude) {
+      peak.series = &target;
+      peak.bin = bin;
+      peak.upr = upr;
+      peak.amplitude = amplitude;
+    }
   }
+  flush();
   for (auto* s : {&low, &high, &other})
     if (!s->x.empty()) bands.series.push_back(std::move(*s));
   plot::render(bands, dir, stem);

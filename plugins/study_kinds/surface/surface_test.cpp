@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -314,6 +315,50 @@ namespace {
 
 // The polar roundness plot draws the minimum zone as its two circles (RONt apart, the zone's
 // centre), and the waviness lies between them, touching both (issue 20).
+TEST(SurfaceBandsPlot, ALongProfilesSpectrumIsDrawnBoundedWithItsPeaks) {
+  // 100,000 radii in one revolution: 50,000 spectral lines. The Wz|f plot draws each of ~4000
+  // log-spaced bins as its largest line, so the 26 UPR lobes, the 895 UPR chatter and a lone
+  // 30,000 UPR line all stay in the plot while the number of impulses stays bounded.
+  TempDir dir;
+  const std::size_t n = 100000;
+  {
+    std::ofstream csv(dir.path() / "radii.csv");
+    csv << "radius_um\n";
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = 2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n);
+      csv << 0.8 * std::sin(26 * t) + 0.05 * std::sin(895 * t) + 0.01 * std::sin(30000 * t) << "\n";
+    }
+    std::ofstream toml(dir.path() / "bands.toml");
+    toml << "[study]\nkind = \"surface\"\n[input]\nfile = \"radii.csv\"\ncolumn = \"radius_um\"\n"
+            "closed = true\nsamples_per_rev = " << n << "\nunit = \"um\"\n"
+            "[filter]\ntype = \"gaussian\"\ncutoff_upr = 50\n"
+            "[process]\nwheel_speed_rpm = 1450\nwork_speed_rpm = 55\n";
+  }
+  const Study study = load_study(dir.path() / "bands.toml");
+  SurfaceStudy kind;
+  PointContext context;
+  context.artifact_dir = dir.path() / "out";
+  context.plots = true;
+  kind.run_point(study.point_document(0), context);
+  std::ifstream dat(dir.path() / "out" / "wz_f_bands.dat");
+  ASSERT_TRUE(dat) << "no wz_f_bands.dat (gnuplot missing?)";
+  std::size_t impulses = 0;
+  std::map<long, double> line;  // UPR -> amplitude
+  for (std::string text; std::getline(dat, text);) {
+    if (text.empty() || text[0] == '#') continue;
+    std::istringstream in(text);
+    double upr = 0, amplitude = 0;
+    in >> upr >> amplitude;
+    ++impulses;
+    line[std::lround(upr)] = amplitude;
+  }
+  EXPECT_LT(impulses, 4100u);
+  EXPECT_GT(impulses, 1000u);
+  EXPECT_NEAR(line[26], 0.8, 1e-6);
+  EXPECT_NEAR(line[895], 0.05, 1e-6);
+  EXPECT_NEAR(line[30000], 0.01, 1e-6);
+}
+
 TEST(SurfacePolarPlot, MinimumZoneDrawsBothCirclesAroundTheProfile) {
   TempDir dir;
   const Study study = load_study(std::filesystem::path(CHATTERLAB_SOURCE_DIR) / "studies" / "surface_roundness.toml");
