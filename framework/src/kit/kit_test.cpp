@@ -10,7 +10,11 @@
 #include "chatterlab/kit/model.hpp"
 #include "chatterlab/kit/plots.hpp"
 #include "chatterlab/kit/settings.hpp"
+#include "chatterlab/kit/simulation.hpp"
+#include "chatterlab/model.hpp"
+#include "chatterlab/study.hpp"
 #include "chatterlab/param_table.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab::testing {
@@ -174,6 +178,29 @@ TEST(KitModel, ExactSpeedRatiosOfSmallWholeNumbers) {
   EXPECT_EQ(kit::exact_ratio(1450.0, 55.0), "290/11");
   EXPECT_EQ(kit::exact_ratio(1450.0, 55.0, 10), "");  // needs q = 11
   EXPECT_EQ(kit::exact_ratio(0.0, 55.0), "");
+}
+
+// The fit window waits for the longest REGENERATIVE delay: a rotor whose surface the model does
+// not regenerate feeds nothing back, however slowly it turns.
+double longest_delay_of(const std::string& model_toml) {
+  TempDir dir;
+  const Study study = load_text(dir, "[study]\nkind = \"simulate\"\n" + model_toml + "[simulation]\nduration_s = 1.0\n");
+  return kit::longest_delay_s(*kit::build_model(study.document["model"])->time_domain());
+}
+
+TEST(KitSimulation, LongestDelayIsTheSlowestRegeneratedRotorsRevolution) {
+  // G7 regenerates the wheel alone: its 55 rpm work (1.09 s a revolution) is no delay.
+  EXPECT_DOUBLE_EQ(longest_delay_of("[model]\ntype = \"amplitude_modulated\"\nfrequency_hz = 800.0\n"
+                                    "damping_ratio = 0.05\nstiffness_n_per_m = 5.0e7\n"
+                                    "grinding_stiffness_n_per_m = 1.0e7\ncontact_stiffness_n_per_m = 1.0e8\n"
+                                    "modulation_depth = 0.3\nwheel_speed_rpm = 1450\nwork_speed_rpm = 55\n"),
+                   60.0 / 1450.0);
+  // G1 regenerates both by default: the 300 rpm work is the longest; without work regeneration the
+  // 1450 rpm wheel is.
+  const std::string g1 = model_table_toml("plunge_regenerative", g1_feed_risk_machine);
+  EXPECT_DOUBLE_EQ(longest_delay_of(g1), 60.0 / 300.0);
+  EXPECT_DOUBLE_EQ(longest_delay_of(g1 + "work_regeneration = false\n"), 60.0 / 1450.0);
+  EXPECT_DOUBLE_EQ(longest_delay_of(g1 + "work_regeneration = false\nwheel_regeneration = false\n"), 0.0);
 }
 
 TEST(KitPlots, AxisLabelsAreWordsWithTheUnitOfTheKeySuffix) {

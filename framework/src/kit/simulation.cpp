@@ -187,6 +187,9 @@ FitWindow fit_window(const FitWindowSettings& s, const SimulationResult& run, do
 double longest_delay_s(const TimeDomainModel& model) {
   double delay = 0.0;
   for (Rotor r : {Rotor::wheel, Rotor::work}) {
+    // A rotor whose surface is not regenerated (G6's wheel, G7's work) feeds no delay back: its
+    // revolution says nothing about when the regenerated surfaces take over the growth.
+    if (!model.regenerates(r)) continue;
     const double rpm = model.nominal_speed_rpm(r);
     if (rpm > 0) delay = std::max(delay, 60.0 / rpm);
   }

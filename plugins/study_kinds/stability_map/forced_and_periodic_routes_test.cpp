@@ -50,15 +50,15 @@ std::string g6_model(double wheel_damping_n_s_per_m, double unbalance_kg_m) {
          std::to_string(unbalance_kg_m) + "\nwheel_speed_rpm = 1450.0\nwork_speed_rpm = 1200.0\n";
 }
 
-// G7 as studies/simulate_g7_sidebands.toml with grinding stiffness kg b and modulation depth Q. The
-// work speed (reported only: G7 regenerates the wheel alone) at the wheel's, because the simulate
-// kind's fit validity counts the slowest rotor's revolution as the longest delay.
+// G7 as studies/simulate_g7_sidebands.toml with grinding stiffness kg b and modulation depth Q. Its
+// 55 rpm work is reported only (G7 regenerates the wheel alone), so the simulate kind's fit window
+// waits for a wheel revolution, not for the work's 1.09 s.
 std::string g7_model(double grinding_stiffness_n_per_m, double depth) {
   return "[model]\ntype = \"amplitude_modulated\"\nfrequency_hz = 800.0\ndamping_ratio = 0.05\n"
          "stiffness_n_per_m = 5.0e7\ngrinding_stiffness_n_per_m = " +
          std::to_string(grinding_stiffness_n_per_m) +
          "\ncontact_stiffness_n_per_m = 1.0e8\nmodulation_depth = " + std::to_string(depth) +
-         "\nwheel_speed_rpm = 1450\nwork_speed_rpm = 1450\n";
+         "\nwheel_speed_rpm = 1450\nwork_speed_rpm = 55\n";
 }
 
 // The rightmost eigenvalue's real part of G6's structure, typed in from MODELS.md G6.

@@ -86,7 +86,8 @@ FitWindow fit_window(const FitWindowSettings& settings, double duration_s);
 // are the regenerated surfaces under the contact). Explicit fit_start_s / fit_end_s are taken as
 // given (the end clipped to the run); assess_fit (chatterlab/fit_validity.hpp) judges either.
 FitWindow fit_window(const FitWindowSettings& settings, const SimulationResult& run, double longest_delay_s);
-// The longest regenerative delay of a model: one revolution of its slowest rotor at nominal speed.
+// The longest regenerative delay of a model: one revolution, at nominal speed, of the slowest rotor
+// whose surface it regenerates (0 when it regenerates none).
 double longest_delay_s(const TimeDomainModel& model);
 
 // ------------------------------------------------------------------ the [simulation] table
