@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -100,6 +101,53 @@ TEST(ProcessConditions, PenetrationDampingModelFollowsG1AndScalesKdByG4) {
   // The table builds a model (what a study kind does with it).
   Json built = b;
   EXPECT_NE(kit::build_model(built)->characteristic(), nullptr);
+}
+
+// The default parameter_values_at flattens parameters_at's table; it must tell every two different
+// tables apart (feed_risk groups segments by these vectors and runs one root search per group).
+class TableAsGiven final : public ProcessConditionsModel {
+ public:
+  explicit TableAsGiven(Json table) : table_(std::move(table)) {}
+  ProcessConditions nominal_conditions() const override { return {}; }
+  Json parameters_at(const ProcessConditions&, const ProcessConditions&, const ProcessScaling&) const override {
+    return table_;
+  }
+
+ private:
+  Json table_;
+};
+
+std::vector<double> flattened(const Json& table) {
+  std::vector<double> values;
+  TableAsGiven(table).parameter_values_at({}, {}, {}, values);
+  return values;
+}
+
+bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+TEST(ProcessConditions, DefaultParameterValuesTellEveryTwoTablesApart) {
+  const Json a = Json::parse(R"({"k": 1.5, "law": "linear", "on": true, "modes": [[1, 2], [3]]})");
+  EXPECT_TRUE(bitwise_equal(flattened(a), flattened(a)));
+  // Texts are compared in full, not by a hash: these differ only in their last byte.
+  Json b = a;
+  b["law"] = "lineas";
+  EXPECT_FALSE(bitwise_equal(flattened(a), flattened(b)));
+  b["law"] = "linear ";
+  EXPECT_FALSE(bitwise_equal(flattened(a), flattened(b)));
+  // The same leaves in another nesting are another table.
+  b = a;
+  b["modes"] = Json::parse("[[1], [2, 3]]");
+  EXPECT_FALSE(bitwise_equal(flattened(a), flattened(b)));
+  b = a;
+  b["on"] = false;
+  EXPECT_FALSE(bitwise_equal(flattened(a), flattened(b)));
+  // A long text (more than one six-byte chunk) differing in its first byte.
+  Json c = a, d = a;
+  c["law"] = std::string(40, 'x');
+  d["law"] = "y" + std::string(39, 'x');
+  EXPECT_FALSE(bitwise_equal(flattened(c), flattened(d)));
 }
 
 }  // namespace
