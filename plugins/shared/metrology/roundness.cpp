@@ -1,6 +1,7 @@
 #include "shared/metrology/roundness.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -38,9 +39,11 @@ std::vector<double> solve_dense(std::vector<std::vector<double>> m, std::vector<
 // cos and sin of the samples' angles, read in sweeps (every sample in order) and at single
 // samples (the constraint-generation subset), in the same values either way.
 //
-// Equally spaced angles 2 pi i / N: by rotation, re-anchored on the exact value every 256 samples
-// (error ~1e-14; ten million trig calls per sweep would cost more than the circles), computed when
-// read instead of held in two arrays (16 bytes per sample).
+// Equally spaced angles 2 pi i / N, computed when read instead of held in two arrays (16 bytes
+// per sample): by rotation, re-anchored on the exact value every 256 samples (error ~1e-14; ten
+// million trig calls per sweep would cost more than the circles). A sweep rotates one block into
+// a small buffer before using it, so the rotation's latency chain is not interleaved with the
+// work on each sample; a single sample is rotated from its anchor to the same value.
 class EquallySpacedTrig {
  public:
   explicit EquallySpacedTrig(std::size_t n)
@@ -54,32 +57,39 @@ class EquallySpacedTrig {
   // f(i, cos theta_i, sin theta_i) for i = 0..N-1.
   template <class F>
   void sweep(F&& f) const {
-    double c = 0, s = 0;
-    for (std::size_t i = 0; i < n_; ++i) {
-      if (i % anchor_every == 0) {
-        anchor(i, c, s);
-      } else {
-        rotate(c, s);
+    // Two blocks at a time: their rotations are independent, so they overlap in the pipeline.
+    std::array<double, 2 * block> cs{}, sn{};
+    for (std::size_t first = 0; first < n_; first += 2 * block) {
+      const std::size_t count = std::min(2 * block, n_ - first);
+      anchor(first, cs[0], sn[0]);
+      if (count > block) anchor(first + block, cs[block], sn[block]);
+      for (std::size_t k = 1; k < block; ++k) {
+        rotate(cs[k - 1], sn[k - 1], cs[k], sn[k]);
+        rotate(cs[block + k - 1], sn[block + k - 1], cs[block + k], sn[block + k]);
       }
-      f(i, c, s);
+      for (std::size_t k = 0; k < count; ++k) f(first + k, cs[k], sn[k]);
     }
   }
 
   void at(std::size_t i, double& c, double& s) const {
-    anchor(i - i % anchor_every, c, s);
-    for (std::size_t k = 0; k < i % anchor_every; ++k) rotate(c, s);
+    anchor(i - i % block, c, s);
+    for (std::size_t k = 0; k < i % block; ++k) {
+      double next_c, next_s;
+      rotate(c, s, next_c, next_s);
+      c = next_c;
+      s = next_s;
+    }
   }
 
  private:
-  static constexpr std::size_t anchor_every = 256;
+  static constexpr std::size_t block = 256;
   void anchor(std::size_t i, double& c, double& s) const {
     c = std::cos(step_ * static_cast<double>(i));
     s = std::sin(step_ * static_cast<double>(i));
   }
-  void rotate(double& c, double& s) const {
-    const double next_c = c * c1_ - s * s1_;
-    s = s * c1_ + c * s1_;
-    c = next_c;
+  void rotate(double c, double s, double& next_c, double& next_s) const {
+    next_c = c * c1_ - s * s1_;
+    next_s = s * c1_ + c * s1_;
   }
   std::size_t n_;
   double step_, c1_, s1_;
@@ -146,6 +156,22 @@ int rows_of(Program program, double r, double cs, double sn, double a[2][4], dou
       return 2;
   }
   return 0;
+}
+
+// How far a sample's rows are from holding at x: max(0, c - A . x) over its rows (rows_of
+// written out: this runs for every sample in every round).
+inline double violation(Program program, const std::vector<double>& x, double r, double cs,
+                        double sn) {
+  switch (program) {
+    case Program::circumscribed:
+      return std::max(0.0, r - (x[0] + cs * x[1] + sn * x[2]));
+    case Program::inscribed:
+      return std::max(0.0, -r - (x[0] + cs * x[1] + sn * x[2]));
+    case Program::zone:
+      return std::max({0.0, r - (x[0] + cs * x[2] + sn * x[3]),
+                       -r - (x[1] - cs * x[2] - sn * x[3])});
+  }
+  return 0.0;
 }
 
 struct ProgramSolution {
@@ -223,14 +249,9 @@ ProgramSolution solve_by_constraint_generation(Program program, const Samples<Tr
       continue;
     }
     LargestViolations violated(64);
+    const std::vector<double>& x = lp.x;
     s.sweep([&](std::size_t i, double r, double cs, double sn) {
-      const int k = rows_of(program, r, cs, sn, a, c);
-      double worst = 0;
-      for (int q = 0; q < k; ++q) {
-        double lhs = 0;
-        for (std::size_t j = 0; j < m; ++j) lhs += a[q][j] * lp.x[j];
-        worst = std::max(worst, c[q] - lhs);
-      }
+      const double worst = violation(program, x, r, cs, sn);
       if (worst > tolerance && !in_subset[i]) violated.add(worst, i);
     });
     out.x = lp.x;
