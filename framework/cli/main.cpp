@@ -107,11 +107,14 @@ void print_summary(const chatterlab::Study& study) {
       chatterlab::grid_cost(study.point_count(), study.grid.size(), study.output_columns.size());
   out << fmt::format(
       "  estimate    memory {} at rank 0, disk {} for the journal, results.csv and grid plots\n"
-      "              ({} points x {} and {} bytes; a kind's own per-point files come on top)\n"
+      "              (memory: {} fixed, {} held rows x {} bytes, {} points x {} bytes;\n"
+      "              disk: {} points x {} bytes; a kind's own working set and files come on top)\n"
       "              limit on this machine: {} points (half of {} of memory){}\n",
-      bytes_text(cost.memory_bytes()), bytes_text(cost.disk_bytes()), cost.points,
-      cost.memory_bytes_per_point, cost.disk_bytes_per_point, cost.default_max_points,
-      bytes_text(2 * cost.memory_budget_bytes),
+      bytes_text(cost.memory_bytes()), bytes_text(cost.disk_bytes()),
+      bytes_text(chatterlab::GridCost::fixed_memory_bytes), cost.held_rows,
+      chatterlab::GridCost::memory_bytes_per_cell * cost.cells_per_point, cost.points,
+      chatterlab::GridCost::bookkeeping_bytes_per_point, cost.points, cost.disk_bytes_per_point,
+      cost.default_max_points, bytes_text(2 * cost.memory_budget_bytes),
       cost.points > cost.default_max_points ? "; this grid needs --allow-large" : "");
   if (study.inputs)
     for (const auto& file : study.inputs->files())

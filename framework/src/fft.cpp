@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <mutex>
 #include <new>
 #include <stdexcept>
@@ -111,6 +112,52 @@ std::vector<double> RealFft::inverse(std::span<const std::complex<double>> spect
   std::vector<double> x(n_);
   inverse(spectrum, x);
   return x;
+}
+
+InPlaceRealFft::InPlaceRealFft(std::span<const double> samples)
+    : n_(samples.size()), buffer_(2 * (samples.size() / 2 + 1), 0.0) {
+  if (n_ == 0) throw std::invalid_argument("InPlaceRealFft: length must be at least 1");
+  std::copy(samples.begin(), samples.end(), buffer_.begin());
+}
+
+namespace {
+// Plans under the lock (FFTW_ESTIMATE never touches the buffer), executes outside it.
+void execute_once(const std::function<fftw_plan()>& plan_maker, std::size_t n) {
+  fftw_plan plan = nullptr;
+  {
+    const std::lock_guard lock(planner_mutex());
+    plan = plan_maker();
+  }
+  if (plan == nullptr)
+    throw std::runtime_error(fmt::format("FFTW could not plan an in-place transform of length {}", n));
+  fftw_execute(plan);
+  const std::lock_guard lock(planner_mutex());
+  fftw_destroy_plan(plan);
+}
+}  // namespace
+
+void InPlaceRealFft::forward() {
+  auto* real = buffer_.data();
+  auto* complex = reinterpret_cast<fftw_complex*>(buffer_.data());
+  execute_once([&] { return fftw_plan_dft_r2c_1d(static_cast<int>(n_), real, complex, FFTW_ESTIMATE); },
+               n_);
+}
+
+void InPlaceRealFft::inverse() {
+  auto* real = buffer_.data();
+  auto* complex = reinterpret_cast<fftw_complex*>(buffer_.data());
+  execute_once([&] { return fftw_plan_dft_c2r_1d(static_cast<int>(n_), complex, real, FFTW_ESTIMATE); },
+               n_);
+  const double scale = 1.0 / static_cast<double>(n_);
+  for (std::size_t j = 0; j < n_; ++j) buffer_[j] *= scale;
+}
+
+std::vector<double> InPlaceRealFft::take_samples() {
+  std::vector<double> out = std::move(buffer_);
+  out.resize(n_);
+  n_ = 0;
+  buffer_.clear();
+  return out;
 }
 
 }  // namespace chatterlab

@@ -50,6 +50,30 @@ TEST(RealFft, MovedObjectStillTransforms) {
   for (auto v : s) EXPECT_NEAR(std::abs(v - 1.0), 0.0, 1e-15);
 }
 
+TEST(InPlaceRealFft, AgreesWithRealFftAndRoundTrips) {
+  for (std::size_t n : {1u, 2u, 7u, 16u, 33u, 1000u}) {
+    SCOPED_TRACE(n);
+    std::mt19937 rng(static_cast<unsigned>(n) + 5);
+    std::normal_distribution<double> noise;
+    std::vector<double> x(n);
+    for (auto& v : x) v = noise(rng);
+    RealFft reference(n);
+    const auto expected = reference.forward(x);
+    InPlaceRealFft fft(x);
+    ASSERT_EQ(fft.size(), n);
+    fft.forward();
+    ASSERT_EQ(fft.spectrum().size(), n / 2 + 1);
+    for (std::size_t k = 0; k < expected.size(); ++k)
+      EXPECT_NEAR(std::abs(fft.spectrum()[k] - expected[k]), 0.0, 1e-13 * static_cast<double>(n));
+    fft.inverse();
+    const std::vector<double> back = fft.take_samples();
+    ASSERT_EQ(back.size(), n);
+    for (std::size_t j = 0; j < n; ++j) EXPECT_NEAR(back[j], x[j], 1e-13);
+    EXPECT_EQ(fft.size(), 0u);
+  }
+  EXPECT_THROW(InPlaceRealFft(std::vector<double>{}), std::invalid_argument);
+}
+
 TEST(AmplitudeSpectrum, SineOnABinReadsItsAmplitude) {
   const double rate = 1000.0;
   const std::size_t n = 1000;

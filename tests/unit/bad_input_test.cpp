@@ -186,10 +186,11 @@ TEST_F(BadInput, OverlappingGridKeys) {
 TEST_F(BadInput, OversizeGridNamesTheSizeAndTheFlag) {
   expect_mentions(error(fake_study("[grid]\n"
                                    "speed_rpm = { from = 1, to = 2, steps = 100000 }\n"
-                                   "mass_kg = { from = 1, to = 2, steps = 1000 }\n")),
-                  {"study.toml:10: [grid] has 100000000 points (100000 x 1000), more than the limit of",
-                   "on this machine: its results would take about", "bytes per point), more than "
-                   "half of the machine's memory", "--allow-large"});
+                                   "mass_kg = { from = 1, to = 2, steps = 1000000 }\n")),
+                  {"study.toml:10: [grid] has 100000000000 points (100000 x 1000000), more than the limit of",
+                   "on this machine: the run would hold about 14", " GiB at rank 0 (16 bytes of "
+                   "bookkeeping per point beside ", " MiB of held rows and program), more than half "
+                   "of the machine's memory", "--allow-large"});
   expect_mentions(error(fake_study("[grid]\n"
                                    "speed_rpm = { from = 1, to = 2, steps = 4294967296 }\n"
                                    "mass_kg = { from = 1, to = 2, steps = 4294967296 }\n"),

@@ -330,17 +330,25 @@ TEST(StudyLoad, AStudyKindConstructorThrowingAnythingIsBadInputAtTheKindsLine) {
     EXPECT_NE(message.find(part), std::string::npos) << message;
 }
 
-TEST(GridCost, GrowsWithTheRowAndKeepsTheDefaultGridWithinHalfTheMemory) {
-  const GridCost small = grid_cost(1000, 2, 3), wide = grid_cost(1000, 2, 13);
+TEST(GridCost, HeldRowsAreBoundedAndOnlyTheBookkeepingGrowsWithTheGrid) {
+  // Results stream: rows are held up to the plots' table and one block in flight, then only the
+  // per-point bookkeeping grows.
+  const GridCost tiny = grid_cost(9, 2, 3), small = grid_cost(10'000, 2, 3),
+                 large = grid_cost(10'000'000, 2, 3), wide = grid_cost(10'000'000, 2, 13);
   EXPECT_EQ(small.cells_per_point, 6u);
-  EXPECT_EQ(small.memory_bytes_per_point, 6 * GridCost::memory_bytes_per_cell);
-  EXPECT_EQ(wide.disk_bytes(), 1000 * 16 * GridCost::disk_bytes_per_cell);
+  EXPECT_EQ(tiny.held_rows, 18u);
+  EXPECT_EQ(small.held_rows, 10'000u + 10'000u);
+  EXPECT_EQ(large.held_rows, GridCost::max_held_rows);
+  EXPECT_EQ(small.memory_bytes(), GridCost::fixed_memory_bytes + 20'000 * 6 * GridCost::memory_bytes_per_cell +
+                                      10'000 * GridCost::bookkeeping_bytes_per_point);
+  EXPECT_EQ(large.memory_bytes() - grid_cost(1'000'000, 2, 3).memory_bytes(),
+            9'000'000 * GridCost::bookkeeping_bytes_per_point);
+  EXPECT_EQ(wide.disk_bytes(), 10'000'000 * 16 * GridCost::disk_bytes_per_cell);
+  EXPECT_GT(wide.memory_bytes(), large.memory_bytes());
   EXPECT_GT(small.default_max_points, wide.default_max_points);
   // What the limit accepts fits in the budget; one point more would not.
-  EXPECT_LE(static_cast<std::uint64_t>(small.default_max_points) * small.memory_bytes_per_point,
-            small.memory_budget_bytes);
-  EXPECT_GT((static_cast<std::uint64_t>(small.default_max_points) + 1) * small.memory_bytes_per_point,
-            small.memory_budget_bytes);
+  EXPECT_LE(grid_cost(small.default_max_points, 2, 3).memory_bytes(), small.memory_budget_bytes);
+  EXPECT_GT(grid_cost(small.default_max_points + 1, 2, 3).memory_bytes(), small.memory_budget_bytes);
 }
 
 TEST(GridCost, AGridOverTheLimitNeedsAllowLarge) {

@@ -43,4 +43,33 @@ class RealFft {
   void* inverse_plan_ = nullptr;
 };
 
+// One real signal transformed in place, in one buffer of 2 (n/2 + 1) doubles (FFTW's padded
+// in-place layout): for signals so long that the copies matter. RealFft holds 16 bytes per sample
+// of its own buffers and returns fresh arrays; this holds 8 (a whole-revolution filter of a
+// 10^7-sample closed profile, issue 23). Same conventions as RealFft: forward unnormalised,
+// inverse normalised. Plans are made per transform under RealFft's planner lock (FFTW_ESTIMATE:
+// microseconds, negligible beside a transform of a long signal).
+class InPlaceRealFft {
+ public:
+  // The n samples, copied into the padded buffer (n >= 1).
+  explicit InPlaceRealFft(std::span<const double> samples);
+
+  std::size_t size() const { return n_; }
+  // The n samples: valid before forward() and after inverse().
+  std::span<double> samples() { return {buffer_.data(), n_}; }
+  // The n/2 + 1 bins X[k]: valid after forward() (and until inverse()).
+  std::span<std::complex<double>> spectrum() {
+    return {reinterpret_cast<std::complex<double>*>(buffer_.data()), n_ / 2 + 1};
+  }
+  void forward();
+  void inverse();
+  // The samples as a vector of n (the buffer itself, no copy: capacity 2 (n/2 + 1)); the object
+  // is empty afterwards.
+  std::vector<double> take_samples();
+
+ private:
+  std::size_t n_;
+  std::vector<double> buffer_;
+};
+
 }  // namespace chatterlab

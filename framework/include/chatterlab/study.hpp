@@ -26,26 +26,40 @@ struct GridAxis {
   SourceLocation where;     // line of the grid key
 };
 
-// What a grid costs (docs/studies.md, "Grid size"). At the end of a run rank 0 holds every
-// point's results in memory (the results table, then results.csv's text and the plots' data);
-// on disk the journal, results.csv and the plots' data hold them. Both grow with the cells of a
+// What a grid costs (docs/studies.md, "Grid size"). Results stream (docs/architecture.md,
+// "Streaming results"): rank 0 holds a fixed part, a few bytes of bookkeeping per point and a
+// bounded number of rows -- the plots' table (at most runner::max_plot_rows), and the rows of a
+// block that finished ahead of an earlier one (at most runner::max_block_points) -- while on disk
+// the journal, results.csv and the plots' data grow with the grid. Rows are costed per cell of a
 // results.csv row (grid keys + output columns + status), at rates measured on stability_map
 // grids, whose certificate column makes them the most expensive per cell of the built-in kinds.
+// A kind's own per-point working set (a long profile, a long simulation) comes on top.
 struct GridCost {
-  // Measured (docs/performance.md, "Study runner: memory and disk per point"): 10-cell rows of a
-  // linear_dde stability map take 1050 bytes of peak memory and 1360 bytes of disk per point.
+  // Measured (docs/performance.md, "Study runner at grid scale"): a 9-point linear_dde stability
+  // map peaks at 25 MB (program, libraries, HDF5, two threads' working sets), 10-cell rows take
+  // about 1100 bytes each while held, the list of points to compute 8 bytes per point and a
+  // resume's journal offsets 8 more; on disk 1360 bytes per 10-cell row.
+  static constexpr std::uint64_t fixed_memory_bytes = std::uint64_t{40} << 20;
+  static constexpr std::uint64_t bookkeeping_bytes_per_point = 16;
   static constexpr std::uint64_t memory_bytes_per_cell = 110;
   static constexpr std::uint64_t disk_bytes_per_cell = 140;
+  // Rows held at most: the plots' table and one block of points in flight.
+  static constexpr std::uint64_t max_held_rows = 65'536 + 16'384;
 
   std::size_t points = 0;
   std::size_t cells_per_point = 0;
-  std::uint64_t memory_bytes_per_point = 0;
+  std::uint64_t held_rows = 0;            // min(points, plot rows) + min(points, block)
+  std::uint64_t held_rows_bytes = 0;      // held_rows x cells x memory_bytes_per_cell
   std::uint64_t disk_bytes_per_point = 0;
   std::uint64_t memory_budget_bytes = 0;  // half of this machine's physical memory
-  // The largest grid accepted without --allow-large: memory_budget / memory per point.
+  // The largest grid accepted without --allow-large: the most points whose memory_bytes() fits
+  // in memory_budget_bytes.
   std::size_t default_max_points = 0;
 
-  std::uint64_t memory_bytes() const { return points * memory_bytes_per_point; }
+  // Peak memory at rank 0 (an estimate within a factor ~2 for the built-in kinds).
+  std::uint64_t memory_bytes() const {
+    return fixed_memory_bytes + held_rows_bytes + points * bookkeeping_bytes_per_point;
+  }
   std::uint64_t disk_bytes() const { return points * disk_bytes_per_point; }
 };
 GridCost grid_cost(std::size_t points, std::size_t grid_keys, std::size_t output_columns);

@@ -221,11 +221,13 @@ std::vector<GridAxis> build_grid(const Json& grid, const Json& validated, const 
   const GridCost cost = grid_cost(*count, pending.size(), output_columns);
   if (*count > cost.default_max_points && !options.allow_large)
     throw InputError(fmt::format(
-        "{}: [grid] has {} points ({}), more than the limit of {} on this machine: its results "
-        "would take about {:.1f} GiB of memory ({} bytes per point), more than half of the "
-        "machine's memory; pass --allow-large to run it anyway",
+        "{}: [grid] has {} points ({}), more than the limit of {} on this machine: the run "
+        "would hold about {:.1f} GiB at rank 0 ({} bytes of bookkeeping per point beside {} MiB "
+        "of held rows and program), more than half of the machine's memory; pass --allow-large "
+        "to run it anyway",
         where, *count, shape, cost.default_max_points,
-        static_cast<double>(cost.memory_bytes()) / (1u << 30), cost.memory_bytes_per_point));
+        static_cast<double>(cost.memory_bytes()) / (1u << 30), GridCost::bookkeeping_bytes_per_point,
+        (GridCost::fixed_memory_bytes + cost.held_rows_bytes) >> 20));
 
   std::vector<GridAxis> axes;
   for (auto& [axis, range] : pending) {

@@ -6,6 +6,8 @@
 #include <limits>
 
 #include "chatterlab/study.hpp"
+#include "runner/mpi_scheduler.hpp"
+#include "runner/result_writer.hpp"
 
 namespace chatterlab {
 
@@ -18,17 +20,23 @@ std::uint64_t physical_memory_bytes() {
 }  // namespace
 
 GridCost grid_cost(std::size_t points, std::size_t grid_keys, std::size_t output_columns) {
+  static_assert(GridCost::max_held_rows == runner::max_plot_rows + runner::max_block_points,
+                "GridCost::max_held_rows: the plots' rows and one block in flight");
   GridCost cost;
   cost.points = points;
   cost.cells_per_point = grid_keys + output_columns + 1;  // + status
-  cost.memory_bytes_per_point = GridCost::memory_bytes_per_cell * cost.cells_per_point;
+  const std::uint64_t row_bytes = GridCost::memory_bytes_per_cell * cost.cells_per_point;
+  cost.held_rows = std::min<std::uint64_t>(points, runner::max_plot_rows) +
+                   std::min<std::uint64_t>(points, runner::max_block_points);
+  cost.held_rows_bytes = cost.held_rows * row_bytes;
   cost.disk_bytes_per_point = GridCost::disk_bytes_per_cell * cost.cells_per_point;
-  // Half: gnuplot draws the maps while the results are still held (it needs about half as much
-  // again for a 2-D map), and the machine has other work.
+  // Half: gnuplot draws the maps beside the run, and the machine has other work.
   cost.memory_budget_bytes = physical_memory_bytes() / 2;
-  cost.default_max_points = static_cast<std::size_t>(
-      std::min<std::uint64_t>(cost.memory_budget_bytes / cost.memory_bytes_per_point,
-                              std::numeric_limits<std::size_t>::max()));
+  // Past the held rows' cap only the bookkeeping grows: the limit is where it fills the budget.
+  const std::uint64_t capped = GridCost::fixed_memory_bytes + GridCost::max_held_rows * row_bytes;
+  const std::uint64_t room = cost.memory_budget_bytes > capped ? cost.memory_budget_bytes - capped : 0;
+  cost.default_max_points = static_cast<std::size_t>(std::min<std::uint64_t>(
+      room / GridCost::bookkeeping_bytes_per_point, std::numeric_limits<std::size_t>::max()));
   return cost;
 }
 

@@ -14,6 +14,12 @@
 // Deviations from each reference: RONt = peak-to-valley, RONp = largest peak above the reference
 // circle, RONv = deepest valley below it (>= 0), RONq = rms of the deviations about their mean
 // radius with that reference's centre.
+//
+// Memory: a constant number of bytes per sample beside the radii (issue 23: a 10^7-sample
+// revolution within 48 bytes per sample, docs/performance.md): cos and sin of equally spaced
+// angles are computed when read, not stored; deviations are summed as they are computed; the
+// least-squares deviations are an array only when asked for.
+#include <span>
 #include <string>
 #include <vector>
 
@@ -30,25 +36,31 @@ struct ReferenceCircle {
 
 struct Roundness {
   ReferenceCircle least_squares, minimum_zone, minimum_circumscribed, maximum_inscribed;
-  std::vector<double> least_squares_deviations;  // r_i minus the least-squares circle
+  // r_i minus the least-squares circle; empty unless Deviations::least_squares was asked for.
+  std::vector<double> least_squares_deviations;
 };
 
 // Which circles to compute: all four, or least squares and minimum zone only (the other two
 // are then left default, name empty).
 enum class References { all, least_squares_and_zone };
 
+// Whether to return the least-squares deviations (an array of the samples' size).
+enum class Deviations { none, least_squares };
+
 // `radius`: deviations r_i; `angle_rad`: theta_i (any order, must span more than half a turn in
 // every direction: the MC/MI/MZ programs need samples all round). Throws std::invalid_argument
 // for fewer than 4 samples or mismatched sizes.
-Roundness roundness(const std::vector<double>& radius, const std::vector<double>& angle_rad,
-                    References references = References::all);
+Roundness roundness(std::span<const double> radius, std::span<const double> angle_rad,
+                    References references = References::all,
+                    Deviations deviations = Deviations::none);
 
 // Equally spaced samples of one revolution: theta_i = 2 pi i / N.
-Roundness roundness(const std::vector<double>& radius, References references = References::all);
+Roundness roundness(std::span<const double> radius, References references = References::all,
+                    Deviations deviations = Deviations::none);
 
 // Deviations from one reference given its centre: r_i - a cos theta_i - b sin theta_i - R.
-std::vector<double> deviations(const ReferenceCircle& circle, const std::vector<double>& radius,
-                               const std::vector<double>& angle_rad);
+std::vector<double> deviations(const ReferenceCircle& circle, std::span<const double> radius,
+                               std::span<const double> angle_rad);
 
 std::vector<double> equally_spaced_angles(std::size_t n);
 

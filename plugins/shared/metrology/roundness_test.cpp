@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <utility>
 
 namespace chatterlab::surface {
 namespace {
@@ -242,6 +244,51 @@ TEST(Roundness, EccentricPerfectCircleIsRoundAboutEveryReference) {
     EXPECT_NEAR(c->centre_y, -0.1, 1e-9);
     EXPECT_NEAR(c->radius, 7.0, 1e-9);
   }
+}
+
+TEST(Roundness, EquallySpacedAnglesComputedOnTheFlyAgreeWithGivenAngles) {
+  // The equally spaced route computes cos and sin by rotation when read (no arrays); given the
+  // same angles explicitly, the other route tabulates std::cos/std::sin: the same circles to
+  // rounding and the programs' own tolerance (a constraint violated by less than 1e-10 of the
+  // range counts as met). An odd sample count over many rotation anchors, noise so the programs
+  // need several rounds of constraint generation.
+  const std::size_t n = 100003;
+  const auto th = equally_spaced_angles(n);
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::vector<double> r(n);
+  for (std::size_t i = 0; i < n; ++i)
+    r[i] = 40.0 + 0.7 * std::cos(th[i] - 0.3) + 0.5 * std::sin(5 * th[i]) + noise(rng);
+  const Roundness a = roundness(r), b = roundness(r, th);
+  for (auto [x, y] : {std::pair{&a.least_squares, &b.least_squares},
+                      std::pair{&a.minimum_zone, &b.minimum_zone},
+                      std::pair{&a.minimum_circumscribed, &b.minimum_circumscribed},
+                      std::pair{&a.maximum_inscribed, &b.maximum_inscribed}}) {
+    SCOPED_TRACE(x->name);
+    EXPECT_TRUE(x->certified);
+    for (auto [u, v] : {std::pair{x->centre_x, y->centre_x}, std::pair{x->centre_y, y->centre_y},
+                        std::pair{x->radius, y->radius}, std::pair{x->RONt, y->RONt},
+                        std::pair{x->RONp, y->RONp}, std::pair{x->RONv, y->RONv},
+                        std::pair{x->RONq, y->RONq}})
+      EXPECT_NEAR(u, v, 1e-9);
+  }
+  EXPECT_TRUE(a.least_squares_deviations.empty());  // only on request
+}
+
+TEST(Roundness, LeastSquaresDeviationsOnRequest) {
+  const std::size_t n = 2000;
+  const auto th = equally_spaced_angles(n);
+  std::vector<double> r(n);
+  for (std::size_t i = 0; i < n; ++i) r[i] = 3.0 + 0.2 * std::cos(th[i]) + 0.1 * std::cos(4 * th[i]);
+  const Roundness rd = roundness(r, References::least_squares_and_zone, Deviations::least_squares);
+  const auto& d = rd.least_squares_deviations;
+  ASSERT_EQ(d.size(), n);
+  const auto expected = deviations(rd.least_squares, r, th);
+  for (std::size_t i = 0; i < n; ++i) EXPECT_NEAR(d[i], expected[i], 1e-12);
+  for (std::size_t i = 0; i < n; i += 50) EXPECT_NEAR(d[i], 0.1 * std::cos(4 * th[i]), 1e-12);
+  const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
+  EXPECT_NEAR(*hi - *lo, rd.least_squares.RONt, 1e-15);
+  EXPECT_TRUE(rd.minimum_circumscribed.name.empty());  // not asked for
 }
 
 TEST(Roundness, CoveringLpSolvesASmallProgram) {

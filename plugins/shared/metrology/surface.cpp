@@ -175,8 +175,8 @@ SurfaceEvaluation evaluate_surface_profile(const SampledSeries& series,
   std::vector<double> w;
   std::optional<Roundness> round;
   if (series.closed) {
-    round = roundness(out.waviness_um);
-    w = round->least_squares_deviations;
+    round = roundness(out.waviness_um, References::all, Deviations::least_squares);
+    w = std::move(round->least_squares_deviations);
     s["form_removed"] = "least-squares circle (limacon: mean radius and centre offset)";
   } else {
     // Evaluation length: the filtered profile without lc/2 at each end. The mean line is

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <numbers>
+#include <span>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/fft.hpp"
@@ -312,8 +314,9 @@ void plot_bands(const SurfaceEvaluation& e, const std::string& title, const fs::
                 const std::string& stem) {
   const Json& wzf = e.summary.at("Wz_f");
   const std::size_t n = e.profile_um.size();
-  RealFft fft(n);
-  const auto spectrum = fft.forward(e.profile_um);
+  InPlaceRealFft fft(e.profile_um);  // one buffer: 8 bytes per sample of a long profile
+  fft.forward();
+  const std::span<const std::complex<double>> spectrum = fft.spectrum();
   plot::Curves bands;
   bands.title = fmt::format("{}: Wz|f low {:.3g} um, high {:.3g} um", title,
                             wzf["low"]["Wz_um"].get<double>(), wzf["high"]["Wz_um"].get<double>());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <functional>
 #include <stdexcept>
 
@@ -50,67 +51,113 @@ AmplitudeMoments amplitude_moments(const double* w, std::size_t n) {
 
 }  // namespace
 
+namespace {
+
+// The profile elements from the phases in order (each complete: its extreme and extent final),
+// with the width discrimination applied as they arrive: a peak or valley narrower than the limit,
+// between two others, is no element of its own: its neighbours (of the other kind) join across
+// it. Only the phases that a later join could still change are held (a noisy band-limited
+// profile of 10^7 samples has millions of phases): every phase before the last one that can no
+// longer be removed (started by a transition, or at least as wide as the limit) is final.
+class ElementJoiner {
+ public:
+  ElementJoiner(double width_discrimination, ProfileElements& out)
+      : width_discrimination_(width_discrimination), out_(out) {}
+
+  void add(const PhaseExtreme& p) {
+    if (kept_.size() >= 2 && removable(kept_.back())) {
+      kept_.pop_back();
+      PhaseExtreme& joined = kept_.back();
+      joined.extreme = p.kind == Phase::peak ? std::max(joined.extreme, p.extreme)
+                                             : std::min(joined.extreme, p.extreme);
+      joined.last = p.last;
+      if (!removable(joined)) last_fixed_ = kept_.size() - 1;
+    } else {
+      kept_.push_back(p);
+      if (!removable(p)) last_fixed_ = kept_.size() - 1;
+    }
+    // Phases before the last fixed one are final, and so is the wave height of each but the
+    // last of them (it needs the next phase's extreme): emit those, keep the rest.
+    if (kept_.size() > 64 && last_fixed_ >= 2) {
+      const std::size_t done = last_fixed_ - 1;
+      for (std::size_t k = 0; k < done; ++k) emit(k);
+      kept_.erase(kept_.begin(), kept_.begin() + static_cast<std::ptrdiff_t>(done));
+      last_fixed_ -= done;
+    }
+  }
+
+  void finish() {
+    for (std::size_t k = 0; k < kept_.size(); ++k) emit(k);
+    kept_.clear();
+  }
+
+ private:
+  bool removable(const PhaseExtreme& p) const {
+    return p.started_by_transition &&
+           static_cast<double>(p.last - p.first + 1) < width_discrimination_;
+  }
+  void emit(std::size_t k) {
+    if (kept_[k].kind == Phase::peak && kept_[k].up_crossing >= 0)
+      out_.up_crossings.push_back(kept_[k].up_crossing);
+    if (k + 1 < kept_.size() && kept_[k].kind == Phase::peak && kept_[k].started_by_transition)
+      out_.wave_heights.push_back(kept_[k].extreme - kept_[k + 1].extreme);
+  }
+
+  double width_discrimination_;
+  ProfileElements& out_;
+  std::vector<PhaseExtreme> kept_;
+  std::size_t last_fixed_ = 0;  // index in kept_ of the last phase no join can remove
+};
+
+}  // namespace
+
 ProfileElements profile_elements(std::span<const double> w, double height_discrimination,
                                  bool closed, double width_discrimination) {
   ProfileElements out;
   if (w.size() < 3) return out;
-  std::span<const double> y = w;  // open: read in place
-  std::vector<double> loop;
-  if (closed) {
-    // Start at the deepest valley and close the loop with it: every phase is then complete.
-    loop.assign(w.begin(), w.end());
-    std::rotate(loop.begin(), std::min_element(loop.begin(), loop.end()), loop.end());
-    loop.push_back(loop.front());
-    y = loop;
-  }
+  // A closed profile is read from its deepest valley round to that valley again (every phase is
+  // then complete): y(i) = w[(start + i) mod N], i = 0..N, by index instead of a rotated copy.
+  const std::size_t n = w.size();
+  const std::size_t start =
+      closed ? static_cast<std::size_t>(std::min_element(w.begin(), w.end()) - w.begin()) : 0;
+  const std::size_t length = closed ? n + 1 : n;
+  auto y = [&](std::size_t i) {
+    const std::size_t k = i + start;
+    return w[k >= n ? k - n : k];
+  };
   const double h = height_discrimination;
-  std::vector<PhaseExtreme> phases;
+  ElementJoiner joiner(width_discrimination, out);
+  bool started = false;
+  PhaseExtreme current{};  // the phase being read
   std::size_t last_significant = 0;
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    const Phase cls = y[i] > h ? Phase::peak : (y[i] < -h ? Phase::valley : Phase::none);
+  for (std::size_t i = 0; i < length; ++i) {
+    const double yi = y(i);
+    const Phase cls = yi > h ? Phase::peak : (yi < -h ? Phase::valley : Phase::none);
     if (cls == Phase::none) continue;
-    if (phases.empty()) {
-      phases.push_back({cls, y[i], false, i, i, -1.0});
-    } else if (phases.back().kind == cls) {
-      PhaseExtreme& p = phases.back();
-      p.extreme = cls == Phase::peak ? std::max(p.extreme, y[i]) : std::min(p.extreme, y[i]);
-      p.last = i;
+    if (!started) {
+      current = {cls, yi, false, i, i, -1.0};
+      started = true;
+    } else if (current.kind == cls) {
+      current.extreme = cls == Phase::peak ? std::max(current.extreme, yi) : std::min(current.extreme, yi);
+      current.last = i;
     } else {
       double crossing = -1.0;
       if (cls == Phase::peak) {
         // The mean-line up-crossing closest to this peak phase.
         for (std::size_t j = i; j > last_significant; --j) {
-          if (y[j - 1] < 0 && y[j] >= 0) {
-            crossing = static_cast<double>(j - 1) + y[j - 1] / (y[j - 1] - y[j]);
+          if (y(j - 1) < 0 && y(j) >= 0) {
+            crossing = static_cast<double>(j - 1) + y(j - 1) / (y(j - 1) - y(j));
             break;
           }
         }
       }
-      phases.push_back({cls, y[i], true, i, i, crossing});
+      joiner.add(current);
+      current = {cls, yi, true, i, i, crossing};
     }
     last_significant = i;
   }
-  // Width discrimination: a peak or valley narrower than the limit, between two others, is no
-  // element of its own: its neighbours (of the other kind) join across it.
-  std::vector<PhaseExtreme> kept;
-  for (const PhaseExtreme& p : phases) {
-    if (kept.size() >= 2 && kept.back().started_by_transition &&
-        static_cast<double>(kept.back().last - kept.back().first + 1) < width_discrimination) {
-      kept.pop_back();
-      PhaseExtreme& joined = kept.back();
-      joined.extreme = p.kind == Phase::peak ? std::max(joined.extreme, p.extreme)
-                                             : std::min(joined.extreme, p.extreme);
-      joined.last = p.last;
-      continue;
-    }
-    kept.push_back(p);
-  }
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    if (kept[k].kind == Phase::peak && kept[k].up_crossing >= 0)
-      out.up_crossings.push_back(kept[k].up_crossing);
-    if (k + 1 < kept.size() && kept[k].kind == Phase::peak && kept[k].started_by_transition)
-      out.wave_heights.push_back(kept[k].extreme - kept[k + 1].extreme);
-  }
+  if (started) joiner.add(current);
+  joiner.finish();
   return out;
 }
 
@@ -167,14 +214,24 @@ std::pair<UprBand, UprBand> default_bands(double wheel_speed_rpm, double work_sp
   return {low, high};
 }
 
-std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band) {
-  RealFft fft(closed_profile.size());
-  auto spectrum = fft.forward(closed_profile);
+namespace {
+
+// Zeroes the bins outside [max(2, from_upr), to_upr].
+void keep_band(std::span<std::complex<double>> spectrum, UprBand band) {
   for (std::size_t k = 0; k < spectrum.size(); ++k) {
     const double upr = static_cast<double>(k);
     if (upr < std::max(2.0, band.from_upr) || upr > band.to_upr) spectrum[k] = 0.0;
   }
-  return fft.inverse(spectrum);
+}
+
+}  // namespace
+
+std::vector<double> band_limited(std::span<const double> closed_profile, UprBand band) {
+  InPlaceRealFft fft(closed_profile);
+  fft.forward();
+  keep_band(fft.spectrum(), band);
+  fft.inverse();
+  return fft.take_samples();
 }
 
 BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
@@ -183,10 +240,14 @@ BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
   BandWaviness out;
   out.band = {std::max(2.0, band.from_upr),
               std::min(band.to_upr, std::floor(static_cast<double>(n) / 2))};
-  const std::vector<double> limited = band_limited(closed_profile, out.band);
-  // Dominant bin: amplitude of a cosine of k lobes is 2 |X_k| / N (|X_k| / N at Nyquist).
-  RealFft fft(n);
-  const auto spectrum = fft.forward(limited);
+  // One buffer (in place: 8 bytes per sample beside the profile) holds the band's spectrum, then
+  // the band-limited profile.
+  InPlaceRealFft fft(closed_profile);
+  fft.forward();
+  keep_band(fft.spectrum(), out.band);
+  // Dominant bin of the band's own spectrum: amplitude of a cosine of k lobes is 2 |X_k| / N
+  // (|X_k| / N at Nyquist); bins outside the band are zero.
+  const std::span<const std::complex<double>> spectrum = fft.spectrum();
   for (std::size_t k = 0; k < spectrum.size(); ++k) {
     const double scale = (2 * k == n ? 1.0 : 2.0) / static_cast<double>(n);
     const double amplitude = scale * std::abs(spectrum[k]);
@@ -196,6 +257,8 @@ BandWaviness band_waviness(std::span<const double> closed_profile, UprBand band,
     }
   }
   out.dominant_frequency_hz = out.dominant_upr * work_speed_rpm / 60.0;
+  fft.inverse();
+  const std::span<const double> limited = fft.samples();
   // Elements of the band-limited profile: 10 % of its peak-to-valley height as discrimination.
   const auto [lo, hi] = std::minmax_element(limited.begin(), limited.end());
   const ProfileElements elements = profile_elements(limited, 0.1 * (*hi - *lo), true);

@@ -85,6 +85,33 @@ TEST(WavinessParameters, WidthDiscriminationJoinsNarrowFeatures) {
   EXPECT_NEAR(*p.WSm, 1.0, 1e-6);
 }
 
+TEST(WavinessParameters, WidthDiscriminationOverHundredsOfElements) {
+  // 300 waves of 200 samples (crests +1, troughs -1 on samples), a 3-sample notch to -0.5 in
+  // every crest: over a thousand phases, so the joins happen while earlier elements are already
+  // final. Every notch joins its crest: 300 waves of height 2 (closed), wherever the revolution
+  // starts; without width discrimination each notch splits its crest into two waves.
+  const std::size_t per_wave = 200, waves = 300;
+  std::vector<double> y(per_wave * waves);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    y[i] = std::sin(2 * pi * static_cast<double>(i) / static_cast<double>(per_wave));
+    if (i % per_wave >= 20 && i % per_wave < 23) y[i] = -0.5;  // the crest is at 50
+  }
+  EXPECT_EQ(profile_elements(y, 0.2, true).wave_heights.size(), 2 * waves);
+  for (std::size_t shift : {0u, 1u, 21u, 12345u}) {
+    SCOPED_TRACE(shift);
+    std::vector<double> rotated(y.size());
+    for (std::size_t i = 0; i < y.size(); ++i) rotated[i] = y[(i + shift) % y.size()];
+    const ProfileElements e = profile_elements(rotated, 0.2, true, 10.0);
+    ASSERT_EQ(e.wave_heights.size(), waves);
+    for (double h : e.wave_heights) EXPECT_NEAR(h, 2.0, 1e-12);
+    EXPECT_EQ(e.up_crossings.size(), waves);
+  }
+  // Open: the first crest has no up-crossing before it (no complete wave).
+  const ProfileElements open = profile_elements(y, 0.2, false, 10.0);
+  EXPECT_EQ(open.wave_heights.size(), waves - 1);
+  EXPECT_EQ(open.up_crossings.size(), waves - 1);
+}
+
 TEST(WavinessParameters, FrequencyResolvedWzSeparatesForcedLobesFromChatter) {
   // G8-like part: n_g = 1450 rpm, n_w = 55 rpm (Z = 26.4), 26 forced lobes of Wz 4.26 um and
   // 895 chatter lobes (820 Hz at 55 rpm) of Wz 3.12 um.
@@ -106,6 +133,13 @@ TEST(WavinessParameters, FrequencyResolvedWzSeparatesForcedLobesFromChatter) {
   EXPECT_NEAR(h.Wz, 3.12, 1e-6);
   EXPECT_DOUBLE_EQ(h.dominant_upr, 900);
   EXPECT_NEAR(h.dominant_frequency_hz, 825.0, 1e-9);
+  // The band-limited profiles themselves: each band keeps exactly its own cosine.
+  const auto high_only = band_limited(y, high);
+  ASSERT_EQ(high_only.size(), n);
+  for (std::size_t i = 0; i < n; i += 97) {
+    const double th = 2 * pi * static_cast<double>(i) / static_cast<double>(n);
+    EXPECT_NEAR(high_only[i], 1.56 * std::cos(900 * th), 1e-12);
+  }
 }
 
 }  // namespace
