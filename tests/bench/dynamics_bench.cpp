@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include "chatterlab/dynamics.hpp"
 #include "chatterlab/roots.hpp"
@@ -39,21 +40,44 @@ PlungeRegenerativeParameters one_mode(double frequency_hz) {
   return p;
 }
 
+// Linear (bilateral) contact for 1 s at 10 kHz, never stopped as diverging: a growing run.
+SimulationSettings bilateral_one_second() {
+  SimulationSettings s;
+  s.duration_s = 1.0;
+  s.sample_rate_hz = 10000.0;
+  s.one_sided_contact = false;
+  s.divergence_limit_m = 1e6;
+  return s;
+}
+
 // One-sided contact (events, restarts, a bounded response rather than a growth rate): rtol 1e-3.
 constexpr double kOneSidedRelativeTolerance = 1e-3;
 
-void run(benchmark::State& state, const TimeDomainModel& model, SimulationSettings settings) {
-  double simulated = 0.0, steps = 0.0, rhs = 0.0;
+// The timed loop: totals over every iteration, and the first status other than "completed".
+struct RunTotals {
+  double simulated_s = 0.0, steps = 0.0, rhs_evaluations = 0.0, contact_events = 0.0;
+  std::string failure;
+};
+
+RunTotals timed_runs(benchmark::State& state, const TimeDomainModel& model, const SimulationSettings& settings) {
+  RunTotals totals;
   for (auto _ : state) {
     SimulationResult r = simulate(model, settings);
     benchmark::DoNotOptimize(r.displacement_m.data());
-    simulated += r.end_time_s;
-    steps += static_cast<double>(r.steps);
-    rhs += static_cast<double>(r.rhs_evaluations);
+    totals.simulated_s += r.end_time_s;
+    totals.steps += static_cast<double>(r.steps);
+    totals.rhs_evaluations += static_cast<double>(r.rhs_evaluations);
+    totals.contact_events += static_cast<double>(r.contact_events);
+    if (r.status != "completed" && totals.failure.empty()) totals.failure = r.status;
   }
-  state.counters["rhs_per_step"] = rhs / steps;
-  state.counters["speedup"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
-  state.counters["steps_per_sim_s"] = steps / simulated;
+  state.counters["speedup"] = benchmark::Counter(totals.simulated_s, benchmark::Counter::kIsRate);
+  state.counters["steps_per_sim_s"] = totals.steps / totals.simulated_s;
+  return totals;
+}
+
+void run(benchmark::State& state, const TimeDomainModel& model, SimulationSettings settings) {
+  const RunTotals totals = timed_runs(state, model, settings);
+  state.counters["rhs_per_step"] = totals.rhs_evaluations / totals.steps;
 }
 
 // Settings overridable from the environment for tolerance studies (not used by the recorded
@@ -98,11 +122,7 @@ void accuracy_counters(benchmark::State& state, const PlungeRegenerativeParamete
 void G1BothSurfaces(benchmark::State& state) {
   const PlungeRegenerativeParameters p = one_mode(static_cast<double>(state.range(0)));
   PlungeTimeDomain model(p);
-  SimulationSettings s;
-  s.duration_s = 1.0;
-  s.sample_rate_hz = 10000.0;
-  s.one_sided_contact = false;
-  s.divergence_limit_m = 1e6;
+  SimulationSettings s = bilateral_one_second();
   if (state.range(1) == 1) apply_growth_rate_settings(s);
   environment_overrides(s);
   state.SetLabel(to_string(s.integrator));
@@ -136,11 +156,7 @@ void G1OneChain(benchmark::State& state) {
   auto p = one_mode(250.0);
   (state.range(0) == 0 ? p.work_regeneration : p.wheel_regeneration) = false;
   PlungeTimeDomain model(p);
-  SimulationSettings s;
-  s.duration_s = 1.0;
-  s.sample_rate_hz = 10000.0;
-  s.one_sided_contact = false;
-  s.divergence_limit_m = 1e6;
+  SimulationSettings s = bilateral_one_second();
   apply_growth_rate_settings(s);
   state.SetLabel(state.range(0) == 0 ? "wheel only" : "work only");
   run(state, model, s);
@@ -199,18 +215,9 @@ void G8Chatter60s(benchmark::State& state) {
   SimulationSettings s = g8_settings(60.0, rate, integrator);
   environment_overrides(s);
   state.SetLabel(to_string(integrator));
-  double simulated = 0.0, events = 0.0, steps = 0.0;
-  for (auto _ : state) {
-    SimulationResult r = simulate(model, s);
-    benchmark::DoNotOptimize(r.displacement_m.data());
-    simulated += r.end_time_s;
-    events += static_cast<double>(r.contact_events);
-    steps += static_cast<double>(r.steps);
-    if (r.status != "completed") state.SkipWithError(r.status.c_str());
-  }
-  state.counters["speedup"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
-  state.counters["events_per_sim_s"] = events / simulated;
-  state.counters["steps_per_sim_s"] = steps / simulated;
+  const RunTotals totals = timed_runs(state, model, s);
+  if (!totals.failure.empty()) state.SkipWithError(totals.failure.c_str());
+  state.counters["events_per_sim_s"] = totals.contact_events / totals.simulated_s;
   if (integrator != TimeIntegrator::fixed_step || std::getenv("CHAT_NO_ACCURACY")) return;
   SimulationSettings reference = g8_settings(3.0, rate, TimeIntegrator::explicit_runge_kutta);
   if (const char* e = std::getenv("CHAT_SPW")) reference.samples_per_wave = std::atof(e);

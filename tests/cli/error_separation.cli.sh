@@ -13,6 +13,12 @@ source "$(dirname "$0")/lib.sh"
 bin=$1 work=$2 src=$3
 rm -rf "$work" && mkdir -p "$work"
 
+# An error_separation study at $1: its [input] source line $2 (file or files), columns $3 and probe
+# angles $4, one key a line (line 5: columns, line 7: angles_deg).
+write_probe_study() {
+  printf '[study]\nkind = "error_separation"\n[input]\n%s\ncolumns = %s\n[probes]\nangles_deg = %s\n' "$2" "$3" "$4" > "$1"
+}
+
 # ---- shipped three-probe study
 out=$work/three
 expect_exit 0 "$work/three" "$bin" run "$src/studies/error_separation_three_probe.toml" --out "$out"
@@ -36,15 +42,7 @@ awk 'BEGIN { pi = atan2(0, -1); print "A,B,C"
       y = cos(3 * (t + p)) + 0.5 * sin(7 * (t + p)) + 0.3 * cos(2 * t) * cos(p) + 0.2 * sin(t) * sin(p)
       line = line (q ? "," : "") sprintf("%.15g", y) }
     print line } }' > "$work/supp/probes.csv"
-cat > "$work/supp/warn.toml" <<'TOML'
-[study]
-kind = "error_separation"
-[input]
-file = "probes.csv"
-columns = ["A", "B", "C"]
-[probes]
-angles_deg = [0, 30, 100]
-TOML
+write_probe_study "$work/supp/warn.toml" 'file = "probes.csv"' '["A", "B", "C"]' '[0, 30, 100]'
 expect_exit 0 "$work/supp/warn" "$bin" run "$work/supp/warn.toml" --out "$work/supp/warn_out"
 grep -q "warning: .*harmonics 35, 37, 71, 73" "$work/supp/warn.err" || fail "no suppression warning on stderr"
 tr -d ' \n' < "$work/supp/warn_out/summary.json" | grep -q '"suppressed_harmonics":\[35,37,71,73,107,109,143,145,179\]' ||
@@ -80,28 +78,12 @@ mkdir -p "$work/bad"
 printf 'A,B\n1,2\n3,4\n' > "$work/bad/two.csv"
 printf 'X\n1\n2\n3\n4\n5\n6\n7\n8\n' > "$work/bad/eight.csv"
 printf 'X\n1\n2\n3\n4\n5\n6\n7\n8\n9\n' > "$work/bad/nine.csv"
-cat > "$work/bad/missing.toml" <<'TOML'
-[study]
-kind = "error_separation"
-[input]
-file = "two.csv"
-columns = ["A", "B", "C"]
-[probes]
-angles_deg = [0, 99, 202]
-TOML
+write_probe_study "$work/bad/missing.toml" 'file = "two.csv"' '["A", "B", "C"]' '[0, 99, 202]'
 expect_exit 2 "$work/bad/missing" "$bin" run "$work/bad/missing.toml" --out "$work/bad/out1"
 grep -q 'missing.toml:5: input.columns: no column "C" in .*two.csv (columns: A, B)' "$work/bad/missing.err" ||
   fail "missing column message"
 [ ! -e "$work/bad/out1" ] || fail "output written for a missing column"
-cat > "$work/bad/lengths.toml" <<'TOML'
-[study]
-kind = "error_separation"
-[input]
-files = ["eight.csv", "eight.csv", "nine.csv"]
-columns = ["X", "X", "X"]
-[probes]
-angles_deg = [0, 99, 202]
-TOML
+write_probe_study "$work/bad/lengths.toml" 'files = ["eight.csv", "eight.csv", "nine.csv"]' '["X", "X", "X"]' '[0, 99, 202]'
 expect_exit 2 "$work/bad/lengths" "$bin" run "$work/bad/lengths.toml" --out "$work/bad/out2"
 grep -q 'input.files: probe signals differ in length: .*has 8 rows, .*nine.csv has 9 rows' "$work/bad/lengths.err" ||
   fail "length mismatch message"

@@ -63,14 +63,8 @@ class CatalogModel final : public Model {
 class TwoTableKind final : public StudyKind {
  public:
   static PluginInfo info() {
-    PluginInfo info;
-    info.name = "catalog_test_kind";
-    info.description = "test-only study kind reading two settings tables (catalog_test)";
-    auto level = param_spec("level", ValueKind::real, "1", "a level");
-    level.default_value = 1.0;
-    info.params = {level};
-    info.example_params = {{"level", 2}};
-    return info;
+    return testing::one_parameter_kind_info(
+        "catalog_test_kind", "test-only study kind reading two settings tables (catalog_test)", "level", "a level", 2.0);
   }
   std::vector<std::string> tables() const override { return {"model", "first", "second"}; }
   void validate(Json&, const SourceMap&) const override {}

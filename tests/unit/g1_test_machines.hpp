@@ -3,6 +3,8 @@
 // any model with G1's parameters takes them (plunge_regenerative, plunge_with_penetration_damping
 // with its extra keys appended). A test that needs a machine of its own (a lobe top, a chain
 // switched off) keeps it beside the test and says why.
+#include <iomanip>
+#include <sstream>
 #include <string>
 
 namespace chatterlab::testing {
@@ -28,6 +30,22 @@ wheel_wear_stiffness_n_per_m = 2.0e9
 work_removal_stiffness_n_per_m = 1.6e6
 modes = [ { frequency_hz = 150.0, damping_ratio = 0.03, stiffness_n_per_m = 2.0e7 } ]
 )";
+
+// The machine of studies/suppression_wheel_speed.toml and suppression_work_speed.toml (MODELS.md
+// S1-S3): kc 1e8, kg 3e9, kw 5e7 N/m and one mode (zeta 0.03, 5e7 N/m), as a plunge_regenerative
+// [model] table (after a blank line) at the given speeds and mode frequency; `switches` are extra
+// lines before the modes (a regeneration chain switched off: "work_regeneration = false\n").
+inline std::string g1_suppression_machine(double wheel_speed_rpm, double work_speed_rpm, double mode_frequency_hz,
+                                          const std::string& switches = "") {
+  std::ostringstream s;
+  s << std::setprecision(17) << "\n[model]\ntype = \"plunge_regenerative\"\nwheel_speed_rpm = " << wheel_speed_rpm
+    << "\nwork_speed_rpm = " << work_speed_rpm
+    << "\ncontact_stiffness_n_per_m = 1.0e8\nwheel_wear_stiffness_n_per_m = 3.0e9\n"
+       "work_removal_stiffness_n_per_m = 5.0e7\n"
+    << switches << "modes = [ { frequency_hz = " << mode_frequency_hz
+    << ", damping_ratio = 0.03, stiffness_n_per_m = 5.0e7 } ]\n";
+  return s.str();
+}
 
 // "[model]" with `type = "<model_type>"` and the machine's lines (then `extra` lines, if any).
 inline std::string model_table_toml(const std::string& model_type, const std::string& machine,

@@ -29,6 +29,7 @@
 #include "runner/result_writer.hpp"
 #include "runner/resume.hpp"
 #include "runner/worker_protocol.hpp"
+#include "study_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -609,14 +610,8 @@ std::atomic<int> square_calls{0};
 class SquareKind final : public StudyKind {
  public:
   static PluginInfo info() {
-    PluginInfo info;
-    info.name = "runner_test_square";
-    info.description = "test kind of runner_test.cpp: x squared";
-    ParamSpec x = param_spec("x", ValueKind::real, "1", "the number to square");
-    x.default_value = 1.0;
-    info.params = {x};
-    info.example_params = {{"x", 2.0}};
-    return info;
+    return testing::one_parameter_kind_info("runner_test_square", "test kind of runner_test.cpp: x squared", "x",
+                                            "the number to square", 2.0);
   }
   std::vector<std::string> tables() const override { return {"runner_test"}; }
   void validate(Json& document, const SourceMap& sources) const override {

@@ -115,4 +115,18 @@ inline std::string example_model_toml(const std::string& type) {
   return text;
 }
 
+// PluginInfo of a test-only study kind `name` with one real parameter `key` (unit 1, default 1),
+// whose example is `example`.
+inline PluginInfo one_parameter_kind_info(const std::string& name, const std::string& description,
+                                          const std::string& key, const std::string& doc, double example) {
+  PluginInfo info;
+  info.name = name;
+  info.description = description;
+  ParamSpec spec = param_spec(key, ValueKind::real, "1", doc);
+  spec.default_value = 1.0;
+  info.params = {spec};
+  info.example_params = {{key, example}};
+  return info;
+}
+
 }  // namespace chatterlab::testing

@@ -14,6 +14,7 @@
 #include "chatterlab/roots.hpp"
 #include "derived/g1_written_once.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
+#include "unit/random_g1_machines.hpp"
 
 namespace chatterlab {
 namespace {
@@ -40,22 +41,15 @@ G1Equations written_once(const PlungeRegenerativeParameters& p) {
 }
 
 TEST(DerivedFastPath, PlungeRegenerativeOnFiftyRandomParameterSets) {
-  std::mt19937 random(17);
-  auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(random); };
-  auto log_uniform = [&](double lo, double hi) { return std::exp(uniform(std::log(lo), std::log(hi))); };
+  testing::RandomG1Machines random(17);
   double worst_root = 0.0, worst_ratio = 0.0;
   for (int trial = 0; trial < 50; ++trial) {
-    PlungeRegenerativeParameters p;
-    p.wheel_speed_rpm = uniform(1000.0, 3000.0);
-    p.work_speed_rpm = uniform(30.0, 200.0);
-    p.contact_stiffness_n_per_m = log_uniform(3e7, 3e8);
-    p.wheel_wear_stiffness_n_per_m = log_uniform(5e8, 1e10);
-    p.work_removal_stiffness_n_per_m = log_uniform(5e7, 5e8);
+    PlungeRegenerativeParameters p = random.machine(1000.0, 3000.0, 30.0, 200.0, 1e10);
     p.wheel_regeneration = trial % 3 != 1;
     p.work_regeneration = trial % 3 != 0;
     const int modes = 1 + trial % 3;
-    for (int m = 0; m < modes; ++m) p.modes.push_back({uniform(60.0, 500.0), uniform(0.02, 0.08), log_uniform(3e7, 3e8)});
-    SCOPED_TRACE(testing::Message() << "trial " << trial);
+    for (int m = 0; m < modes; ++m) p.modes.push_back(random.mode(60.0, 500.0));
+    SCOPED_TRACE(::testing::Message() << "trial " << trial);
 
     const PlungeRegenerative fast(p);
     const G1Model derived(written_once(p));
@@ -65,7 +59,7 @@ TEST(DerivedFastPath, PlungeRegenerativeOnFiftyRandomParameterSets) {
     // E(s) up to a constant factor, away from the zeros.
     std::optional<Complex> ratio;
     for (int i = 0; i < 8; ++i) {
-      const Complex s(uniform(-30.0, 20.0), uniform(10.0, 2.0 * std::numbers::pi * 700.0));
+      const Complex s(random.uniform(-30.0, 20.0), random.uniform(10.0, 2.0 * std::numbers::pi * 700.0));
       const Complex reference = e_fast->evaluate(s).value;
       const Complex value = e_derived->evaluate(s).value / reference;
       if (!ratio) ratio = value;

@@ -233,25 +233,28 @@ std::size_t time_optimal_durations(FeedPlan& plan, const std::vector<double>& sp
       }
     }
   // Same-sign rate changes: forward (acceleration) and backward (deceleration) passes.
-  auto forward_bound = [&](std::size_t k, std::size_t next) {  // largest s[next] given s[k]
-    double bound = std::numeric_limits<double>::infinity();
+  // The smallest of a bound over the motors that turn the same way in segments k and next; bound
+  // takes |n0| and |n1|, the pulse counts of k and next.
+  auto same_sign_bound = [&](std::size_t k, std::size_t next, auto bound) {
+    double smallest = std::numeric_limits<double>::infinity();
     for (std::size_t m = 0; m < motors; ++m) {
       const double n0 = pulses(k, m), n1 = pulses(next, m);
       if (n0 * n1 <= 0) continue;
-      const double r = std::abs(n0) * s[k];
-      bound = std::min(bound, (r + rate_change_allowed(r, delta, fss)) / std::abs(n1));
+      smallest = std::min(smallest, bound(std::abs(n0), std::abs(n1)));
     }
-    return bound;
+    return smallest;
+  };
+  auto forward_bound = [&](std::size_t k, std::size_t next) {  // largest s[next] given s[k]
+    return same_sign_bound(k, next, [&](double n0, double n1) {
+      const double r = n0 * s[k];
+      return (r + rate_change_allowed(r, delta, fss)) / n1;
+    });
   };
   auto backward_bound = [&](std::size_t k, std::size_t next) {  // largest s[k] given s[next]
-    double bound = std::numeric_limits<double>::infinity();
-    for (std::size_t m = 0; m < motors; ++m) {
-      const double n0 = pulses(k, m), n1 = pulses(next, m);
-      if (n0 * n1 <= 0) continue;
-      const double r1 = std::abs(n1) * s[next];
-      bound = std::min(bound, std::max(r1 / (1.0 - delta), r1 + fss) / std::abs(n0));
-    }
-    return bound;
+    return same_sign_bound(k, next, [&](double n0, double n1) {
+      const double r1 = n1 * s[next];
+      return std::max(r1 / (1.0 - delta), r1 + fss) / n0;
+    });
   };
   std::size_t passes = 0;
   for (std::size_t pass = 0; pass < 1000; ++pass) {

@@ -34,6 +34,7 @@ struct RateRules {
   double start_stop_rate_hz = 10.0;       // f_ss
 };
 
+// Defaults: MODELS.md P2's rules (300 rpm, 4 mm per 100 rev, delta 0.1, f_ss 10 pulses/s).
 struct FeedConstraints {
   double spindle_speed_rpm = 300.0;
   double max_axial_advance_mm_per_100_rev = 4.0;

@@ -181,13 +181,7 @@ Json p2_machine_params() {
           {"gear_ratio", 10.0},       {"step_angle_deg", 1.0},        {"max_pulse_rate_hz", 100.0}};
 }
 
-FeedConstraints p2_constraints() {
-  FeedConstraints c;
-  c.spindle_speed_rpm = 300.0;
-  c.max_axial_advance_mm_per_100_rev = 4.0;
-  c.max_relative_rate_change = 0.1;
-  c.start_stop_rate_hz = 10.0;
-  return c;
-}
+// FeedConstraints' defaults are P2's rules (scheduler.hpp).
+FeedConstraints p2_constraints() { return FeedConstraints{}; }
 
 }  // namespace chatterlab::planner

@@ -4,6 +4,7 @@
 // to a direct fixed-step simulation of the same DDE (RK4 written here), and (3) the sideband
 // structure of eq 3-18..3-20.
 #include "models/amplitude_modulated/floquet_growth.hpp"
+#include "models/amplitude_modulated/g7_test_case.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,19 +22,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// One 251.6 Hz mode, zeta 0.05; kc b = 1e8, kg b = 1e7 N/m; 1450 rpm: wheel-regenerative chatter.
-AmplitudeModulatedParameters base() {
-  AmplitudeModulatedParameters p;
-  p.mass_kg = 20.0;
-  p.stiffness_n_per_m = 5e7;
-  p.damping_n_s_per_m = 0.1 * std::sqrt(5e7 * 20.0);
-  p.grinding_stiffness_n_per_m = 1e7;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.overlap_factor = 1.0;
-  p.modulation_depth = 0.0;
-  p.wheel_speed_rpm = 1450.0;
-  return p;
-}
+using testing::g7_base_case;
 
 // 1 + Kg (H + 1/Kc)(1 - mu e^{-sT}) = 0 (eq 3-14 with Q = 0), H = 1/(m s^2 + c s + k).
 std::complex<double> raw(const AmplitudeModulatedParameters& p, std::complex<double> s) {
@@ -109,7 +98,7 @@ double simulated_growth(const AmplitudeModulatedParameters& p, int periods) {
 
 TEST(FloquetGrowth, UnmodulatedEqualsTheRightmostRootOfTheWheelOnlyG1Model) {
   for (double grinding : {4e6, 1e7}) {
-    AmplitudeModulatedParameters p = base();
+    AmplitudeModulatedParameters p = g7_base_case();
     p.grinding_stiffness_n_per_m = grinding;
     const G7FloquetResult f = floquet_growth(p);
     ASSERT_TRUE(f.converged) << f.growth_rate_change_per_s;
@@ -139,7 +128,7 @@ TEST(FloquetGrowth, UnmodulatedEqualsTheRightmostRootOfTheWheelOnlyG1Model) {
 }
 
 TEST(FloquetGrowth, PartialOverlapEqualsNewtonOnTheRawEquation) {
-  AmplitudeModulatedParameters p = base();
+  AmplitudeModulatedParameters p = g7_base_case();
   p.overlap_factor = 0.8;
   p.grinding_stiffness_n_per_m = 2e7;
   const G7FloquetResult f = floquet_growth(p);
@@ -151,7 +140,7 @@ TEST(FloquetGrowth, PartialOverlapEqualsNewtonOnTheRawEquation) {
 
 TEST(FloquetGrowthAccuracy, ModulationAgreesWithDirectTimeStepping) {
   for (double depth : {0.0, 0.3, 0.6}) {
-    AmplitudeModulatedParameters p = base();
+    AmplitudeModulatedParameters p = g7_base_case();
     p.modulation_depth = depth;
     const G7FloquetResult f = floquet_growth(p);
     ASSERT_TRUE(f.converged) << depth;
@@ -162,7 +151,7 @@ TEST(FloquetGrowthAccuracy, ModulationAgreesWithDirectTimeStepping) {
 }
 
 TEST(FloquetGrowth, SidebandsAreSpacedByTheWheelFrequencyAndGrowWithQ) {
-  AmplitudeModulatedParameters p = base();
+  AmplitudeModulatedParameters p = g7_base_case();
   p.modulation_depth = 0.05;
   const G7FloquetResult small = floquet_growth(p);
   p.modulation_depth = 0.1;
@@ -184,7 +173,7 @@ TEST(FloquetGrowth, SidebandsAreSpacedByTheWheelFrequencyAndGrowWithQ) {
 TEST(FloquetGrowth, WithoutRegenerationItIsTheStiffenedOscillator) {
   // mu = 0: no memory; at Q = 0 the force is -kappa x1 with kappa = kg b/(1 + kg/kc), so the
   // solution decays at exactly -c/(2m) and rings at sqrt((k + kappa)/m - (c/2m)^2).
-  AmplitudeModulatedParameters p = base();
+  AmplitudeModulatedParameters p = g7_base_case();
   p.overlap_factor = 0.0;
   const G7FloquetResult f = floquet_growth(p);
   ASSERT_TRUE(f.converged);
@@ -196,10 +185,10 @@ TEST(FloquetGrowth, WithoutRegenerationItIsTheStiffenedOscillator) {
 }
 
 TEST(FloquetGrowth, RejectsParametersOutsideTheModel) {
-  AmplitudeModulatedParameters p = base();
+  AmplitudeModulatedParameters p = g7_base_case();
   p.modulation_depth = 1.0;
   EXPECT_THROW(floquet_growth(p), std::invalid_argument);
-  p = base();
+  p = g7_base_case();
   p.overlap_factor = 1.5;
   EXPECT_THROW(floquet_growth(p), std::invalid_argument);
 }

@@ -14,23 +14,10 @@
 #include "chatterlab/floquet.hpp"
 #include "models/amplitude_modulated/amplitude_modulated.hpp"
 #include "models/amplitude_modulated/floquet_growth.hpp"
+#include "models/amplitude_modulated/g7_test_case.hpp"
 
 namespace chatterlab {
 namespace {
-
-// floquet_growth_test.cpp's base case: 20 kg, 5e7 N/m, 10 % damping, kc 1e8, 1450 rpm.
-AmplitudeModulatedParameters base() {
-  AmplitudeModulatedParameters p;
-  p.mass_kg = 20.0;
-  p.stiffness_n_per_m = 5e7;
-  p.damping_n_s_per_m = 0.1 * std::sqrt(5e7 * 20.0);
-  p.grinding_stiffness_n_per_m = 2e7;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.overlap_factor = 1.0;
-  p.modulation_depth = 0.0;
-  p.wheel_speed_rpm = 1450.0;
-  return p;
-}
 
 TEST(G7WrittenOnceAccuracy, FloquetOfTheDerivedLinearisationEqualsTheHandWrittenMonodromy) {
   struct Case {
@@ -38,7 +25,7 @@ TEST(G7WrittenOnceAccuracy, FloquetOfTheDerivedLinearisationEqualsTheHandWritten
   };
   for (const Case c : {Case{0.0, 1.0, 2e7}, Case{0.05, 1.0, 2e7}, Case{0.1, 1.0, 2e7}, Case{0.2, 1.0, 2e7},
                        Case{0.1, 0.8, 3e7}}) {
-    AmplitudeModulatedParameters p = base();
+    AmplitudeModulatedParameters p = testing::g7_base_case();
     p.modulation_depth = c.depth;
     p.overlap_factor = c.overlap;
     p.grinding_stiffness_n_per_m = c.grinding;

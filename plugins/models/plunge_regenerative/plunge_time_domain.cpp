@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numbers>
 
 namespace chatterlab {
@@ -15,37 +16,43 @@ void apply_growth_rate_settings(SimulationSettings& settings) {
   settings.samples_per_wave = 8.0;
 }
 
+namespace {
+
+// The speeds of the G8 experiment (M1432: 1450 rpm wheel, 55 rpm work) that every known-answer
+// machine here shares, with its stiffness chain kc, kg, kw [N/m]; both chains on, no modes yet.
+PlungeRegenerativeParameters at_g8_speeds(double kc_n_per_m, double kg_n_per_m, double kw_n_per_m) {
+  return {.wheel_speed_rpm = 1450.0,
+          .work_speed_rpm = 55.0,
+          .contact_stiffness_n_per_m = kc_n_per_m,
+          .wheel_wear_stiffness_n_per_m = kg_n_per_m,
+          .work_removal_stiffness_n_per_m = kw_n_per_m,
+          .modes = {},
+          .wheel_regeneration = true,
+          .work_regeneration = true};
+}
+
+// MODELS.md G8's seven measured mode frequencies [Hz].
+constexpr double kG8ModeFrequenciesHz[] = {67.56, 102.44, 184.08, 221.11, 255.01, 275.05, 305.60};
+
+}  // namespace
+
 PlungeRegenerativeParameters reference_g1_case() {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 1e9;
-  p.work_removal_stiffness_n_per_m = 2e8;
+  PlungeRegenerativeParameters p = at_g8_speeds(1e8, 1e9, 2e8);
   p.modes = {{250.0, 0.05, 5e7}};
   return p;
 }
 
 PlungeRegenerativeParameters g8_assumed_modes(double contact_stiffness_n_per_m) {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = contact_stiffness_n_per_m;
-  p.wheel_wear_stiffness_n_per_m = 5.0e9;
-  p.work_removal_stiffness_n_per_m = 5.0e7;
-  for (double f : {67.56, 102.44, 184.08, 221.11, 255.01, 275.05, 305.60}) p.modes.push_back({f, 0.05, 2.0e8});
+  PlungeRegenerativeParameters p = at_g8_speeds(contact_stiffness_n_per_m, 5.0e9, 5.0e7);
+  for (double f : kG8ModeFrequenciesHz) p.modes.push_back({f, 0.05, 2.0e8});
   return p;
 }
 
 PlungeRegenerativeParameters g8_grinder() {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 2e8;
-  p.wheel_wear_stiffness_n_per_m = 6.3e10;
-  p.work_removal_stiffness_n_per_m = 2e7;
-  p.modes = {{67.56, 0.03, 5.53e7}, {102.44, 0.03, 1.27e8}, {184.08, 0.03, 4.11e8}, {221.11, 0.03, 5.93e8},
-             {255.01, 0.03, 7.88e8}, {275.05, 0.03, 9.17e8}, {305.60, 0.03, 1.132e9}};
+  PlungeRegenerativeParameters p = at_g8_speeds(2e8, 6.3e10, 2e7);
+  const double stiffness_n_per_m[] = {5.53e7, 1.27e8, 4.11e8, 5.93e8, 7.88e8, 9.17e8, 1.132e9};
+  for (std::size_t i = 0; i < std::size(kG8ModeFrequenciesHz); ++i)
+    p.modes.push_back({kG8ModeFrequenciesHz[i], 0.03, stiffness_n_per_m[i]});
   return p;
 }
 

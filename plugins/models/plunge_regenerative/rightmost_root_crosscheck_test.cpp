@@ -17,6 +17,7 @@
 #include "chatterlab/roots.hpp"
 #include "models/plunge_regenerative/plunge_regenerative.hpp"
 #include "models/plunge_regenerative/plunge_time_domain.hpp"
+#include "unit/random_g1_machines.hpp"
 
 namespace chatterlab {
 namespace {
@@ -108,7 +109,7 @@ bool expect_rightmost_and_honest(const PlungeRegenerativeParameters& p, double b
     return false;
   }
   const double tolerance = 1e-7 * std::max(1.0, std::abs(found.root));
-  SCOPED_TRACE(testing::Message() << "work " << p.work_speed_rpm << " rpm, wheel chain "
+  SCOPED_TRACE(::testing::Message() << "work " << p.work_speed_rpm << " rpm, wheel chain "
                                   << p.wheel_regeneration << ": solver " << found.root
                                   << " (" << found.certificate << "), brute force " << *reference);
   // The reported root is at least as far right as every brute-force root in the band ...
@@ -162,19 +163,12 @@ TEST(RightmostRootCrossCheck, WorkOnlyReportedCase) {
 }
 
 TEST(RightmostRootCrossCheck, RandomWorkOnlyAndBothChainCases) {
-  std::mt19937 random(20261121);
-  auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(random); };
-  auto log_uniform = [&](double lo, double hi) { return std::exp(uniform(std::log(lo), std::log(hi))); };
+  testing::RandomG1Machines random(20261121);
   int certified = 0;
   for (int trial = 0; trial < 8; ++trial) {
-    PlungeRegenerativeParameters p;
-    p.wheel_speed_rpm = uniform(1200.0, 2400.0);
-    p.work_speed_rpm = uniform(30.0, 150.0);
-    p.contact_stiffness_n_per_m = log_uniform(3e7, 3e8);
-    p.wheel_wear_stiffness_n_per_m = log_uniform(5e8, 5e9);
-    p.work_removal_stiffness_n_per_m = log_uniform(5e7, 5e8);
-    p.modes = {{uniform(120.0, 400.0), uniform(0.02, 0.08), log_uniform(3e7, 3e8)}};
-    if (trial % 3 == 2) p.modes.push_back({uniform(120.0, 400.0), uniform(0.02, 0.08), log_uniform(3e7, 3e8)});
+    PlungeRegenerativeParameters p = random.machine(1200.0, 2400.0, 30.0, 150.0, 5e9);
+    p.modes = {random.mode(120.0, 400.0)};
+    if (trial % 3 == 2) p.modes.push_back(random.mode(120.0, 400.0));
     p.wheel_regeneration = trial % 2 == 1;  // alternate work-only and both chains
     certified += expect_rightmost_and_honest(p, 600.0) ? 1 : 0;
   }

@@ -12,20 +12,15 @@
 #include "chatterlab/registry.hpp"
 #include "chatterlab/roots.hpp"
 #include "shared/plunge_dynamics/grinding_process.hpp"
+#include "shared/plunge_dynamics/plunge_parameters.hpp"
 
 namespace chatterlab {
 namespace {
 
-// the G1 example: work-regenerative chatter at 376.5 Hz (docs/models/plunge_regenerative.md).
+// the G1 example (1450/55 rpm, kc 1e8, kg 5e9, kw 5e7 N/m, modes 184.08 Hz and 305.6 Hz):
+// work-regenerative chatter at 376.5 Hz (docs/models/plunge_regenerative.md).
 PlungeRegenerativeParameters example() {
-  PlungeRegenerativeParameters p;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.wheel_wear_stiffness_n_per_m = 5e9;
-  p.work_removal_stiffness_n_per_m = 5e7;
-  p.modes = {{184.08, 0.05, 5e7}, {305.6, 0.04, 8e7}};
-  return p;
+  return plunge_dynamics::plunge_parameters_table().read(plunge_dynamics::example_g1_parameters());
 }
 
 RightmostRoot rightmost(const CharacteristicFunction& e) {

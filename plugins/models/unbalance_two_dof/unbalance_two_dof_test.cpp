@@ -18,20 +18,10 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
+// The model's example (m1 60 kg, c1 6000 N s/m, k1 5e7 N/m; m2 20 kg, c2 3000 N s/m, k2 3e7 N/m;
+// kc 1e8, kg 1e9 N/m; U 1e-4 kg m; 1450/55 rpm).
 UnbalanceTwoDofParameters example() {
-  UnbalanceTwoDofParameters p;
-  p.wheel_mass_kg = 60.0;
-  p.wheel_damping_n_s_per_m = 6000.0;
-  p.wheel_support_stiffness_n_per_m = 5e7;
-  p.work_mass_kg = 20.0;
-  p.work_damping_n_s_per_m = 3000.0;
-  p.work_support_stiffness_n_per_m = 3e7;
-  p.contact_stiffness_n_per_m = 1e8;
-  p.grinding_stiffness_n_per_m = 1e9;
-  p.unbalance_kg_m = 1e-4;
-  p.wheel_speed_rpm = 1450.0;
-  p.work_speed_rpm = 55.0;
-  return p;
+  return UnbalanceTwoDof(ParamValues(UnbalanceTwoDof::info().example_params)).parameters();
 }
 
 // Exact steady state: [K - w^2 M + i w C] X = [U w^2, 0] (Cramer's rule), relative X1 + X2.

@@ -78,16 +78,16 @@ TEST(ComplianceChart, ThompsonModelsUseTheirProcessLine) {
   EXPECT_FALSE(chart_of(*kit::build_model(table), 1000.0, 4000).intersects);
 }
 
+// A compliance_chart study of the model `type` with `lines` after its type (which is line 4).
+std::string chart_study(const std::string& type, const std::string& lines) {
+  return "[study]\nkind = \"compliance_chart\"\n[model]\ntype = \"" + type + "\"\n" + lines;
+}
+
 TEST(ComplianceChart, ModelsWithoutAMachineComplianceAreBadInput) {
   testing::TempDir dir;
-  const std::string study = R"([study]
-kind = "compliance_chart"
-[model]
-type = "linear_dde"
-a0 = [[0.0, 1.0], [-1.3, -0.1]]
-delayed = [{ delay_s = 10.0, matrix = [[0.0, 0.0], [0.3, 0.0]] }]
-)";
-  const std::string message = testing::input_error_of([&] { load_study(dir.write("study.toml", study)); });
+  const std::string message = testing::load_error(
+      dir, chart_study("linear_dde", "a0 = [[0.0, 1.0], [-1.3, -0.1]]\n"
+                                     "delayed = [{ delay_s = 10.0, matrix = [[0.0, 0.0], [0.3, 0.0]] }]\n"));
   EXPECT_NE(message.find("study.toml:4: model.type = \"linear_dde\""), std::string::npos) << message;
   EXPECT_NE(message.find("plunge_regenerative, thompson"), std::string::npos) << message;
 }
@@ -96,19 +96,15 @@ TEST(ComplianceChart, PenetrationDampingIsRefusedNamingKd) {
   // With kd > 0 the work term's real part on the axis is not 1/(2 kw): the line of eq 2-21 would
   // claim a stability it cannot prove.
   testing::TempDir dir;
-  const std::string study = R"([study]
-kind = "compliance_chart"
-[model]
-type = "plunge_with_penetration_damping"
-wheel_speed_rpm = 1450
+  const std::string study = chart_study("plunge_with_penetration_damping", R"(wheel_speed_rpm = 1450
 work_speed_rpm = 55
 contact_stiffness_n_per_m = 1e8
 wheel_wear_stiffness_n_per_m = 5e9
 work_removal_stiffness_n_per_m = 5e7
 modes = [{ frequency_hz = 184.08, damping_ratio = 0.05, stiffness_n_per_m = 5e7 }]
 penetration_damping_n_s_per_m = 1.09e5
-)";
-  const std::string message = testing::input_error_of([&] { load_study(dir.write("study.toml", study)); });
+)");
+  const std::string message = testing::load_error(dir, study);
   EXPECT_NE(message.find("study.toml:11: model.penetration_damping_n_s_per_m = 109000"), std::string::npos)
       << message;
   EXPECT_NE(message.find("kd = 0 or work_regeneration = false"), std::string::npos) << message;

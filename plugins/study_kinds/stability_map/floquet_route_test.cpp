@@ -19,6 +19,7 @@
 #include "chatterlab/suppression.hpp"
 #include "study_kinds/stability_map/floquet_route.hpp"
 #include "study_kinds/stability_map/stability_map.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -27,33 +28,13 @@ namespace {
 using testing::TempDir;
 
 // studies/suppression_wheel_speed.toml's G3 case: wheel chain alone, 1450 rpm, 3.1 1/s at 290 Hz.
-constexpr const char* wheel_model = R"(
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1450
-work_speed_rpm = 60
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 3.0e9
-work_removal_stiffness_n_per_m = 5.0e7
-work_regeneration = false
-modes = [ { frequency_hz = 180.0, damping_ratio = 0.03, stiffness_n_per_m = 5.0e7 } ]
-)";
+const std::string wheel_model = testing::g1_suppression_machine(1450.0, 60.0, 180.0, "work_regeneration = false\n");
 
 // Work chain alone (S3). studies/suppression_work_speed.toml's work turns at 60 rpm: one work
 // revolution (1 s) resolved at its 180 Hz mode needs a monodromy beyond the discretisation's
 // limit (refused, tested below), so the Floquet checks take a work at 600 rpm with a 60 Hz mode
 // (same stiffnesses): a revolution of 0.1 s.
-constexpr const char* work_model = R"(
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1500
-work_speed_rpm = 600
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 3.0e9
-work_removal_stiffness_n_per_m = 5.0e7
-wheel_regeneration = false
-modes = [ { frequency_hz = 60.0, damping_ratio = 0.03, stiffness_n_per_m = 5.0e7 } ]
-)";
+const std::string work_model = testing::g1_suppression_machine(1500.0, 600.0, 60.0, "wheel_regeneration = false\n");
 
 std::string suppression(const std::string& target, const std::string& shape, double amplitude, double frequency_hz) {
   return "[suppression]\ntype = \"variable_speed\"\ntarget = \"" + target + "\"\nshape = \"" + shape +
@@ -115,9 +96,7 @@ TEST(FloquetRoute, ShapesWithoutAPeriodicLinearisationAreRefused) {
   EXPECT_NE(feed.find("suppression.target = \"feed\": the Floquet route takes periodic rotor speeds"), std::string::npos)
       << feed;
   // The shipped S3 case: one work revolution of 1 s at 60 rpm.
-  std::string slow_work = work_model;
-  slow_work.replace(slow_work.find("work_speed_rpm = 600"), 20, "work_speed_rpm = 60");
-  slow_work.replace(slow_work.find("frequency_hz = 60.0"), 19, "frequency_hz = 180.0");
+  const std::string slow_work = testing::g1_suppression_machine(1500.0, 60.0, 180.0, "wheel_regeneration = false\n");
   const std::string large =
       testing::input_error_of([&] { load(dir, slow_work + suppression("work_speed", "sinusoidal", 0.05, 1.0)); });
   EXPECT_NE(large.find("suppression.target = \"work_speed\": the longest revolution"), std::string::npos) << large;
@@ -173,7 +152,7 @@ double simulated_growth_rate(const Study& study, double fit_start_s, double fit_
 }
 
 struct SimulationCase {
-  const char* model;
+  std::string model;
   const char* target;
   double amplitude, frequency_hz;
   const char* shape = "sinusoidal";

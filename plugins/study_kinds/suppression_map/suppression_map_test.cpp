@@ -16,6 +16,7 @@
 #include "chatterlab/roots.hpp"
 #include "chatterlab/study.hpp"
 #include "study_kinds/suppression_map/suppression_measures.hpp"
+#include "unit/g1_test_machines.hpp"
 #include "unit/study_test_support.hpp"
 
 namespace chatterlab {
@@ -26,17 +27,7 @@ using testing::TempDir;
 // G1 with wheel regeneration only (the G3 setting of 5-30..5-39), one 180 Hz mode: at 1520 rpm
 // the rightmost root (sigma = 5.95/s, 303 Hz, 12 waves on the wheel) is at the top of its lobe,
 // which spans about 1440..1550 rpm.
-constexpr const char* wheel_model = R"(
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1520
-work_speed_rpm = 60
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 3.0e9
-work_removal_stiffness_n_per_m = 5.0e7
-work_regeneration = false
-modes = [ { frequency_hz = 180.0, damping_ratio = 0.03, stiffness_n_per_m = 5.0e7 } ]
-)";
+const std::string wheel_model = testing::g1_suppression_machine(1520.0, 60.0, 180.0, "work_regeneration = false\n");
 
 std::string study_text(const std::string& model, const std::string& suppression, const std::string& settings) {
   return "[study]\nkind = \"suppression_map\"\n" + model + "[suppression]\ntype = \"variable_speed\"\n" +
@@ -58,17 +49,8 @@ PointResult run(const std::string& text) {
 
 TEST(SuppressionMap, ZeroModulationGivesExactlyTheConstantRun) {
   // Every target and shape at amplitude 0: the modulated run is the constant run bit for bit.
-  const std::string both = R"(
-[model]
-type = "plunge_regenerative"
-wheel_speed_rpm = 1450
-work_speed_rpm = 55
-contact_stiffness_n_per_m = 1.0e8
-wheel_wear_stiffness_n_per_m = 3.0e9
-work_removal_stiffness_n_per_m = 5.0e7
-modes = [ { frequency_hz = 180.0, damping_ratio = 0.03, stiffness_n_per_m = 5.0e7 } ]
-)";
-  for (const char* target : {"wheel_speed", "work_speed", "feed"})
+  const std::string both = testing::g1_suppression_machine(1450.0, 55.0, 180.0);
+ for (const char* target : {"wheel_speed", "work_speed", "feed"})
     for (const char* shape : {"sinusoidal", "square", "random"}) {
       const PointResult r = run(study_text(
           both, fmt::format("target = \"{}\"\nshape = \"{}\"\namplitude_ratio = 0.0\nfrequency_hz = 3.0", target, shape),

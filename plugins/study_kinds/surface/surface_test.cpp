@@ -44,6 +44,31 @@ double lobes(std::size_t i) {  // 7 lobes of amplitude 1.5 um on 3600 samples
   return 1.5 * std::cos(7 * 2 * pi * static_cast<double>(i) / 3600.0);
 }
 
+// One point of a surface study, its artifacts written to artifact_dir (plots drawn or not).
+std::vector<Json> run_surface_point(const Study& study, const std::filesystem::path& artifact_dir, bool plots) {
+  PointContext context;
+  context.artifact_dir = artifact_dir;
+  context.plots = plots;
+  return SurfaceStudy().run_point(study.point_document(0), context);
+}
+
+// lobes() over one revolution of 3600 samples, times scale (1: um; 1e-6: m).
+std::vector<double> lobe_samples(double scale) {
+  std::vector<double> v;
+  for (std::size_t i = 0; i < 3600; ++i) v.push_back(lobes(i) * scale);
+  return v;
+}
+
+// A closed profile: one revolution of samples, interval_deg apart.
+SampledSeries closed_profile(double interval_deg, std::vector<double> samples) {
+  SampledSeries s;
+  s.closed = true;
+  s.sample_unit = "deg";
+  s.sample_interval = interval_deg;
+  s.set_samples(std::move(samples));
+  return s;
+}
+
 std::string open_study(const std::string& extra_input = "", const std::string& filter =
                                                                 "cutoff_mm = 2.5\n") {
   return "[study]\nkind = \"surface\"\n\n[input]\nfile = \"p.csv\"\ncolumn = \"height_um\"\n"
@@ -80,13 +105,7 @@ TEST(SurfaceEvaluation, OpenSineParametersAndIdentity) {
 }
 
 TEST(SurfaceEvaluation, ClosedProfileRoundnessAndUprTable) {
-  SampledSeries s;
-  s.closed = true;
-  s.sample_unit = "deg";
-  s.sample_interval = 0.1;
-  std::vector<double> um;
-  for (std::size_t i = 0; i < 3600; ++i) um.push_back(lobes(i));
-  s.set_samples(std::move(um));
+  const SampledSeries s = closed_profile(0.1, lobe_samples(1.0));
   SurfaceSettings settings;
   settings.cutoff_upr = 150;
   const Json j = evaluate_surface(s, settings);
@@ -106,11 +125,7 @@ TEST(SurfaceEvaluation, ClosedProfileRoundnessAndUprTable) {
 }
 
 TEST(SurfaceEvaluation, RejectsTooFewSamplesPerCutoff) {
-  SampledSeries s;
-  s.closed = true;
-  s.sample_unit = "deg";
-  s.sample_interval = 1.0;
-  s.set_samples(std::vector<double>(360, 0.0));
+  const SampledSeries s = closed_profile(1.0, std::vector<double>(360, 0.0));
   SurfaceSettings settings;
   settings.cutoff_upr = 60;  // 6 samples per cut-off
   EXPECT_THROW(evaluate_surface(s, settings), InputError);
@@ -118,13 +133,7 @@ TEST(SurfaceEvaluation, RejectsTooFewSamplesPerCutoff) {
 
 TEST(SurfaceEvaluation, AnalysisPluginEvaluatesASimulatedWorkSurface) {
   // A work surface in metres over one revolution, as a simulate study writes it.
-  SampledSeries s;
-  s.closed = true;
-  s.sample_unit = "deg";
-  s.sample_interval = 0.1;
-  std::vector<double> m;
-  for (std::size_t i = 0; i < 3600; ++i) m.push_back(lobes(i) * 1e-6);
-  s.set_samples(std::move(m));
+  const SampledSeries s = closed_profile(0.1, lobe_samples(1e-6));
   const auto& entry = analysis_registry().at("surface_profile");
   const auto analysis = entry.create(ParamValues(
       validate_params(Json{{"unit", "m"}, {"cutoff_upr", 150}}, entry.info.params, "analysis",
@@ -142,12 +151,8 @@ class SurfaceStudyInput : public ::testing::Test {
 TEST_F(SurfaceStudyInput, RunPointWritesFilteredCsvAndSummary) {
   dir_.write("p.csv", table(6000, waves));
   Study study = load_text(dir_, open_study("", "cutoff_mm = 0.8\ntype = \"robust_gaussian\"\n"));
-  SurfaceStudy kind;
-  PointContext context;
-  context.artifact_dir = dir_.path() / "out";
-  context.plots = false;
-  const auto out = kind.run_point(study.point_document(0), context);
-  ASSERT_EQ(out.size(), kind.output_columns(study.document).size());
+  const auto out = run_surface_point(study, dir_.path() / "out", false);
+  ASSERT_EQ(out.size(), SurfaceStudy().output_columns(study.document).size());
   const DataTable csv = read_data_table(dir_.path() / "out" / "filtered.csv");
   EXPECT_EQ(csv.names, (std::vector<std::string>{"x_mm", "profile_um", "waviness_um", "roughness_um"}));
   EXPECT_EQ(csv.rows(), 6000u);
@@ -268,11 +273,7 @@ TEST_F(SurfaceStudyInput, ClosedProfileKeys) {
   // With the circumferential spacing a cut-off in mm converts: 3600 x 0.1 mm / 7.2 mm = 50 UPR.
   {
     Study study = load_text(dir_, head + "spacing_mm = 0.1\n[filter]\ncutoff_mm = 7.2\n");
-    SurfaceStudy kind;
-    PointContext context;
-    context.artifact_dir = dir_.path() / "converted";
-    context.plots = false;
-    kind.run_point(study.point_document(0), context);
+    run_surface_point(study, dir_.path() / "converted", false);
     std::ifstream in(dir_.path() / "converted" / "summary.json");
     const Json j = Json::parse(in);
     EXPECT_NEAR(j["filter"]["cutoff_upr"].get<double>(), 50.0, 1e-9);
@@ -335,11 +336,7 @@ TEST(SurfaceBandsPlot, ALongProfilesSpectrumIsDrawnBoundedWithItsPeaks) {
             "[process]\nwheel_speed_rpm = 1450\nwork_speed_rpm = 55\n";
   }
   const Study study = load_study(dir.path() / "bands.toml");
-  SurfaceStudy kind;
-  PointContext context;
-  context.artifact_dir = dir.path() / "out";
-  context.plots = true;
-  kind.run_point(study.point_document(0), context);
+  run_surface_point(study, dir.path() / "out", true);
   std::ifstream dat(dir.path() / "out" / "wz_f_bands.dat");
   ASSERT_TRUE(dat) << "no wz_f_bands.dat (gnuplot missing?)";
   std::size_t impulses = 0;
@@ -362,11 +359,7 @@ TEST(SurfaceBandsPlot, ALongProfilesSpectrumIsDrawnBoundedWithItsPeaks) {
 TEST(SurfacePolarPlot, MinimumZoneDrawsBothCirclesAroundTheProfile) {
   TempDir dir;
   const Study study = load_study(std::filesystem::path(CHATTERLAB_SOURCE_DIR) / "studies" / "surface_roundness.toml");
-  SurfaceStudy kind;
-  PointContext context;
-  context.artifact_dir = dir.path() / "out";
-  context.plots = true;
-  kind.run_point(study.point_document(0), context);
+  run_surface_point(study, dir.path() / "out", true);
   std::ifstream summary_file(dir.path() / "out" / "summary.json");
   const Json rd = Json::parse(summary_file).at("roundness");
   std::ifstream dat(dir.path() / "out" / "polar.dat");
