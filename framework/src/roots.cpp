@@ -72,8 +72,10 @@ std::string show(Complex s) { return fmt::format("{:.6g}{:+.6g}i", s.real(), s.i
 
 class RootSearch {
  public:
-  RootSearch(const CharacteristicFunction& function, const RootSearchOptions& options)
+  RootSearch(const CharacteristicFunction& function, const RootSearchOptions& options,
+             const std::vector<Complex>* guesses)
       : function_(function),
+        guesses_(guesses),
         options_(options),
         evaluate_(function, options.max_function_evaluations),
         tracker_(evaluate_, ContourSettings{}),
@@ -100,6 +102,7 @@ class RootSearch {
                        std::string certificate) const;
 
   const CharacteristicFunction& function_;
+  const std::vector<Complex>* guesses_;  // warm start; nullptr: the model's own guesses
   RootSearchOptions options_;
   Evaluator evaluate_;
   ContourTracker tracker_;
@@ -112,6 +115,7 @@ class RootSearch {
   int neutral_hits_ = 0;
   int repaired_ = 0;
   bool repairing_ = false;
+  std::vector<Complex> dropped_;  // where candidates dropped by the pruning stood (Im >= 0)
 };
 
 double RootSearch::certificate_gap(Complex rightmost) const {
@@ -145,8 +149,9 @@ bool RootSearch::try_newton(Complex guess) {
 void RootSearch::locate_from_guesses() {
   using roots_detail::NewtonIterate;
   using Status = NewtonIterate::Status;
-  std::vector<Complex> guesses;
-  function_.initial_guesses(kGuessBandFactor * band_, guesses);
+  std::vector<Complex> own_guesses;
+  if (!guesses_) function_.initial_guesses(kGuessBandFactor * band_, own_guesses);
+  const std::vector<Complex>& guesses = guesses_ ? *guesses_ : own_guesses;
   // Only the rightmost root is needed. Every guess gets one Newton step; then, in stages, the
   // most promising candidate is finished (a reference root), the candidates that can no longer
   // beat the best root found are dropped, and the rest take another step. Whatever a wrongly
@@ -186,7 +191,11 @@ void RootSearch::locate_from_guesses() {
       candidates.erase(candidates.begin());
     }
     if (best)
-      std::erase_if(candidates, [&](const NewtonIterate& it) { return reach(it) < best->real(); });
+      std::erase_if(candidates, [&](const NewtonIterate& it) {
+        if (reach(it) >= best->real()) return false;
+        if (options_.keep_approximate_roots) dropped_.push_back(it.s);
+        return true;
+      });
     if (stage == kPruningStages || candidates.empty()) break;
     for (NewtonIterate& it : candidates) {
       roots_detail::newton_steps(evaluate_, it, 1, newton_);
@@ -195,7 +204,10 @@ void RootSearch::locate_from_guesses() {
     std::erase_if(candidates, [](const NewtonIterate& it) { return it.status != Status::running; });
   }
   for (NewtonIterate& it : candidates) {  // still sorted by reach
-    if (best && reach(it) < best->real()) break;
+    if (best && reach(it) < best->real()) {
+      if (options_.keep_approximate_roots) dropped_.push_back(it.s);
+      continue;
+    }
     finish(it);
   }
 }
@@ -346,6 +358,15 @@ RightmostRoot RootSearch::finish(Complex rightmost, bool certified, double sigma
     result.certificate += "; " + note;
   result.repaired_roots = repaired_;
   result.neutral_roots_excluded = neutral_hits_;
+  result.warm_started = guesses_ != nullptr;
+  if (options_.keep_approximate_roots) {
+    result.approximate_roots = roots_.roots();
+    for (Complex s : dropped_)
+      if (!roots_.contains(s)) result.approximate_roots.push_back(s);
+    std::sort(result.approximate_roots.begin(), result.approximate_roots.end(), [](Complex a, Complex b) {
+      return a.imag() != b.imag() ? a.imag() < b.imag() : a.real() < b.real();
+    });
+  }
   return result;
 }
 
@@ -460,7 +481,15 @@ RightmostRoot find_rightmost_root(const CharacteristicFunction& characteristic,
   // The runner calls this from OpenMP threads: only PointFailure may leave, and all state is
   // local to this call (determinism: same inputs, same operations, same result on any thread).
   try {
-    return RootSearch(characteristic, options).run();
+    if (options.warm_start && !options.warm_start->empty()) {
+      try {
+        RightmostRoot warm = RootSearch(characteristic, options, options.warm_start).run();
+        if (warm.certified) return warm;
+      } catch (const PointFailure&) {
+        // no root from the warm guesses: the model's own guesses below
+      }
+    }
+    return RootSearch(characteristic, options, nullptr).run();
   } catch (const PointFailure&) {
     throw;
   } catch (const std::exception& e) {

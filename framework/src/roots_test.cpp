@@ -234,6 +234,36 @@ TEST(Roots, ContourCountsAgreeWithConservativeSettings) {
   }
 }
 
+// A warm start from a neighbouring parameter set's roots: the same certified root with fewer
+// evaluations; from useless guesses, the search falls back to the model's own and still finds it.
+TEST(Roots, WarmStartGivesTheSameCertifiedRoot) {
+  KnownZeros near({{-4e-4, 2000.0}}, {{0.999, 60.0 / 55.0}, {0.98, 60.0 / 1450.0}});
+  // As neighbouring feed_risk groups: the same speeds (delays), slightly different process
+  // stiffnesses (lattice depths) and structural root.
+  KnownZeros e({{-3e-4, 2001.0}}, {{0.9985, 60.0 / 55.0}, {0.981, 60.0 / 1450.0}});
+  RootSearchOptions options;
+  options.max_frequency_hz = 1000.0;
+  options.keep_approximate_roots = true;
+  const RightmostRoot neighbour = find_rightmost_root(near, options);
+  ASSERT_TRUE(neighbour.certified);
+  ASSERT_GT(neighbour.approximate_roots.size(), 1000u);
+  const RightmostRoot cold = find_rightmost_root(e, options);
+  options.warm_start = &neighbour.approximate_roots;
+  const RightmostRoot warm = find_rightmost_root(e, options);
+  ASSERT_TRUE(cold.certified && warm.certified) << warm.certificate;
+  EXPECT_TRUE(warm.warm_started);
+  EXPECT_LE(std::abs(warm.root - cold.root), 1e-12 * std::abs(cold.root));
+  EXPECT_LE(std::abs(warm.root - Complex(-3e-4, 2001.0)), 1e-9 * 2001.0);
+  EXPECT_LT(warm.function_evaluations, cold.function_evaluations);
+  const std::vector<Complex> useless = {Complex(-50.0, 10.0)};
+  options.warm_start = &useless;
+  options.max_repair_rounds = 0;  // no repair of the warm search: its certificate fails
+  const RightmostRoot fallback = find_rightmost_root(e, options);
+  EXPECT_TRUE(fallback.certified) << fallback.certificate;
+  EXPECT_FALSE(fallback.warm_started);
+  EXPECT_LE(std::abs(fallback.root - cold.root), 1e-12 * std::abs(cold.root));
+}
+
 // ---------------------------------------------------------------- failures and threads
 
 class Throwing final : public CharacteristicFunction {

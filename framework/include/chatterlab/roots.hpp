@@ -13,6 +13,7 @@
 //   3. Repair: if the count says zeros are missing, the rectangle is subdivided until each
 //      missing zero is isolated and located by Newton; then the search is certified again.
 #include <string>
+#include <vector>
 
 #include "chatterlab/characteristic.hpp"
 
@@ -27,6 +28,15 @@ struct RootSearchOptions {
   int max_repair_rounds = 3;
   // Work budget per search (evaluations of E); beyond it the result is returned uncertified.
   long max_function_evaluations = 3'000'000;
+  // Warm start: approximate roots of a nearby parameter set (a neighbouring search's
+  // RightmostRoot::approximate_roots) as Newton's guesses in place of the model's lattice
+  // guesses. The certificate is the same; when it fails from the warm guesses, the search is
+  // redone from the model's own guesses, so a warm start can only save work, never lose a root.
+  // The result then depends on the warm guesses too (the same root, converged from elsewhere:
+  // equal to rounding): choose their source by the data, not by thread timing.
+  const std::vector<Complex>* warm_start = nullptr;
+  // Fill RightmostRoot::approximate_roots (for warm-starting a neighbouring search).
+  bool keep_approximate_roots = false;
 };
 
 struct RightmostRoot {
@@ -42,6 +52,11 @@ struct RightmostRoot {
   std::string certificate;  // human-readable outcome, e.g. "ok: 0 zeros in Re s > -1.23e-2"
   int repaired_roots = 0;            // roots the guesses missed and the repair step located
   int neutral_roots_excluded = 0;    // declared neutral roots met by Newton and dropped
+  bool warm_started = false;         // certified from options.warm_start (no cold retry needed)
+  // With options.keep_approximate_roots: every root located plus where each Newton candidate
+  // dropped as "cannot be the rightmost" stood (Im >= 0, sorted by Im): warm-start guesses for a
+  // search at nearby parameters.
+  std::vector<Complex> approximate_roots;
 };
 
 // Throws PointFailure when no root could be located at all (or the options are invalid);

@@ -64,8 +64,12 @@ double ContourTracker::model_step(const LocalModel& model, Complex s, Complex di
   const Complex w = (s - model.zero) * std::conj(direction);  // the zero at the origin, path along +real
   const double x = w.real(), y = std::abs(w.imag());
   if (y == 0.0) return 0.0;
-  const double angle = std::atan2(y, x), target = angle - theta;  // decreases towards 0
-  if (target > 0.0) step = std::min(step, y / std::tan(target) - x);
+  // The angle a = atan2(y, x) subtended by the zero decreases towards 0 along the path; the step
+  // to a - theta (when a > theta) is y cot(a - theta) - x = tan(theta) |w|^2 / (y - x tan(theta)),
+  // and a > theta exactly when y - x tan(theta) > 0 (a in (0, pi), theta < pi/2): no atan2, no
+  // tan per step.
+  const double denominator = y - x * tan_phase_step_;
+  if (denominator > 0.0) step = std::min(step, tan_phase_step_ * (x * x + y * y) / denominator);
   return step;
 }
 

@@ -15,6 +15,7 @@
 // This is a numerical certificate (double precision, checked steps), not interval arithmetic;
 // roots_test.cpp cross-checks it against a far more conservative setting on random rectangles,
 // and docs/models/plunge_regenerative.md states the limits.
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -51,7 +52,7 @@ struct BoxCount {
 class ContourTracker {
  public:
   ContourTracker(Evaluator& evaluate, ContourSettings settings)
-      : evaluate_(evaluate), settings_(settings) {}
+      : evaluate_(evaluate), settings_(settings), tan_phase_step_(std::tan(settings.phase_step)) {}
 
   BoxCount count(const Box& box);
 
@@ -83,6 +84,7 @@ class ContourTracker {
 
   Evaluator& evaluate_;
   ContourSettings settings_;
+  double tan_phase_step_;  // tan(settings_.phase_step), for model_step
   Complex centre_ = 0.0;  // moments are taken about this point
 };
 
