@@ -5,7 +5,8 @@
 //     CHATTERLAB_REGISTER_STUDY_KIND(StabilityMap);
 //
 // Convention: the class has `static PluginInfo info()` whose name is the kind name and whose
-// params/example_params describe the kind's own settings table (e.g. [stability]), so that
+// params/example_params describe the kind's own settings table (e.g. [stability]; thread_safety
+// is always `shareable` for a kind, set at registration), so that
 // `chatterlab describe` and the conformance test treat kinds like plugins; and a default
 // constructor (a kind holds no per-study state: everything arrives in the document). A
 // constructor from `const ParamValues&` is accepted instead, and then gets an empty table.
@@ -91,11 +92,15 @@ class StudyKind {
                                       const PointContext& context) const = 0;
 
   // Plots and any other whole-study artefacts (PNG + SVG). Called once, after all points.
-  virtual void write_artifacts(const Study& study, const ResultTable& results,
-                               const std::filesystem::path& out_dir) const = 0;
+  // Default: none (a kind whose figures belong to one point draws them in run_point, into the
+  // point's artefact directory; a grid of such points is compared through results.csv).
+  virtual void write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
+                               const std::filesystem::path& /*out_dir*/) const {}
 
-  // The plugins this point uses might be serial-only (ThreadSafety::serial).
-  virtual bool requires_serial(const Json& /*document*/) const { return false; }
+  // The plugins this point uses might be serial-only (ThreadSafety::serial). Default: when the
+  // kind reads a [model] table (tables() lists "model"), whether that model plugin is declared
+  // serial (model_is_serial); otherwise false. A kind that builds other plugins says so here.
+  virtual bool requires_serial(const Json& document) const;
 };
 
 Registry<StudyKind>& study_kind_registry();  // kind name "study kind"
@@ -123,15 +128,27 @@ Json validate_component(const Json& document, const std::string& table,
   return detail::validate_component(document, table, registry.kind(), plugins, sources);
 }
 
+// The declaration of study kind T as registered: T::info() with the thread safety every kind has
+// by contract. One kind instance computes all points of a run concurrently (run_point is const
+// and thread-safe, see above), so a kind need not, and cannot, declare anything else.
+template <class T>
+PluginInfo study_kind_info() {
+  PluginInfo info = T::info();
+  info.thread_safety = ThreadSafety::shareable;
+  return info;
+}
+
 // Adds study kind T (see the convention above) to a registry.
 template <class T>
 void add_study_kind(Registry<StudyKind>& registry, std::string origin = "built-in") {
   if constexpr (std::is_default_constructible_v<T>) {
-    registry.add(T::info(), [](const ParamValues&) -> std::unique_ptr<StudyKind> {
+    registry.add(study_kind_info<T>(), [](const ParamValues&) -> std::unique_ptr<StudyKind> {
       return std::make_unique<T>();
     }, std::move(origin));
   } else {
-    add_plugin<T>(registry, std::move(origin));
+    registry.add(study_kind_info<T>(), [](const ParamValues& p) -> std::unique_ptr<StudyKind> {
+      return std::make_unique<T>(p);
+    }, std::move(origin));
   }
 }
 

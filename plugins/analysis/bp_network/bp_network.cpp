@@ -9,6 +9,7 @@
 #include "chatterlab/errors.hpp"
 #include "chatterlab/input_files.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -254,12 +255,6 @@ LabelledWindows labelled_windows(const SampledSeries& series, std::size_t window
 // ------------------------------------------------------------------ plugin
 PluginInfo BpNetworkAnalysis::info() {
   const TrainingOptions defaults;
-  PluginInfo info;
-  info.name = "bp_network";
-  info.description =
-      "3-4-1 back-propagation network on window features: chatter-onset score per window, "
-      "trained from labelled time ranges or loaded from a weights file";
-  info.models_md_ids = "C1, C2";
   const ParamSpec window =
       monitor::count_spec("window_samples", "samples per feature window (book: 10)", 10, 3);
   auto range = [](const char* key, const char* what) {
@@ -314,12 +309,14 @@ PluginInfo BpNetworkAnalysis::info() {
   alarm.max = 1.0;
   alarm.min_exclusive = true;
   alarm.max_exclusive = true;
-  info.params = {window, range("stable_s", "stable (target 0)"),
-                 range("onset_s", "chatter onset (target 1)"), weights, fraction, eta0, alpha,
-                 target, epochs, seed, biases, alarm, monitor::persistence_spec(5)};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"stable_s", {0.0, 0.15}}, {"onset_s", {0.2, 0.35}}};
-  return info;
+  return plugin_info("bp_network", "C1, C2",
+                     {window, range("stable_s", "stable (target 0)"),
+                      range("onset_s", "chatter onset (target 1)"), weights, fraction, eta0, alpha,
+                      target, epochs, seed, biases, alarm, monitor::persistence_spec(5)},
+                     {{"stable_s", {0.0, 0.15}}, {"onset_s", {0.2, 0.35}}},
+                     "3-4-1 back-propagation network on window features: chatter-onset score per window, "
+                     "trained from labelled time ranges or loaded from a weights file",
+                     ThreadSafety::shareable);
 }
 
 BpNetworkAnalysis::BpNetworkAnalysis(const ParamValues& params)

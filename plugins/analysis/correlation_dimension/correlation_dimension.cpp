@@ -16,6 +16,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -184,50 +185,47 @@ ScalingRegion scaling_region(const std::vector<DimensionSlopes>& dims, int satur
 
 }  // namespace
 
+template <>
 PluginInfo CorrelationDimension::info() {
-  PluginInfo info;
-  info.name = "correlation_dimension";
-  info.description =
-      "correlation dimension D2 (Grassberger-Procaccia, Theiler window) from an automatically "
-      "detected scaling region, versus embedding dimension until saturation";
-  info.models_md_ids = "N2";
   using nonlinear::numeric_spec;
-  info.params = {
-      nonlinear::delay_spec(),
-      nonlinear::dimension_spec(),
-      nonlinear::theiler_spec(),
-      numeric_spec("max_dimension", ValueKind::integer, "1",
-                   "largest embedding dimension of the D2 sweep (absent: max(8, 2 x embedding "
-                   "dimension + 2))",
-                   Json(), 1, 30),
-      numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "reference vectors compared with all others (sampled references: cost "
-                   "references x N x dimensions, memory O(N))",
-                   2000, 10),
-      numeric_spec("all_pairs_within", ValueKind::real, "1",
-                   "when given: count every pair closer than this fraction of the signal range "
-                   "(box-assisted, like TISEAN d2 -N 0 -R) instead of sampled references: exact "
-                   "C(r) below it, cost growing with the number of such pairs",
-                   Json(), 0, CorrelationSums::sampled_cut, true),
-      numeric_spec("min_pairs", ValueKind::integer, "1",
-                   "a correlation sum counts only where at least this many pairs lie within r "
-                   "(statistical floor of the scaling region)",
-                   2000, 1),
-      numeric_spec("slope_tolerance", ValueKind::real, "1",
-                   "a scaling region is a range of r whose local slopes (mean of the consistent "
-                   "dimensions) stay within this fraction of their median",
-                   0.1, 0, 1, true),
-      numeric_spec("saturation_tolerance", ValueKind::real, "1",
-                   "D2 has saturated from the first embedding dimension whose local slopes agree "
-                   "with those of the next two within this fraction, scale by scale (the "
-                   "lacunarity of fractal sets moves them by a few per cent)",
-                   0.1, 0, 1, true),
-      nonlinear::bootstrap_spec(),
-      nonlinear::seed_spec(),
-  };
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_dimension", 4}, {"max_reference_points", 200}};
-  return info;
+  return plugin_info("correlation_dimension", "N2",
+                     {
+                         nonlinear::delay_spec(),
+                         nonlinear::dimension_spec(),
+                         nonlinear::theiler_spec(),
+                         numeric_spec("max_dimension", ValueKind::integer, "1",
+                                      "largest embedding dimension of the D2 sweep (absent: max(8, 2 x embedding "
+                                      "dimension + 2))",
+                                      Json(), 1, 30),
+                         numeric_spec("max_reference_points", ValueKind::integer, "1",
+                                      "reference vectors compared with all others (sampled references: cost "
+                                      "references x N x dimensions, memory O(N))",
+                                      2000, 10),
+                         numeric_spec("all_pairs_within", ValueKind::real, "1",
+                                      "when given: count every pair closer than this fraction of the signal range "
+                                      "(box-assisted, like TISEAN d2 -N 0 -R) instead of sampled references: exact "
+                                      "C(r) below it, cost growing with the number of such pairs",
+                                      Json(), 0, CorrelationSums::sampled_cut, true),
+                         numeric_spec("min_pairs", ValueKind::integer, "1",
+                                      "a correlation sum counts only where at least this many pairs lie within r "
+                                      "(statistical floor of the scaling region)",
+                                      2000, 1),
+                         numeric_spec("slope_tolerance", ValueKind::real, "1",
+                                      "a scaling region is a range of r whose local slopes (mean of the consistent "
+                                      "dimensions) stay within this fraction of their median",
+                                      0.1, 0, 1, true),
+                         numeric_spec("saturation_tolerance", ValueKind::real, "1",
+                                      "D2 has saturated from the first embedding dimension whose local slopes agree "
+                                      "with those of the next two within this fraction, scale by scale (the "
+                                      "lacunarity of fractal sets moves them by a few per cent)",
+                                      0.1, 0, 1, true),
+                         nonlinear::bootstrap_spec(),
+                         nonlinear::seed_spec(),
+                     },
+                     {{"max_dimension", 4}, {"max_reference_points", 200}},
+                     "correlation dimension D2 (Grassberger-Procaccia, Theiler window) from an automatically "
+                     "detected scaling region, versus embedding dimension until saturation",
+                     ThreadSafety::shareable);
 }
 
 namespace {
@@ -540,6 +538,7 @@ Json by_dimension_json(const std::vector<DimensionSlopes>& dims, const D2Fit& f,
 
 }  // namespace
 
+template <>
 Json CorrelationDimension::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
@@ -598,6 +597,7 @@ Json CorrelationDimension::analyse(const SampledSeries& series, const Json& cont
   return out;
 }
 
+template <>
 void CorrelationDimension::plot(const Json& result, const SampledSeries& series,
                                 const std::filesystem::path& out_dir) const {
   const std::string title = series.name.empty() ? std::string("series") : series.name;

@@ -10,6 +10,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -17,40 +18,38 @@ namespace {
 Json vector_json(const std::vector<double>& v) { return Json(v); }
 }  // namespace
 
+template <>
 PluginInfo EmbeddingAnalysis::info() {
-  PluginInfo info;
-  info.name = "embedding";
-  info.description =
-      "delay by average mutual information, embedding dimension by false nearest neighbours and "
-      "Cao's method, Theiler window by space-time separation";
-  info.models_md_ids = "N1";
   using nonlinear::numeric_spec;
   ParamSpec delay = nonlinear::delay_spec();
   delay.description = "fixed delay instead of the AMI choice (absent: automatic)";
-  info.params = {
-      numeric_spec("max_delay_samples", ValueKind::integer, "samples",
-                   "largest lag searched for the AMI minimum (absent: N/10, at most 1000)", Json(),
-                   2),
-      delay,
-      numeric_spec("histogram_bins", ValueKind::integer, "1", "bins of the AMI histogram estimator",
-                   embedding_default_bins, 4, 256),
-      numeric_spec("max_dimension", ValueKind::integer, "1",
-                   "largest embedding dimension examined by FNN and Cao", embedding_default_max_dimension, 2,
-                   30),
-      numeric_spec("fnn_distance_ratio", ValueKind::real, "1",
-                   "a neighbour is false when the added coordinate separates it by more than this "
-                   "times the distance (Kennel's R_tol)",
-                   embedding_default_distance_ratio, 0, 1000, true),
-      numeric_spec("fnn_threshold", ValueKind::real, "1",
-                   "the embedding dimension is the first whose false-neighbour fraction is at most "
-                   "this",
-                   embedding_default_fnn_threshold, 0, 1, true),
-  };
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_dimension", 6}};
-  return info;
+  return plugin_info("embedding", "N1",
+                     {
+                         numeric_spec("max_delay_samples", ValueKind::integer, "samples",
+                                      "largest lag searched for the AMI minimum (absent: N/10, at most 1000)", Json(),
+                                      2),
+                         delay,
+                         numeric_spec("histogram_bins", ValueKind::integer, "1", "bins of the AMI histogram estimator",
+                                      embedding_default_bins, 4, 256),
+                         numeric_spec("max_dimension", ValueKind::integer, "1",
+                                      "largest embedding dimension examined by FNN and Cao", embedding_default_max_dimension, 2,
+                                      30),
+                         numeric_spec("fnn_distance_ratio", ValueKind::real, "1",
+                                      "a neighbour is false when the added coordinate separates it by more than this "
+                                      "times the distance (Kennel's R_tol)",
+                                      embedding_default_distance_ratio, 0, 1000, true),
+                         numeric_spec("fnn_threshold", ValueKind::real, "1",
+                                      "the embedding dimension is the first whose false-neighbour fraction is at most "
+                                      "this",
+                                      embedding_default_fnn_threshold, 0, 1, true),
+                     },
+                     {{"max_dimension", 6}},
+                     "delay by average mutual information, embedding dimension by false nearest neighbours and "
+                     "Cao's method, Theiler window by space-time separation",
+                     ThreadSafety::shareable);
 }
 
+template <>
 Json EmbeddingAnalysis::analyse(const SampledSeries& series, const Json& /*context*/) const {
   const auto& x = series.values;
   const std::string name = series.name.empty() ? std::string("series") : series.name;
@@ -116,6 +115,7 @@ Json EmbeddingAnalysis::analyse(const SampledSeries& series, const Json& /*conte
   return out;
 }
 
+template <>
 void EmbeddingAnalysis::plot(const Json& result, const SampledSeries& series,
                              const std::filesystem::path& out_dir) const {
   const std::string title = series.name.empty() ? std::string("series") : series.name;

@@ -10,13 +10,8 @@
 
 namespace chatterlab {
 
-class EmbeddingAnalysis final : public nonlinear::ParameterisedAnalysis {
- public:
-  static PluginInfo info();
-  using ParameterisedAnalysis::ParameterisedAnalysis;
-  Json analyse(const SampledSeries& series, const Json& context) const override;
-  void plot(const Json& result, const SampledSeries& series,
-            const std::filesystem::path& out_dir) const override;
-};
+// The plugin: info(), analyse() and plot() are defined in embedding.cpp.
+struct EmbeddingMethod;
+using EmbeddingAnalysis = nonlinear::MethodAnalysis<EmbeddingMethod>;
 
 }  // namespace chatterlab

@@ -15,6 +15,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -135,32 +136,29 @@ double separation_kept(const CurveResult& a, const CurveResult& b) {
 
 }  // namespace
 
+template <>
 PluginInfo LyapunovAnalysis::info() {
-  PluginInfo info;
-  info.name = "lyapunov";
-  info.description =
-      "largest Lyapunov exponent from Kantz's and Rosenstein's divergence curves over three "
-      "embedding dimensions and six neighbourhood sizes; reported only where they show a "
-      "common exponential divergence; per sample and per second";
-  info.models_md_ids = "N3, N4";
   using nonlinear::numeric_spec;
-  info.params = {
-      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-      numeric_spec("max_steps", ValueKind::integer, "samples",
-                   "how far the divergence curves follow the neighbours (absent: max(30, 100 x "
-                   "delay), at most a quarter of the series)",
-                   Json(), 4),
-      numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "reference vectors whose neighbours are followed (evenly spread)", 5000, 20),
-      numeric_spec("radius", ValueKind::real, "signal unit",
-                   "middle of five Kantz neighbourhood sizes eps, a factor 2 apart (absent: six "
-                   "sizes, the median distances to the 4th, 10th, 25th, 60th, 150th and 400th "
-                   "nearest neighbour)",
-                   Json(), 0, std::numeric_limits<double>::infinity(), true),
-      nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_reference_points", 200}};
-  return info;
+  return plugin_info("lyapunov", "N3, N4",
+                     {
+                         nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+                         numeric_spec("max_steps", ValueKind::integer, "samples",
+                                      "how far the divergence curves follow the neighbours (absent: max(30, 100 x "
+                                      "delay), at most a quarter of the series)",
+                                      Json(), 4),
+                         numeric_spec("max_reference_points", ValueKind::integer, "1",
+                                      "reference vectors whose neighbours are followed (evenly spread)", 5000, 20),
+                         numeric_spec("radius", ValueKind::real, "signal unit",
+                                      "middle of five Kantz neighbourhood sizes eps, a factor 2 apart (absent: six "
+                                      "sizes, the median distances to the 4th, 10th, 25th, 60th, 150th and 400th "
+                                      "nearest neighbour)",
+                                      Json(), 0, std::numeric_limits<double>::infinity(), true),
+                         nonlinear::bootstrap_spec(), nonlinear::seed_spec()},
+                     {{"max_reference_points", 200}},
+                     "largest Lyapunov exponent from Kantz's and Rosenstein's divergence curves over three "
+                     "embedding dimensions and six neighbourhood sizes; reported only where they show a "
+                     "common exponential divergence; per sample and per second",
+                     ThreadSafety::shareable);
 }
 
 namespace {
@@ -688,6 +686,7 @@ Json curves_json(const CurveSet& set) {
 
 }  // namespace
 
+template <>
 Json LyapunovAnalysis::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto& x = series.values;
@@ -811,6 +810,7 @@ void plot_slopes(const Json& result, const std::string& title, double dt, const 
 
 }  // namespace
 
+template <>
 void LyapunovAnalysis::plot(const Json& result, const SampledSeries& series,
                             const std::filesystem::path& out_dir) const {
   const std::string title = series.name.empty() ? std::string("series") : series.name;

@@ -18,13 +18,8 @@
 
 namespace chatterlab {
 
-class LyapunovAnalysis final : public nonlinear::ParameterisedAnalysis {
- public:
-  static PluginInfo info();
-  using ParameterisedAnalysis::ParameterisedAnalysis;
-  Json analyse(const SampledSeries& series, const Json& context) const override;
-  void plot(const Json& result, const SampledSeries& series,
-            const std::filesystem::path& out_dir) const override;
-};
+// The plugin: info(), analyse() and plot() are defined in lyapunov.cpp.
+struct LyapunovMethod;
+using LyapunovAnalysis = nonlinear::MethodAnalysis<LyapunovMethod>;
 
 }  // namespace chatterlab

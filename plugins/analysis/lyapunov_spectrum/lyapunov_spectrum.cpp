@@ -12,6 +12,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -139,32 +140,29 @@ constexpr double combination_tolerance = 0.06;
 constexpr double divergence_agreement = 0.25;
 }  // namespace
 
+template <>
 PluginInfo LyapunovSpectrum::info() {
-  PluginInfo info;
-  info.name = "lyapunov_spectrum";
-  info.description =
-      "Lyapunov spectrum from local Jacobian least-squares fits with QR re-orthonormalisation; "
-      "spurious exponents flagged by one more embedding dimension and by time reversal; "
-      "Kaplan-Yorke dimension and the sum of the exponents";
-  info.models_md_ids = "N3";
   using nonlinear::numeric_spec;
   ParamSpec reversal = param_spec("time_reversal_check", ValueKind::boolean, "",
                                   "flag exponents that do not change sign for the reversed series");
   reversal.default_value = true;
-  info.params = {
-      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-      numeric_spec("evolution_steps", ValueKind::integer, "samples",
-                   "samples over which each local Jacobian maps displacements (multi-step "
-                   "evolution; absent: one delay)",
-                   Json(), 1),
-      numeric_spec("neighbours", ValueKind::integer, "1",
-                   "nearest neighbours per local fit (absent: max(20, 4 x dimension))", Json(), 2),
-      numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "local fits along the trajectory at most", 10000, 20),
-      reversal, nonlinear::bootstrap_spec(), nonlinear::seed_spec()};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_reference_points", 300}};
-  return info;
+  return plugin_info("lyapunov_spectrum", "N3",
+                     {
+                         nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+                         numeric_spec("evolution_steps", ValueKind::integer, "samples",
+                                      "samples over which each local Jacobian maps displacements (multi-step "
+                                      "evolution; absent: one delay)",
+                                      Json(), 1),
+                         numeric_spec("neighbours", ValueKind::integer, "1",
+                                      "nearest neighbours per local fit (absent: max(20, 4 x dimension))", Json(), 2),
+                         numeric_spec("max_reference_points", ValueKind::integer, "1",
+                                      "local fits along the trajectory at most", 10000, 20),
+                         reversal, nonlinear::bootstrap_spec(), nonlinear::seed_spec()},
+                     {{"max_reference_points", 300}},
+                     "Lyapunov spectrum from local Jacobian least-squares fits with QR re-orthonormalisation; "
+                     "spurious exponents flagged by one more embedding dimension and by time reversal; "
+                     "Kaplan-Yorke dimension and the sum of the exponents",
+                     ThreadSafety::shareable);
 }
 
 namespace {
@@ -416,6 +414,7 @@ std::string cross_checks(const Json& context, const GenuineSpectrum& g, double l
 
 }  // namespace
 
+template <>
 Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   FitSettings fit;
@@ -481,6 +480,7 @@ Json LyapunovSpectrum::analyse(const SampledSeries& series, const Json& context)
   return out;
 }
 
+template <>
 void LyapunovSpectrum::plot(const Json& result, const SampledSeries& series,
                             const std::filesystem::path& out_dir) const {
   plot::Curves c;

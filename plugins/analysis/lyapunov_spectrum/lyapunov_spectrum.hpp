@@ -25,13 +25,8 @@ SpectrumEstimate lyapunov_spectrum(std::span<const double> x, int dimension, int
                                    std::size_t theiler, std::size_t evolution_steps,
                                    std::size_t neighbours, std::size_t references);
 
-class LyapunovSpectrum final : public nonlinear::ParameterisedAnalysis {
- public:
-  static PluginInfo info();
-  using ParameterisedAnalysis::ParameterisedAnalysis;
-  Json analyse(const SampledSeries& series, const Json& context) const override;
-  void plot(const Json& result, const SampledSeries& series,
-            const std::filesystem::path& out_dir) const override;
-};
+// The plugin: info(), analyse() and plot() are defined in lyapunov_spectrum.cpp.
+struct LyapunovSpectrumMethod;
+using LyapunovSpectrum = nonlinear::MethodAnalysis<LyapunovSpectrumMethod>;
 
 }  // namespace chatterlab

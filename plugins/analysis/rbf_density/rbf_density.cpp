@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -104,12 +105,6 @@ DensityCriterion density_criterion(std::span<const double> samples, const RbfDen
 }
 
 PluginInfo RbfDensityAnalysis::info() {
-  PluginInfo info;
-  info.name = "rbf_density";
-  info.description =
-      "amplitude-density chatter criterion (5-22) on a Gaussian RBF density estimate of the "
-      "latest samples";
-  info.models_md_ids = "C3";
   const ParamSpec window = monitor::count_spec(
       "window_samples", "latest samples the density is estimated from (book: 50)", 50, 5);
   const ParamSpec hop =
@@ -127,10 +122,12 @@ PluginInfo RbfDensityAnalysis::info() {
   rho.min = 0.0;
   rho.max = 1.0;
   rho.min_exclusive = true;
-  info.params = {window, hop, nodes, rho, monitor::persistence_spec(10)};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"window_samples", 50}, {"rho", 0.2}};
-  return info;
+  return plugin_info("rbf_density", "C3",
+                     {window, hop, nodes, rho, monitor::persistence_spec(10)},
+                     {{"window_samples", 50}, {"rho", 0.2}},
+                     "amplitude-density chatter criterion (5-22) on a Gaussian RBF density estimate of the "
+                     "latest samples",
+                     ThreadSafety::shareable);
 }
 
 RbfDensityAnalysis::RbfDensityAnalysis(const ParamValues& params)

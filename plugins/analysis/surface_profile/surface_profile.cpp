@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "shared/metrology/surface_report.hpp"
 
 namespace chatterlab::surface {
@@ -10,19 +11,15 @@ namespace chatterlab::surface {
 namespace fs = std::filesystem;
 
 PluginInfo SurfaceAnalysis::info() {
-  PluginInfo info;
-  info.name = "surface_profile";  // names are unique across registries: the kind is "surface"
-  info.description =
-      "waviness, MOTIF, roundness and Wz|f of a profile series (the surface study's evaluation)";
-  info.models_md_ids = "W1, W2";
-  info.params = {unit_spec()};
+  std::vector<ParamSpec> params{unit_spec()};
   for (const auto& specs : {filter_specs(), process_specs(), parameter_specs()})
-    info.params.insert(info.params.end(), specs.begin(), specs.end());
+    params.insert(params.end(), specs.begin(), specs.end());
   // `type` names the plugin in a component table: the filter type is `filter` here.
-  info.params[1].key = "filter";
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"cutoff_upr", 50}, {"unit", "m"}};
-  return info;
+  params[1].key = "filter";
+  // Names are unique across registries: the kind is "surface".
+  return plugin_info("surface_profile", "W1, W2", std::move(params), {{"cutoff_upr", 50}, {"unit", "m"}},
+                     "waviness, MOTIF, roundness and Wz|f of a profile series (the surface study's evaluation)",
+                     ThreadSafety::shareable);
 }
 
 SurfaceAnalysis::SurfaceAnalysis(const ParamValues& params) : params_(params.json()) {

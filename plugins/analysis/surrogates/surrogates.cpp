@@ -15,6 +15,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -180,37 +181,34 @@ void rank(RankTest& t) {
 
 }  // namespace
 
+template <>
 PluginInfo Surrogates::info() {
-  PluginInfo info;
-  info.name = "surrogates";
-  info.description =
-      "surrogate tests for determinism (IAAFT and phase-randomised): one-sided rank tests of "
-      "the prediction error, the divergence of neighbours (for the exponent) and the "
-      "correlation-sum slope (for the dimension); time-reversal asymmetry";
-  info.models_md_ids = "N4";
   using nonlinear::numeric_spec;
   ParamSpec kinds = param_spec("kinds", ValueKind::string, "",
                                "surrogate kinds: \"iaaft\", \"phase_randomised\" or \"both\"");
   kinds.choices = {"iaaft", "phase_randomised", "both"};
   kinds.default_value = "both";
-  info.params = {
-      nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
-      numeric_spec("surrogates", ValueKind::integer, "1",
-                   "surrogates of each kind (19: one-sided tests at significance 1/20)", 19, 4,
-                   999),
-      kinds,
-      numeric_spec("max_samples", ValueKind::integer, "samples",
-                   "the tests use at most this many samples from the start of the series (the "
-                   "IAAFT iterations cost a Fourier transform of the series each)",
-                   8192, 256),
-      numeric_spec("neighbours", ValueKind::integer, "1",
-                   "neighbours of the locally constant predictor", 5, 1),
-      numeric_spec("max_reference_points", ValueKind::integer, "1",
-                   "predictions per series at most (evenly spread)", 2000, 20),
-      nonlinear::seed_spec()};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"surrogates", 4}, {"max_reference_points", 100}};
-  return info;
+  return plugin_info("surrogates", "N4",
+                     {
+                         nonlinear::delay_spec(), nonlinear::dimension_spec(), nonlinear::theiler_spec(),
+                         numeric_spec("surrogates", ValueKind::integer, "1",
+                                      "surrogates of each kind (19: one-sided tests at significance 1/20)", 19, 4,
+                                      999),
+                         kinds,
+                         numeric_spec("max_samples", ValueKind::integer, "samples",
+                                      "the tests use at most this many samples from the start of the series (the "
+                                      "IAAFT iterations cost a Fourier transform of the series each)",
+                                      8192, 256),
+                         numeric_spec("neighbours", ValueKind::integer, "1",
+                                      "neighbours of the locally constant predictor", 5, 1),
+                         numeric_spec("max_reference_points", ValueKind::integer, "1",
+                                      "predictions per series at most (evenly spread)", 2000, 20),
+                         nonlinear::seed_spec()},
+                     {{"surrogates", 4}, {"max_reference_points", 100}},
+                     "surrogate tests for determinism (IAAFT and phase-randomised): one-sided rank tests of "
+                     "the prediction error, the divergence of neighbours (for the exponent) and the "
+                     "correlation-sum slope (for the dimension); time-reversal asymmetry",
+                     ThreadSafety::shareable);
 }
 
 namespace {
@@ -392,6 +390,7 @@ Json tests_json(const Tests& t, std::size_t samples_used) {
 
 }  // namespace
 
+template <>
 Json Surrogates::analyse(const SampledSeries& series, const Json& context) const {
   const auto embedding = resolve_embedding(params_, series, context);
   const auto max_samples = std::size_t(params_.integer("max_samples"));
@@ -420,6 +419,7 @@ Json Surrogates::analyse(const SampledSeries& series, const Json& context) const
   return out;
 }
 
+template <>
 void Surrogates::plot(const Json& result, const SampledSeries& series,
                       const std::filesystem::path& out_dir) const {
   const std::string title = series.name.empty() ? std::string("series") : series.name;

@@ -37,13 +37,8 @@ double prediction_error(std::span<const double> x, int dimension, int delay,
 // <(x_{n+tau} - x_n)^3> / <(x_{n+tau} - x_n)^2>^{3/2}: zero for time-reversible processes.
 double time_reversal_asymmetry(std::span<const double> x, int delay);
 
-class Surrogates final : public nonlinear::ParameterisedAnalysis {
- public:
-  static PluginInfo info();
-  using ParameterisedAnalysis::ParameterisedAnalysis;
-  Json analyse(const SampledSeries& series, const Json& context) const override;
-  void plot(const Json& result, const SampledSeries& series,
-            const std::filesystem::path& out_dir) const override;
-};
+// The plugin: info(), analyse() and plot() are defined in surrogates.cpp.
+struct SurrogatesMethod;
+using Surrogates = nonlinear::MethodAnalysis<SurrogatesMethod>;
 
 }  // namespace chatterlab

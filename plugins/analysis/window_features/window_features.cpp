@@ -4,15 +4,11 @@
 
 #include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
 PluginInfo WindowFeaturesAnalysis::info() {
-  PluginInfo info;
-  info.name = "window_features";
-  info.description =
-      "per-window variance, lag-1 correlation and AR(1) residual variance of a signal";
-  info.models_md_ids = "C1";
   const ParamSpec window =
       monitor::count_spec("window_samples", "samples per window (the book uses 10)", 10, 3);
   ParamSpec hop = param_spec("hop_samples", ValueKind::integer, "1",
@@ -20,10 +16,11 @@ PluginInfo WindowFeaturesAnalysis::info() {
                              "consecutive non-overlapping windows)");
   hop.min = 1;
   hop.optional = true;
-  info.params = {window, hop};
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"window_samples", 10}};
-  return info;
+  return plugin_info("window_features", "C1",
+                     {window, hop},
+                     {{"window_samples", 10}},
+                     "per-window variance, lag-1 correlation and AR(1) residual variance of a signal",
+                     ThreadSafety::shareable);
 }
 
 WindowFeaturesAnalysis::WindowFeaturesAnalysis(const ParamValues& params)

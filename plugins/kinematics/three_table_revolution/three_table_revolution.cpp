@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "chatterlab/param_table.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -43,18 +44,14 @@ const ParamTable<ThreeTableParameters>& parameters_table() {
 }  // namespace
 
 PluginInfo ThreeTableRevolution::info() {
-  PluginInfo info;
-  info.name = "three_table_revolution";
-  info.description =
-      "three-table stepper machine for solids of revolution: lower, middle table and the nut "
-      "turning the upper table (P4 inverse kinematics)";
-  info.models_md_ids = "P1, P2, P4";
-  info.params = parameters_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"pivot_to_nut_mm", 300.0},  {"fixture_to_pivot_mm", 250.0},
-                         {"screw_pitch_mm", 12.0},    {"gear_ratio", 10.0},
-                         {"step_angle_deg", 1.0},     {"max_pulse_rate_hz", 100.0}};
-  return info;
+  return plugin_info("three_table_revolution", "P1, P2, P4",
+                     parameters_table().specs(),
+                     {{"pivot_to_nut_mm", 300.0},  {"fixture_to_pivot_mm", 250.0},
+                      {"screw_pitch_mm", 12.0},    {"gear_ratio", 10.0},
+                      {"step_angle_deg", 1.0},     {"max_pulse_rate_hz", 100.0}},
+                     "three-table stepper machine for solids of revolution: lower, middle table and the nut "
+                     "turning the upper table (P4 inverse kinematics)",
+                     ThreadSafety::shareable);
 }
 
 ThreeTableRevolution::ThreeTableRevolution(const ParamValues& params) {

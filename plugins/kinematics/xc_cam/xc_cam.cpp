@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "chatterlab/param_table.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -30,19 +31,15 @@ const ParamTable<XcCamParameters>& parameters_table() {
 }  // namespace
 
 PluginInfo XcCam::info() {
-  PluginInfo info;
-  info.name = "xc_cam";
-  info.description =
-      "X-C cam grinder: C axis turns the cam so the wheel centre lies on the X slide (K2 tangent "
-      "point tracking)";
-  info.models_md_ids = "K2";
-  info.params = parameters_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"wheel_radius_mm", 200.0},
-                         {"c_deg_per_pulse", 0.001},
-                         {"x_mm_per_pulse", 0.0001},
-                         {"max_pulse_rate_hz", 100000.0}};
-  return info;
+  return plugin_info("xc_cam", "K2",
+                     parameters_table().specs(),
+                     {{"wheel_radius_mm", 200.0},
+                      {"c_deg_per_pulse", 0.001},
+                      {"x_mm_per_pulse", 0.0001},
+                      {"max_pulse_rate_hz", 100000.0}},
+                     "X-C cam grinder: C axis turns the cam so the wheel centre lies on the X slide (K2 tangent "
+                     "point tracking)",
+                     ThreadSafety::shareable);
 }
 
 XcCam::XcCam(const ParamValues& params) {

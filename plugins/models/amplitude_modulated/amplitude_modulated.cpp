@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "chatterlab/param_table.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -77,18 +78,15 @@ AmplitudeModulated::AmplitudeModulated(const ParamValues& values)
     : DerivedModel(AmplitudeModulatedEquations(parameters_table().read(values))) {}
 
 PluginInfo AmplitudeModulated::info() {
-  PluginInfo info;
-  info.name = "amplitude_modulated";
-  info.description = "wheel-regenerative chatter with the grinding stiffness modulated once per "
-                     "wheel revolution (G7, eqs 3-9..3-20): beats, sidebands at +/- k n_g/60";
-  info.params = parameters_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.models_md_ids = "G7";
-  info.example_params = Json::parse(R"({
-      "frequency_hz": 800.0, "damping_ratio": 0.05, "stiffness_n_per_m": 5.0e7,
-      "grinding_stiffness_n_per_m": 5.0e6, "contact_stiffness_n_per_m": 1.0e8,
-      "modulation_depth": 0.3, "wheel_speed_rpm": 1450.0 })");
-  return info;
+  return plugin_info("amplitude_modulated", "G7",
+                     parameters_table().specs(),
+                     Json::parse(R"({
+                         "frequency_hz": 800.0, "damping_ratio": 0.05, "stiffness_n_per_m": 5.0e7,
+                         "grinding_stiffness_n_per_m": 5.0e6, "contact_stiffness_n_per_m": 1.0e8,
+                         "modulation_depth": 0.3, "wheel_speed_rpm": 1450.0 })"),
+                     "wheel-regenerative chatter with the grinding stiffness modulated once per "
+                     "wheel revolution (G7, eqs 3-9..3-20): beats, sidebands at +/- k n_g/60",
+                     ThreadSafety::shareable);
 }
 
 CHATTERLAB_REGISTER_MODEL(AmplitudeModulated);

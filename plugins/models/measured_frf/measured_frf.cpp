@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -248,15 +249,11 @@ MeasuredFrfModel::MeasuredFrfModel(const ParamValues& values)
 }
 
 PluginInfo MeasuredFrfModel::info() {
-  PluginInfo info;
-  info.name = "measured_frf";
-  info.description =
-      "Plunge grinding (G1 eq 2-16) with the machine compliance from a measured FRF: its fitted modes, or the FRF itself";
-  info.params = measured_frf_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.models_md_ids = "G1, G8";
-  info.example_params = example_parameters();
-  return info;
+  return plugin_info("measured_frf", "G1, G8",
+                     measured_frf_table().specs(),
+                     example_parameters(),
+                     "Plunge grinding (G1 eq 2-16) with the machine compliance from a measured FRF: its fitted modes, or the FRF itself",
+                     ThreadSafety::shareable);
 }
 
 std::unique_ptr<CharacteristicFunction> MeasuredFrfModel::characteristic() const {

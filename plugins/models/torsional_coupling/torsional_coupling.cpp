@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "chatterlab/param_table.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "shared/plunge_dynamics/process_scaling.hpp"
 
 namespace chatterlab {
@@ -177,21 +178,18 @@ Json TorsionalCoupling::parameters_at(const ProcessConditions& reference_given,
 }
 
 PluginInfo TorsionalCoupling::info() {
-  PluginInfo info;
-  info.name = "torsional_coupling";
-  info.description = "transverse, workpiece-torsion and wheel-torsion modes coupled by a "
-                     "speed-dependent grinding force (G5, eqs 2-79..2-87)";
-  info.params = parameters_table().specs();
-  info.thread_safety = ThreadSafety::shareable;  // time-domain instances are per simulation
-  info.models_md_ids = "G5";
-  info.example_params = Json::parse(R"({
-      "mass_kg": 50.0, "damping_n_s_per_m": 8000.0, "stiffness_n_per_m": 5.0e7,
-      "work_inertia_kg_m2": 0.05, "work_torsional_damping_n_m_s": 2.0, "work_torsional_stiffness_n_m": 2.0e4,
-      "wheel_inertia_kg_m2": 0.3, "wheel_torsional_damping_n_m_s": 5.0, "wheel_torsional_stiffness_n_m": 5.0e4,
-      "work_radius_m": 0.05, "wheel_radius_m": 0.2, "work_speed_rpm": 55.0, "wheel_speed_rpm": 1450.0,
-      "grinding_width_m": 0.035, "removal_coefficient_n_per_m2": 1.5e9, "grinding_ratio": 30.0,
-      "force_angle_deg": 20.0 })");
-  return info;
+  return plugin_info("torsional_coupling", "G5",
+                     parameters_table().specs(),
+                     Json::parse(R"({
+                         "mass_kg": 50.0, "damping_n_s_per_m": 8000.0, "stiffness_n_per_m": 5.0e7,
+                         "work_inertia_kg_m2": 0.05, "work_torsional_damping_n_m_s": 2.0, "work_torsional_stiffness_n_m": 2.0e4,
+                         "wheel_inertia_kg_m2": 0.3, "wheel_torsional_damping_n_m_s": 5.0, "wheel_torsional_stiffness_n_m": 5.0e4,
+                         "work_radius_m": 0.05, "wheel_radius_m": 0.2, "work_speed_rpm": 55.0, "wheel_speed_rpm": 1450.0,
+                         "grinding_width_m": 0.035, "removal_coefficient_n_per_m2": 1.5e9, "grinding_ratio": 30.0,
+                         "force_angle_deg": 20.0 })"),
+                     "transverse, workpiece-torsion and wheel-torsion modes coupled by a "
+                     "speed-dependent grinding force (G5, eqs 2-79..2-87)",
+                     ThreadSafety::shareable);  // time-domain instances are per simulation
 }
 
 CHATTERLAB_REGISTER_MODEL(TorsionalCoupling);

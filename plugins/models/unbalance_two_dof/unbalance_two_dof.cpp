@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "chatterlab/param_table.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -116,19 +117,16 @@ std::vector<Json> UnbalanceTwoDof::indicator_values() const {
 }
 
 PluginInfo UnbalanceTwoDof::info() {
-  PluginInfo info;
-  info.name = "unbalance_two_dof";
-  info.description = "two-DOF wheel/work system forced by wheel unbalance U w^2 cos wt (G6, eqs "
-                     "3-1..3-6): forced response, Z = n_g/n_w lobes on the work";
-  info.params = parameters_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.models_md_ids = "G6";
-  info.example_params = Json::parse(R"({
-      "mass_1_kg": 60.0, "damping_1_n_s_per_m": 6000.0, "stiffness_1_n_per_m": 5.0e7,
-      "mass_2_kg": 20.0, "damping_2_n_s_per_m": 3000.0, "stiffness_2_n_per_m": 3.0e7,
-      "contact_stiffness_n_per_m": 1.0e8, "wheel_wear_stiffness_n_per_m": 1.0e9,
-      "unbalance_kg_m": 1.0e-4, "wheel_speed_rpm": 1450.0, "work_speed_rpm": 55.0 })");
-  return info;
+  return plugin_info("unbalance_two_dof", "G6",
+                     parameters_table().specs(),
+                     Json::parse(R"({
+                         "mass_1_kg": 60.0, "damping_1_n_s_per_m": 6000.0, "stiffness_1_n_per_m": 5.0e7,
+                         "mass_2_kg": 20.0, "damping_2_n_s_per_m": 3000.0, "stiffness_2_n_per_m": 3.0e7,
+                         "contact_stiffness_n_per_m": 1.0e8, "wheel_wear_stiffness_n_per_m": 1.0e9,
+                         "unbalance_kg_m": 1.0e-4, "wheel_speed_rpm": 1450.0, "work_speed_rpm": 55.0 })"),
+                     "two-DOF wheel/work system forced by wheel unbalance U w^2 cos wt (G6, eqs "
+                     "3-1..3-6): forced response, Z = n_g/n_w lobes on the work",
+                     ThreadSafety::shareable);
 }
 
 CHATTERLAB_REGISTER_MODEL(UnbalanceTwoDof);

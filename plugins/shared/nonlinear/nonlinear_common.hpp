@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -21,13 +22,28 @@
 
 namespace chatterlab::nonlinear {
 
-// ---------------------------------------------------------------- plugin base
-// Base of the analysis plugins here: holds the validated parameter table.
-class ParameterisedAnalysis : public Analysis {
+// ---------------------------------------------------------------- plugin class
+// Every nonlinear analysis plugin (N1-N4) is the same kind of class: its validated parameters
+// and three functions of them. This template declares it once; a method is named by a tag type
+// and defines the three members as explicit specialisations in its own .cpp:
+//
+//     struct LyapunovMethod;                                          // lyapunov.hpp
+//     using LyapunovAnalysis = nonlinear::MethodAnalysis<LyapunovMethod>;
+//
+//     template <> PluginInfo LyapunovAnalysis::info() { ... }         // lyapunov.cpp
+//     template <> Json LyapunovAnalysis::analyse(const SampledSeries&, const Json&) const { ... }
+//     template <> void LyapunovAnalysis::plot(const Json&, const SampledSeries&, ...) const { ... }
+//     CHATTERLAB_REGISTER_ANALYSIS(chatterlab::LyapunovAnalysis);
+template <class Method>
+class MethodAnalysis final : public Analysis {
  public:
-  explicit ParameterisedAnalysis(const ParamValues& params) : params_(params) {}
+  static PluginInfo info();
+  explicit MethodAnalysis(const ParamValues& params) : params_(params) {}
+  Json analyse(const SampledSeries& series, const Json& context) const override;
+  void plot(const Json& result, const SampledSeries& series,
+            const std::filesystem::path& out_dir) const override;
 
- protected:
+ private:
   ParamValues params_;
 };
 

@@ -12,10 +12,11 @@
 #include "chatterlab/kinematics.hpp"
 #include "chatterlab/kit/output.hpp"
 #include "chatterlab/kit/settings.hpp"
-#include "chatterlab/param_table.hpp"
 #include "chatterlab/output_files.hpp"
+#include "chatterlab/param_table.hpp"
 #include "chatterlab/planner/cam_planning.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "chatterlab/signal_io.hpp"
 
 namespace chatterlab::planner {
@@ -277,15 +278,11 @@ constexpr const char* columns[] = {"seed_points_max_fit_error_mm", "max_fit_erro
 }  // namespace
 
 PluginInfo CamPlanKind::info() {
-  PluginInfo info;
-  info.name = "cam_plan";
-  info.description = "X-C cam grinding: spline fit of a lift table with adaptive insertion, "
-                     "tangent-point tracking, pulses and replayed profile error";
-  info.models_md_ids = "K1-K3";
-  info.params = cam_plan_settings_specs();
-  info.thread_safety = ThreadSafety::copy_per_thread;
-  info.example_params = {{"segment_angle_deg", 1.0}};
-  return info;
+  return plugin_info("cam_plan", "K1-K3",
+                     cam_plan_settings_specs(),
+                     {{"segment_angle_deg", 1.0}},
+                     "X-C cam grinding: spline fit of a lift table with adaptive insertion, "
+                     "tangent-point tracking, pulses and replayed profile error");
 }
 
 void CamPlanKind::validate(Json& document, const SourceMap& sources) const {

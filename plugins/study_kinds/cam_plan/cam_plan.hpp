@@ -20,7 +20,6 @@ class CamPlanKind final : public StudyKind {
   std::vector<std::string> output_columns(const Json& document) const override;
   std::vector<Json> run_point(const Json& point_document,
                               const PointContext& context) const override;
-  void write_artifacts(const Study&, const ResultTable&, const std::filesystem::path&) const override {}
 };
 
 }  // namespace chatterlab::planner

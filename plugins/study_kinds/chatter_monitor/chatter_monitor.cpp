@@ -13,6 +13,7 @@
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "chatterlab/signal_io.hpp"
 #include "shared/monitoring/features.hpp"
 #include "shared/monitoring/monitor_common.hpp"
@@ -255,16 +256,11 @@ SampledSeries monitor_input_signal(const Json& input) {
 }
 
 PluginInfo ChatterMonitor::info() {
-  PluginInfo info;
-  info.name = "chatter_monitor";
-  info.description =
-      "chatter onset monitoring of one signal (window features, 3-4-1 network, RBF amplitude "
-      "density): alarm times, scores, training and test results";
-  info.models_md_ids = "C1, C2, C3";
-  info.params = monitor_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = Json::object();
-  return info;
+  return plugin_info("chatter_monitor", "C1, C2, C3",
+                     monitor_table().specs(),
+                     Json::object(),
+                     "chatter onset monitoring of one signal (window features, 3-4-1 network, RBF amplitude "
+                     "density): alarm times, scores, training and test results");
 }
 
 void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
@@ -454,12 +450,6 @@ std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
   }
   write_json_file(dir / "summary.json", summary);
   return outputs;
-}
-
-void ChatterMonitor::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                     const fs::path& /*out_dir*/) const {
-  // Everything is per point (artefact directory): a grid of monitors (e.g. over rho) is compared
-  // through results.csv.
 }
 
 }  // namespace chatterlab

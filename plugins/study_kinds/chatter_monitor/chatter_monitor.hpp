@@ -35,8 +35,6 @@ class ChatterMonitor final : public StudyKind {
   std::vector<std::string> output_columns(const Json& document) const override;
   std::vector<Json> run_point(const Json& point_document,
                               const PointContext& context) const override;
-  void write_artifacts(const Study& study, const ResultTable& results,
-                       const std::filesystem::path& out_dir) const override;
 };
 
 // The [input] signal of a validated document (file resolved, sample rate known).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -111,16 +112,11 @@ const ParamTable<ComplianceChartSettings>& compliance_chart_settings_table() {
 }
 
 PluginInfo ComplianceChartKind::info() {
-  PluginInfo info;
-  info.name = "compliance_chart";
-  info.description =
-      "stability chart of book fig 2-4: machine compliance curve H(jw) against the process line "
-      "Re = -(1/2)(2/kc + 1/kg + 1/kw) (G1 eq 2-21)";
-  info.models_md_ids = "G1 (eq 2-21), G2";
-  info.params = compliance_chart_settings_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_frequency_hz", 1000.0}};
-  return info;
+  return plugin_info("compliance_chart", "G1 (eq 2-21), G2",
+                     compliance_chart_settings_table().specs(),
+                     {{"max_frequency_hz", 1000.0}},
+                     "stability chart of book fig 2-4: machine compliance curve H(jw) against the process line "
+                     "Re = -(1/2)(2/kc + 1/kg + 1/kw) (G1 eq 2-21)");
 }
 
 void ComplianceChartKind::validate(Json& document, const SourceMap& sources) const {
@@ -176,10 +172,6 @@ void ComplianceChartKind::write_artifacts(const Study& study, const ResultTable&
   kit::Figures figures;
   kit::plot_column(axes, results, figure, out_dir, "line_depth_ratio", figures);
   figures.finish();
-}
-
-bool ComplianceChartKind::requires_serial(const Json& document) const {
-  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

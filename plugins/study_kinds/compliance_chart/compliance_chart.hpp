@@ -47,7 +47,6 @@ class ComplianceChartKind final : public StudyKind {
   std::vector<Json> run_point(const Json& point_document, const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
-  bool requires_serial(const Json& document) const override;
 };
 
 }  // namespace chatterlab

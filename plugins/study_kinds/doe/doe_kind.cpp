@@ -10,13 +10,14 @@
 #include <set>
 
 #include "study_kinds/doe/doe.hpp"
+#include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
 #include "chatterlab/kit/plots.hpp"
 #include "chatterlab/kit/settings.hpp"
-#include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -293,16 +294,11 @@ void plot_doe(const std::string& title, const Design& d,
 }  // namespace
 
 PluginInfo DoeKind::info() {
-  PluginInfo info;
-  info.name = "doe";
-  info.description =
-      "orthogonal-array experiment: range analysis, ANOVA with F tests and p-values, regression "
-      "fits with SSE";
-  info.models_md_ids = "S4";
-  info.params = doe_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"goal", "minimize"}};
-  return info;
+  return plugin_info("doe", "S4",
+                     doe_table().specs(),
+                     {{"goal", "minimize"}},
+                     "orthogonal-array experiment: range analysis, ANOVA with F tests and p-values, regression "
+                     "fits with SSE");
 }
 
 void DoeKind::validate(Json& document, const SourceMap& sources) const {
@@ -477,11 +473,6 @@ std::vector<Json> DoeKind::run_point(const Json& point_document,
   out.emplace_back(anova.total.s);
   out.emplace_back(best);
   return out;
-}
-
-void DoeKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                              const fs::path& /*out_dir*/) const {
-  // Figures belong to the point (drawn by run_point into its artefact directory).
 }
 
 }  // namespace chatterlab

@@ -12,13 +12,14 @@
 
 #include "study_kinds/error_separation/cylindricity.hpp"
 #include "study_kinds/error_separation/error_separation.hpp"
+#include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
 #include "chatterlab/kit/plots.hpp"
 #include "chatterlab/kit/settings.hpp"
-#include "chatterlab/errors.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -682,16 +683,11 @@ void plot_cylinder(const std::string& title, const std::string& z_name, const es
 }  // namespace
 
 PluginInfo ErrorSeparationKind::info() {
-  PluginInfo info;
-  info.name = "error_separation";
-  info.description =
-      "roundness and spindle error motion from 2-8 probes by error separation (three-point, time "
-      "recursion, n-point, two-point), cylindricity with a section column";
-  info.models_md_ids = "E1, E2, E3, E4, E5, E6";
-  info.params = separation_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_harmonic", 64}, {"fir_passband_upr", 32.0}};
-  return info;
+  return plugin_info("error_separation", "E1, E2, E3, E4, E5, E6",
+                     separation_table().specs(),
+                     {{"max_harmonic", 64}, {"fir_passband_upr", 32.0}},
+                     "roundness and spindle error motion from 2-8 probes by error separation (three-point, time "
+                     "recursion, n-point, two-point), cylindricity with a section column");
 }
 
 void ErrorSeparationKind::validate(Json& document, const SourceMap& sources) const {
@@ -1060,11 +1056,6 @@ std::vector<Json> ErrorSeparationKind::run_point(const Json& point_document,
                         100.0 * p.degradation.lost.lost_share};
   if (p.cyl) out.emplace_back(p.cyl->cylindricity);
   return out;
-}
-
-void ErrorSeparationKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                          const fs::path& /*out_dir*/) const {
-  // Every figure belongs to one point and is drawn by run_point into its artefact directory.
 }
 
 }  // namespace chatterlab

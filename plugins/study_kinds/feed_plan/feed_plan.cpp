@@ -5,6 +5,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/planner/feed_planning.hpp"
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab::planner {
 
@@ -17,16 +18,11 @@ constexpr const char* columns[] = {"total_time_s", "lower_bound_s", "gap_percent
 }  // namespace
 
 PluginInfo FeedPlanKind::info() {
-  PluginInfo info;
-  info.name = "feed_plan";
-  info.description =
-      "certified time-optimal stepper pulse schedule for a solid of revolution, with replayed "
-      "profile error, wheel limits and wear distribution";
-  info.models_md_ids = "P1-P8";
-  info.params = feed_plan_settings_specs();
-  info.thread_safety = ThreadSafety::copy_per_thread;
-  info.example_params = {{"segment_length_mm", 0.2}};
-  return info;
+  return plugin_info("feed_plan", "P1-P8",
+                     feed_plan_settings_specs(),
+                     {{"segment_length_mm", 0.2}},
+                     "certified time-optimal stepper pulse schedule for a solid of revolution, with replayed "
+                     "profile error, wheel limits and wear distribution");
 }
 
 void FeedPlanKind::validate(Json& document, const SourceMap& sources) const {
@@ -51,11 +47,6 @@ std::vector<Json> FeedPlanKind::run_point(const Json& doc, const PointContext& c
           f.rms_profile_error_mm,
           f.max_edge_radius_mm,
           f.schedule_certified};
-}
-
-void FeedPlanKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                   const std::filesystem::path& /*out_dir*/) const {
-  // Every figure belongs to one plan and is drawn by run_point into its artefact directory.
 }
 
 }  // namespace chatterlab::planner

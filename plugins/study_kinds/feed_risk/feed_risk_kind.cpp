@@ -14,6 +14,7 @@
 #include "chatterlab/model.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "study_kinds/feed_risk/feed_risk.hpp"
 #include "chatterlab/kit/model.hpp"
 #include "chatterlab/kit/output.hpp"
@@ -854,17 +855,12 @@ std::vector<Json> result_row(const PointSetup& in, const Rated& base, const Repl
 }  // namespace
 
 PluginInfo FeedRiskKind::info() {
-  PluginInfo info;
-  info.name = "feed_risk";
-  info.description =
-      "chatter risk along a feed plan: rightmost root per segment, accumulated amplification, risk "
-      "class, simulation along the schedule, chatter-aware spindle speed";
-  info.models_md_ids = "P, G1, G3, G4, S2";
-  info.params = feed_risk_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"reference_contact_width_mm", 35.0}, {"reference_work_radius_mm", 50.0},
-                         {"depth_of_cut_mm", 0.01}};
-  return info;
+  return plugin_info("feed_risk", "P, G1, G3, G4, S2",
+                     feed_risk_table().specs(),
+                     {{"reference_contact_width_mm", 35.0}, {"reference_work_radius_mm", 50.0},
+                      {"depth_of_cut_mm", 0.01}},
+                     "chatter risk along a feed plan: rightmost root per segment, accumulated amplification, risk "
+                     "class, simulation along the schedule, chatter-aware spindle speed");
 }
 
 void FeedRiskKind::validate(Json& document, const SourceMap& sources) const {
@@ -900,15 +896,6 @@ std::vector<Json> FeedRiskKind::run_point(const Json& document, const PointConte
   }
   if (!context.artifact_dir.empty()) write_point_files(document, context, in, base, re ? &*re : nullptr, summary);
   return result_row(in, base, re ? &*re : nullptr, summary);
-}
-
-void FeedRiskKind::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                   const fs::path& /*out_dir*/) const {
-  // Every figure belongs to one plan and is drawn by run_point into its artefact directory.
-}
-
-bool FeedRiskKind::requires_serial(const Json& document) const {
-  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab::feed_risk

@@ -23,9 +23,6 @@ class FeedRiskKind final : public StudyKind {
   void validate(Json& document, const SourceMap& sources) const override;
   std::vector<std::string> output_columns(const Json& document) const override;
   std::vector<Json> run_point(const Json& point_document, const PointContext& context) const override;
-  void write_artifacts(const Study& study, const ResultTable& results,
-                       const std::filesystem::path& out_dir) const override;
-  bool requires_serial(const Json& document) const override;
 };
 
 }  // namespace chatterlab::feed_risk

@@ -8,11 +8,12 @@
 #include <optional>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
-#include "chatterlab/kit/data.hpp"
 #include "chatterlab/errors.hpp"
+#include "chatterlab/kit/data.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "chatterlab/signal_io.hpp"
 
 namespace chatterlab {
@@ -79,19 +80,14 @@ std::unique_ptr<Analysis> build(const std::string& name, const Json& params) {
 }  // namespace
 
 PluginInfo SignalAnalysis::info() {
-  PluginInfo info;
-  info.name = "signal_analysis";
-  info.description =
-      "nonlinear analysis of one measured or simulated signal: embedding, correlation "
-      "dimension, Lyapunov exponents, surrogates (any registered analysis), a verdict on chaos "
-      "gated by the surrogate tests, with summary.json";
-  info.models_md_ids = "N1-N4";
-  // The [input] table; [analysis] holds `methods` (a list of analysis names, default
-  // embedding, correlation_dimension, lyapunov, surrogates) and one optional table per method.
-  info.params = input_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"file", "signal.csv"}, {"column", "x"}, {"sample_rate_hz", 1000.0}};
-  return info;
+  return plugin_info("signal_analysis", "N1-N4",
+                     // The [input] table; [analysis] holds `methods` (a list of analysis names, default
+                     // embedding, correlation_dimension, lyapunov, surrogates) and one optional table per method.
+                     input_table().specs(),
+                     {{"file", "signal.csv"}, {"column", "x"}, {"sample_rate_hz", 1000.0}},
+                     "nonlinear analysis of one measured or simulated signal: embedding, correlation "
+                     "dimension, Lyapunov exponents, surrogates (any registered analysis), a verdict on chaos "
+                     "gated by the surrogate tests, with summary.json");
 }
 
 SampledSeries SignalAnalysis::load_series(const Json& input) {
@@ -536,11 +532,6 @@ std::vector<Json> SignalAnalysis::run_point(const Json& point_document,
   }
   out.push_back(summary["verdict"]["verdict"]);
   return out;
-}
-
-void SignalAnalysis::write_artifacts(const Study& /*study*/, const ResultTable& /*results*/,
-                                     const fs::path& /*out_dir*/) const {
-  // Every figure belongs to one signal: drawn per point by run_point.
 }
 
 }  // namespace chatterlab

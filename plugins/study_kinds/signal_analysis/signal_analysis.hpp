@@ -33,8 +33,6 @@ class SignalAnalysis final : public StudyKind {
   std::vector<std::string> output_columns(const Json& document) const override;
   std::vector<Json> run_point(const Json& point_document,
                               const PointContext& context) const override;
-  void write_artifacts(const Study& study, const ResultTable& results,
-                       const std::filesystem::path& out_dir) const override;
 
   // The series of a validated document (file re-read), named after its column; without a sample
   // rate its unit is "sample" (interval 1).

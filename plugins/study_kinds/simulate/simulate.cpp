@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "study_kinds/simulate/closed_form_columns.hpp"
 #include "study_kinds/simulate/simulate_point.hpp"
 
@@ -59,15 +60,11 @@ const ParamTable<SimulateSettings>& simulate_settings_table() {
 }
 
 PluginInfo Simulate::info() {
-  PluginInfo info;
-  info.name = "simulate";
-  info.description = "time-domain simulation of the model (angle-indexed regenerative surfaces, "
-                     "one-sided contact): growth rate, chatter frequency, surfaces";
-  info.models_md_ids = "G1, G5, G6, G7";
-  info.params = simulate_settings_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"duration_s", 0.2}, {"sample_rate_hz", 10000.0}};
-  return info;
+  return plugin_info("simulate", "G1, G5, G6, G7",
+                     simulate_settings_table().specs(),
+                     {{"duration_s", 0.2}, {"sample_rate_hz", 10000.0}},
+                     "time-domain simulation of the model (angle-indexed regenerative surfaces, "
+                     "one-sided contact): growth rate, chatter frequency, surfaces");
 }
 
 void Simulate::validate(Json& document, const SourceMap& sources) const {
@@ -160,10 +157,6 @@ void Simulate::write_artifacts(const Study& study, const ResultTable& results, c
   kit::plot_column(axes, results, {col_frequency, title + ": dominant frequency", "dominant frequency [Hz]"},
                    out_dir, "dominant_frequency", figures);
   figures.finish();
-}
-
-bool Simulate::requires_serial(const Json& document) const {
-  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

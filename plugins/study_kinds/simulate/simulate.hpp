@@ -43,7 +43,6 @@ class Simulate final : public StudyKind {
   std::vector<Json> run_point(const Json& point_document, const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
-  bool requires_serial(const Json& document) const override;
 
  private:
   // The optional [surface] table (part quality of the final work surface).

@@ -9,6 +9,7 @@
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/modal_fit.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "study_kinds/stability_lobes/lobe_results.hpp"
 
 namespace chatterlab {
@@ -319,19 +320,14 @@ std::vector<Json> outputs(const LobeStudy& study, const LobeResults& r) {
 }  // namespace
 
 PluginInfo StabilityLobes::info() {
-  PluginInfo info;
-  info.name = "stability_lobes";
-  info.description =
-      "lobe diagram: the critical value of one model parameter over a speed, traced along each lobe, with chatter "
-      "frequency, sensitivities, chatter-free windows and time to chatter";
-  info.models_md_ids = "G1, G3, G8";
-  info.params = lobes_settings_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"parameter", "model.contact_stiffness_n_per_m"},
-                         {"parameter_range", {1e5, 1e9}},
-                         {"speed", "work_speed_rpm"},
-                         {"speed_values", {40, 55, 70}}};
-  return info;
+  return plugin_info("stability_lobes", "G1, G3, G8",
+                     lobes_settings_table().specs(),
+                     {{"parameter", "model.contact_stiffness_n_per_m"},
+                      {"parameter_range", {1e5, 1e9}},
+                      {"speed", "work_speed_rpm"},
+                      {"speed_values", {40, 55, 70}}},
+                     "lobe diagram: the critical value of one model parameter over a speed, traced along each lobe, with chatter "
+                     "frequency, sensitivities, chatter-free windows and time to chatter");
 }
 
 void StabilityLobes::validate(Json& document, const SourceMap& sources) const {
@@ -387,8 +383,6 @@ void StabilityLobes::write_artifacts(const Study& study, const ResultTable& resu
   kit::plot_column(axes, results, figure, out_dir, "lowest_critical_value", figures);
   figures.finish();
 }
-
-bool StabilityLobes::requires_serial(const Json& document) const { return model_is_serial(document.at("model")); }
 
 }  // namespace chatterlab
 

@@ -9,6 +9,7 @@
 
 #include "chatterlab/closed_form.hpp"
 #include "chatterlab/delay_system.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "study_kinds/stability_map/floquet_route.hpp"
 
 namespace chatterlab {
@@ -241,18 +242,13 @@ std::vector<std::string> floquet_columns(const Json& document, bool with_constan
 }  // namespace
 
 PluginInfo StabilityMap::info() {
-  PluginInfo info;
-  info.name = "stability_map";
-  info.description =
-      "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
-      "and a certificate that no root lies further right; with [suppression] (modulated wheel or "
-      "work speed), or for a model whose coefficients repeat once per revolution (G7), the Floquet "
-      "growth rate of the periodic linearisation";
-  info.models_md_ids = "G1, G3, G5, G6, G7, S2, S3";
-  info.params = kit::stability_settings_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"max_frequency_hz", 500.0}};
-  return info;
+  return plugin_info("stability_map", "G1, G3, G5, G6, G7, S2, S3",
+                     kit::stability_settings_table().specs(),
+                     {{"max_frequency_hz", 500.0}},
+                     "rightmost characteristic root per grid point: growth rate, chatter frequency, stability "
+                     "and a certificate that no root lies further right; with [suppression] (modulated wheel or "
+                     "work speed), or for a model whose coefficients repeat once per revolution (G7), the Floquet "
+                     "growth rate of the periodic linearisation");
 }
 
 void StabilityMap::validate(Json& document, const SourceMap& sources) const {
@@ -327,10 +323,6 @@ void StabilityMap::write_artifacts(const Study& study, const ResultTable& result
   plot_roots(axes, study, results, out_dir, figures);
   plot_closed_form_margins(axes, study, results, out_dir, figures);
   figures.finish();
-}
-
-bool StabilityMap::requires_serial(const Json& document) const {
-  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

@@ -25,7 +25,6 @@ class StabilityMap final : public StudyKind {
                               const PointContext& context) const override;
   void write_artifacts(const Study& study, const ResultTable& results,
                        const std::filesystem::path& out_dir) const override;
-  bool requires_serial(const Json& document) const override;
 };
 
 }  // namespace chatterlab

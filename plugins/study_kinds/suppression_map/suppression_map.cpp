@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "chatterlab/process_conditions.hpp"
 #include "chatterlab/suppression.hpp"
 #include "study_kinds/suppression_map/suppression_measures.hpp"
@@ -641,15 +642,11 @@ void write_reference(const Study& study, const fs::path& out_dir) {
 // ------------------------------------------------------------------ the kind
 
 PluginInfo SuppressionMap::info() {
-  PluginInfo info;
-  info.name = "suppression_map";
-  info.description = "variable-speed/feed chatter suppression over a modulation grid: simulated "
-                     "amplitude ratio vs constant speed, growth-rate averaging, energy balance (S1-S3)";
-  info.models_md_ids = "S1, S2, S3, G3";
-  info.params = settings_table().specs();
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"revolutions", 10.0}, {"sample_rate_hz", 5000.0}};
-  return info;
+  return plugin_info("suppression_map", "S1, S2, S3, G3",
+                     settings_table().specs(),
+                     {{"revolutions", 10.0}, {"sample_rate_hz", 5000.0}},
+                     "variable-speed/feed chatter suppression over a modulation grid: simulated "
+                     "amplitude ratio vs constant speed, growth-rate averaging, energy balance (S1-S3)");
 }
 
 void SuppressionMap::validate(Json& document, const SourceMap& sources) const {
@@ -721,10 +718,6 @@ void SuppressionMap::write_artifacts(const Study& study, const ResultTable& resu
       figures.render(h, out_dir, fmt::format("{}_{}{}", spec.column, target, group.is_null() ? "" : "_" + group_name));
     }
   figures.finish();
-}
-
-bool SuppressionMap::requires_serial(const Json& document) const {
-  return model_is_serial(document.at("model"));
 }
 
 }  // namespace chatterlab

@@ -13,6 +13,7 @@
 #include "chatterlab/kit/data.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
+#include "chatterlab/plugin_info.hpp"
 #include "chatterlab/signal_io.hpp"
 #include "shared/metrology/surface_report.hpp"
 
@@ -110,16 +111,11 @@ void check_open_keys(const Json& input, const Json& filter, const DataTable& tab
 }  // namespace
 
 PluginInfo SurfaceStudy::info() {
-  PluginInfo info;
-  info.name = "surface";
-  info.description =
-      "surface metrology of one profile: ISO Gaussian/robust filters, waviness and MOTIF "
-      "parameters, roundness about LS/MZ/MC/MI circles, Wz|f bands";
-  info.models_md_ids = "W1, W2";
-  info.params = filter_specs();  // the [filter] table; [input], [process], [parameters]: docs
-  info.thread_safety = ThreadSafety::shareable;
-  info.example_params = {{"type", "gaussian"}, {"cutoff_mm", 0.8}};
-  return info;
+  return plugin_info("surface", "W1, W2",
+                     filter_specs(),  // the [filter] table; [input], [process], [parameters]: docs
+                     {{"type", "gaussian"}, {"cutoff_mm", 0.8}},
+                     "surface metrology of one profile: ISO Gaussian/robust filters, waviness and MOTIF "
+                     "parameters, roundness about LS/MZ/MC/MI circles, Wz|f bands");
 }
 
 void SurfaceStudy::validate(Json& document, const SourceMap& sources) const {

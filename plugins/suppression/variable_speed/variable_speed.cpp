@@ -4,6 +4,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <utility>
+#include "chatterlab/plugin_info.hpp"
 
 namespace chatterlab {
 
@@ -190,16 +191,13 @@ PluginInfo VariableSpeed::info() {
   ParamSpec seed = param_spec("seed", ValueKind::integer, "1", "seed of the random shape's levels");
   seed.default_value = 1;
   seed.min = 0;
-  PluginInfo info;
-  info.name = "variable_speed";
-  info.description = "variable wheel speed, work speed or feed: sinusoidal, triangular, square or "
-                     "random modulation (S1-S3)";
-  info.params = {target, shape, amplitude, frequency, seed};
-  info.thread_safety = ThreadSafety::shareable;  // immutable after construction
-  info.models_md_ids = "S1, S2, S3";
-  info.example_params = Json::parse(
-      R"({"target": "wheel_speed", "shape": "sinusoidal", "amplitude_ratio": 0.1, "frequency_hz": 0.5})");
-  return info;
+  return plugin_info("variable_speed", "S1, S2, S3",
+                     {target, shape, amplitude, frequency, seed},
+                     Json::parse(
+                         R"({"target": "wheel_speed", "shape": "sinusoidal", "amplitude_ratio": 0.1, "frequency_hz": 0.5})"),
+                     "variable wheel speed, work speed or feed: sinusoidal, triangular, square or "
+                     "random modulation (S1-S3)",
+                     ThreadSafety::shareable);  // immutable after construction
 }
 
 CHATTERLAB_REGISTER_SUPPRESSION(VariableSpeed);
