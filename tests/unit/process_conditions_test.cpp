@@ -148,6 +148,10 @@ TEST(ProcessConditions, DefaultParameterValuesTellEveryTwoTablesApart) {
   c["law"] = std::string(40, 'x');
   d["law"] = "y" + std::string(39, 'x');
   EXPECT_FALSE(bitwise_equal(flattened(c), flattened(d)));
+  // Structure and text are NaNs: a study grouping numbers within a tolerance (feed_risk's log
+  // cells) compares these by their bits, so nearby texts or sizes never share a group.
+  for (double v : flattened(Json::parse(R"({"law": "a text longer than six bytes", "modes": [[], [[]]]})")))
+    EXPECT_TRUE(std::isnan(v));
 }
 
 }  // namespace

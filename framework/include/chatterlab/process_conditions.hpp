@@ -39,6 +39,14 @@ class ProcessConditionsModel {
  public:
   virtual ~ProcessConditionsModel() = default;
 
+  // What a NaN in parameter_values_at's vector carries: a container's size, a text's length, or
+  // six bytes of a text (payload below 2^48).
+  enum class Structure : std::uint64_t { container_size = 1, text_length = 2, text_bytes = 3 };
+  static double structure_value(Structure what, std::uint64_t payload) {
+    return std::bit_cast<double>(0x7ff8000000000000ULL | (static_cast<std::uint64_t>(what) << 48) |
+                                 (payload & 0xffffffffffffULL));
+  }
+
   // The speeds the model's own parameters describe (width, radii and depth ratio are not model
   // parameters: a study gives them as the reference, see parameters_at).
   virtual ProcessConditions nominal_conditions() const = 0;
@@ -53,15 +61,16 @@ class ProcessConditionsModel {
   // study comparing the parameters of 10^5 conditions (feed_risk's grouping) spent a fifth of its
   // time building and freeing those tables. A model overrides it with its typed parameters; two
   // conditions give bitwise equal vectors exactly when their tables are equal. Default: the
-  // table's leaves (booleans 0/1), each array and object preceded by its size, each text by a NaN
-  // carrying its length and then its bytes six to a double (integers below 2^48, exact), so that
-  // no two different tables give the same vector.
+  // table's leaves (booleans 0/1), each array and object preceded by its size, each text by its
+  // length and then its bytes six to a value, so that no two different tables give the same
+  // vector. Sizes, lengths and text bytes travel as NaNs carrying them in their payload
+  // (structure_value): a study compares NaNs by their bits, never within a tolerance.
   virtual void parameter_values_at(const ProcessConditions& reference, const ProcessConditions& conditions,
                                    const ProcessScaling& scaling, std::vector<double>& values) const {
     values.clear();
     auto leaves = [&values](const Json& v, const auto& self) -> void {
       if (v.is_object() || v.is_array()) {
-        values.push_back(static_cast<double>(v.size()));
+        values.push_back(structure_value(Structure::container_size, v.size()));
         for (const Json& e : v) self(e, self);
       } else if (v.is_number()) {
         values.push_back(v.get<double>());
@@ -69,12 +78,12 @@ class ProcessConditionsModel {
         values.push_back(v.get<bool>() ? 1.0 : 0.0);
       } else {
         const std::string text = v.dump();
-        values.push_back(std::bit_cast<double>(0x7ff8000000000000ULL | (text.size() & 0x0007ffffffffffffULL)));
+        values.push_back(structure_value(Structure::text_length, text.size()));
         for (std::size_t i = 0; i < text.size(); i += 6) {
           std::uint64_t chunk = 0;
           for (std::size_t j = i; j < std::min(i + 6, text.size()); ++j)
             chunk = (chunk << 8) | static_cast<unsigned char>(text[j]);
-          values.push_back(static_cast<double>(chunk));
+          values.push_back(structure_value(Structure::text_bytes, chunk));
         }
       }
     };

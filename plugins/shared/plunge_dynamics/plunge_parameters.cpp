@@ -2,6 +2,8 @@
 
 #include <limits>
 
+#include "chatterlab/process_conditions.hpp"
+
 namespace chatterlab::plunge_dynamics {
 
 namespace {
@@ -62,11 +64,18 @@ const ParamTable<PlungeRegenerativeParameters>& plunge_parameters_table() {
 }
 
 void parameter_values(const PlungeRegenerativeParameters& p, std::vector<double>& values) {
+  // The layout of ProcessConditionsModel's default (each container preceded by its size), so that
+  // both routes give bitwise the same vector (process_scaling_test checks it): the table's 8 keys,
+  // then the modes array's length and each mode's 3 keys.
+  constexpr auto size = ProcessConditionsModel::Structure::container_size;
   values.clear();
-  values.insert(values.end(), {p.wheel_speed_rpm, p.work_speed_rpm, p.contact_stiffness_n_per_m,
-                               p.wheel_wear_stiffness_n_per_m, p.work_removal_stiffness_n_per_m});
+  values.insert(values.end(), {ProcessConditionsModel::structure_value(size, 8), p.wheel_speed_rpm, p.work_speed_rpm,
+                               p.contact_stiffness_n_per_m, p.wheel_wear_stiffness_n_per_m,
+                               p.work_removal_stiffness_n_per_m,
+                               ProcessConditionsModel::structure_value(size, p.modes.size())});
+  const double mode_size = ProcessConditionsModel::structure_value(size, 3);
   for (const StructuralMode& m : p.modes)
-    values.insert(values.end(), {m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
+    values.insert(values.end(), {mode_size, m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m});
   values.push_back(p.wheel_regeneration ? 1.0 : 0.0);
   values.push_back(p.work_regeneration ? 1.0 : 0.0);
 }
