@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "chatterlab/errors.hpp"
+#include "chatterlab/kit/plots.hpp"
 #include "chatterlab/plot.hpp"
 
 namespace chatterlab::monitor {
@@ -84,12 +85,20 @@ void plot_scores(const Json& result, const std::string& title, const std::string
   c.title = title;
   c.x_label = "time of the latest sample used [s]";
   c.y_label = score_label;
-  c.series.push_back({"score", t, result.at("score").get<std::vector<double>>(), "points"});
+  // A long signal has 10^6 evaluations or more: the plot draws each bucket's lowest and highest
+  // score and alarm state in time order (at most ~2 x plot_buckets points a series), so its
+  // files stay bounded and no spike or alarm vanishes from the picture.
+  constexpr std::size_t plot_buckets = 4000;
+  plot::Series score = kit::decimated("score", t, result.at("score").get<std::vector<double>>(), plot_buckets);
+  score.style = "points";
+  c.series.push_back(std::move(score));
   std::vector<double> state;
   for (const Json& a : result.at("alarm")) state.push_back(a.get<bool>() ? 1.0 : 0.0);
-  c.series.push_back({fmt::format("alarm state (persistence {})",
-                                  result.at("persistence_windows").get<int>()),
-                      t, std::move(state), "steps"});
+  plot::Series alarm = kit::decimated(
+      fmt::format("alarm state (persistence {})", result.at("persistence_windows").get<int>()), t, state,
+      plot_buckets);
+  alarm.style = "steps";
+  c.series.push_back(std::move(alarm));
   c.reference_y = result.at("threshold").get<double>();
   c.reference_label = fmt::format("threshold {}", result.at("threshold").get<double>());
   plot::render(c, out_dir, stem);

@@ -4,6 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "unit/study_test_support.hpp"
 
 namespace chatterlab::monitor {
 namespace {
@@ -58,6 +63,25 @@ TEST(TransitionSignal, AmplitudeLawAndNoiseLevel) {
   for (std::size_t i = 0; i < 4000; ++i) sum_sq += x[i] * x[i];
   EXPECT_NEAR(std::sqrt(sum_sq / 4000), spec.noise_rms, 0.05);  // se ~ 0.011
   EXPECT_EQ(spec.samples(), x);  // same seed, same signal
+}
+
+// A 10^7-sample signal gives 10^6 windows: the score plot must stay bounded and still show the one
+// spike and the alarm.
+TEST(ScorePlot, LongTracksAreDrawnBoundedWithTheirExtremes) {
+  constexpr std::size_t n = 1000000;
+  std::vector<double> t(n), score(n, 0.25);
+  std::vector<bool> alarm(n, false);
+  for (std::size_t k = 0; k < n; ++k) t[k] = 1e-3 * static_cast<double>(k);
+  score[654321] = 7.5;
+  alarm[654321] = true;
+  const Json result{{"t_s", t}, {"score", score}, {"alarm", alarm}, {"persistence_windows", 1}, {"threshold", 0.5}};
+  testing::TempDir dir;
+  plot_scores(result, "scores", "score", dir.path(), "scores_test");
+  std::ifstream in(dir.path() / "scores_test.dat");
+  const std::string data{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_LT(std::count(data.begin(), data.end(), '\n'), 20000);
+  EXPECT_NE(data.find("7.5"), std::string::npos);
+  EXPECT_NE(data.find("654.321"), std::string::npos);  // the spike's time, kept with it
 }
 
 }  // namespace
