@@ -7,12 +7,48 @@
 # directory's size and the wall time. Not a test: run it by hand, with a BASELINE chatterlab to
 # compare (each run alternates the two). FILTER `closed` measures a closed profile instead: one
 # revolution of SAMPLES radii (eccentricity, 26 and 895 lobes plus noise), 50 UPR Gaussian filter,
-# so the roundness evaluation (reference circles, UPR table, Wz|f) runs on all of them.
-# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER|closed [BASELINE]]]
+# so the roundness evaluation (reference circles, UPR table, Wz|f) runs on all of them. FILTER
+# `monitor` measures a signal instead: a `chatter_monitor` study (both detectors, as
+# studies/chatter_monitor_transition.toml) on SAMPLES samples at 8 kHz of 0.1 um noise with a
+# 361.7 Hz chatter growing at 0.02 /s from 600 s, one column.
+# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER|closed|monitor [BASELINE]]]
 set -eu
 bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
 mkdir -p "$work"
-if [ "$filter" = closed ]; then
+if [ "$filter" = monitor ]; then
+  data=$work/signal_$samples.csv
+  if [ ! -s "$data" ]; then
+    awk -v n="$samples" 'BEGIN {
+      srand(7); pi = atan2(0, -1); print "displacement_m"
+      for (i = 0; i < n; i++) {
+        t = i / 8000; u = rand(); if (u < 1e-12) u = 1e-12
+        a = t > 600 ? 1e-7 * exp(0.02 * (t - 600)) : 0; if (a > 2e-5) a = 2e-5
+        printf "%.6g\n", sqrt(-2 * log(u)) * cos(2 * pi * rand()) * 1e-7 + a * sin(2 * pi * 361.7 * t)
+      }
+    }' >"$data.tmp" && mv "$data.tmp" "$data"
+  fi
+  study=$work/monitor_$samples.toml
+  cat >"$study" <<EOF
+[study]
+kind = "chatter_monitor"
+name = "memory: signal of $samples samples"
+
+[input]
+file = "signal_$samples.csv"
+column = "displacement_m"
+sample_rate_hz = 8000.0
+
+[monitor.bp_network]
+window_samples = 10
+stable_s = [100.0, 100.0186875]
+onset_s = [669.0, 669.0186875]
+seed = 1
+
+[monitor.rbf_density]
+window_samples = 50
+rho = 0.2
+EOF
+elif [ "$filter" = closed ]; then
   data=$work/roundness_$samples.csv
   if [ ! -s "$data" ]; then
     awk -v n="$samples" 'BEGIN {
@@ -71,7 +107,7 @@ type = "$filter"
 cutoff_mm = 0.8
 EOF
 fi
-echo "profile: $data ($(stat -c %s "$data") bytes, $samples samples), filter $filter, load $(cut -d' ' -f1 /proc/loadavg)"
+echo "input: $data ($(stat -c %s "$data") bytes, $samples samples), filter $filter, load $(cut -d' ' -f1 /proc/loadavg)"
 printf '%-9s %14s %14s %14s %8s\n' build "peak RSS kB" "bytes/sample" "output bytes" "wall s"
 for build in new ${baseline:+baseline}; do
   exe=$bin && [ "$build" = baseline ] && exe=$baseline
