@@ -15,18 +15,20 @@
 set -eu
 bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
 mkdir -p "$work"
+# Writes the awk program's output (n = SAMPLES) to the file once: later runs reuse it.
+generate() { [ -s "$1" ] || { awk -v n="$samples" "$2" >"$1.tmp" && mv "$1.tmp" "$1"; }; }
 if [ "$filter" = monitor ]; then
+  # The network trains on 100 s of noise and at 669 s (chatter at ~4 x the noise).
+  [ "$samples" -ge 5400000 ] || { echo "monitor needs SAMPLES >= 5400000 (675 s at 8 kHz)" >&2; exit 2; }
   data=$work/signal_$samples.csv
-  if [ ! -s "$data" ]; then
-    awk -v n="$samples" 'BEGIN {
+  generate "$data" 'BEGIN {
       srand(7); pi = atan2(0, -1); print "displacement_m"
       for (i = 0; i < n; i++) {
         t = i / 8000; u = rand(); if (u < 1e-12) u = 1e-12
         a = t > 600 ? 1e-7 * exp(0.02 * (t - 600)) : 0; if (a > 2e-5) a = 2e-5
         printf "%.6g\n", sqrt(-2 * log(u)) * cos(2 * pi * rand()) * 1e-7 + a * sin(2 * pi * 361.7 * t)
       }
-    }' >"$data.tmp" && mv "$data.tmp" "$data"
-  fi
+    }'
   study=$work/monitor_$samples.toml
   cat >"$study" <<EOF
 [study]
@@ -50,15 +52,13 @@ rho = 0.2
 EOF
 elif [ "$filter" = closed ]; then
   data=$work/roundness_$samples.csv
-  if [ ! -s "$data" ]; then
-    awk -v n="$samples" 'BEGIN {
+  generate "$data" 'BEGIN {
       srand(1); pi = atan2(0, -1); print "radius_um"
       for (i = 0; i < n; i++) {
         t = 2 * pi * i / n
         printf "%.6g\n", 3 * cos(t - 0.4) + 0.8 * sin(26 * t) + 0.05 * sin(895 * t) + 0.02 * (rand() + rand() + rand() - 1.5)
       }
-    }' >"$data.tmp" && mv "$data.tmp" "$data"
-  fi
+    }'
   study=$work/roundness_$samples.toml
   cat >"$study" <<EOF
 [study]
@@ -82,15 +82,13 @@ work_speed_rpm = 55
 EOF
 else
 data=$work/profile_$samples.csv
-if [ ! -s "$data" ]; then
-  awk -v n="$samples" 'BEGIN {
+generate "$data" 'BEGIN {
     srand(1); pi = atan2(0, -1); print "height_um"
     for (i = 0; i < n; i++) {
       x = i * 0.0005
       printf "%.6g\n", 1.5 * sin(2 * pi * x / 4) + 0.3 * sin(2 * pi * x / 0.05) + 0.1 * (rand() + rand() + rand() - 1.5)
     }
-  }' >"$data.tmp" && mv "$data.tmp" "$data"
-fi
+  }'
 study=$work/surface_${samples}_$filter.toml
 cat >"$study" <<EOF
 [study]
