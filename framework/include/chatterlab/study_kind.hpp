@@ -141,15 +141,12 @@ PluginInfo study_kind_info() {
 // Adds study kind T (see the convention above) to a registry.
 template <class T>
 void add_study_kind(Registry<StudyKind>& registry, std::string origin = "built-in") {
-  if constexpr (std::is_default_constructible_v<T>) {
-    registry.add(study_kind_info<T>(), [](const ParamValues&) -> std::unique_ptr<StudyKind> {
+  registry.add(study_kind_info<T>(), []([[maybe_unused]] const ParamValues& p) -> std::unique_ptr<StudyKind> {
+    if constexpr (std::is_default_constructible_v<T>)
       return std::make_unique<T>();
-    }, std::move(origin));
-  } else {
-    registry.add(study_kind_info<T>(), [](const ParamValues& p) -> std::unique_ptr<StudyKind> {
+    else
       return std::make_unique<T>(p);
-    }, std::move(origin));
-  }
+  }, std::move(origin));
 }
 
 }  // namespace chatterlab
