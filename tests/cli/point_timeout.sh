@@ -35,6 +35,19 @@ expect_exit 1 "$work/resume" timeout 60 "$bin" run "$study" --out "$out" --resum
 cmp "$work/first.csv" "$csv" || fail "--resume changed results.csv"
 [ "$(json_number "$out/meta.json" points_computed)" = 0 ] || fail "--resume recomputed points"
 
+# results.h5 does not keep a timeout's elapsed time; --resume of a completed hdf5 run takes it
+# from the run's meta.json, so the resumed meta.json still says how long each timeout ran.
+misbehaving_study "$work/hang_hdf5.toml" "$plugin" '["ok", "hang", "sleep"]'
+printf '[output]\nformat = "hdf5"\n' >>"$work/hang_hdf5.toml"
+out_h5=$work/limited_hdf5
+expect_exit 1 "$work/limited_hdf5" timeout 120 "$bin" run "$work/hang_hdf5.toml" --out "$out_h5" --threads 2 --point-timeout 3
+expect_exit 1 "$work/resume_hdf5" timeout 60 "$bin" run "$work/hang_hdf5.toml" --out "$out_h5" --resume
+[ "$(json_number "$out_h5/meta.json" points_computed)" = 0 ] || fail "hdf5 --resume recomputed points"
+[ "$(grep -c '"elapsed_s"' "$out_h5/meta.json")" = 3 ] || fail "hdf5 --resume: timeouts lost elapsed_s"
+for elapsed in $(grep -o '"elapsed_s": [0-9.e+-]*' "$out_h5/meta.json" | sed 's/.*: //'); do
+  awk -v e="$elapsed" 'BEGIN { exit !(e >= 3 && e < 10) }' || fail "hdf5 --resume: a timeout's elapsed_s = $elapsed"
+done
+
 # --resume --retry-failed computes exactly the timed-out points again, under the limit.
 expect_exit 1 "$work/retry" timeout 120 "$bin" run "$study" --out "$out" --resume --retry-failed --point-timeout 2
 [ "$(json_number "$out/meta.json" points_computed)" = 3 ] || fail "--retry-failed did not compute the 3 timed-out points"

@@ -151,7 +151,14 @@ PointResult ResumedPoints::take(std::size_t point) {
       h5_row_first_ = h5_->position() - h5_row_.size();
     }
     h5_row_next_ = point - h5_row_first_ + 1;
-    return std::move(h5_row_[point - h5_row_first_]);
+    PointResult result = std::move(h5_row_[point - h5_row_first_]);
+    if (outcome_of(result.status) == PointOutcome::timeout) {
+      const auto found = std::lower_bound(h5_timeout_elapsed_s_.begin(), h5_timeout_elapsed_s_.end(),
+                                          std::pair<std::size_t, double>(point, -1.0));
+      if (found != h5_timeout_elapsed_s_.end() && found->first == point)
+        result.elapsed_s = found->second;
+    }
+    return result;
   }
   JournalCursor& journal = *journals_.at(static_cast<std::size_t>((location >> offset_bits) - 1));
   std::pair<std::size_t, PointResult> record;
@@ -194,6 +201,26 @@ class ResumeScan {
                                    file.string(), e.what()));
     }
     r_.results_h5_ = file;
+    r_.h5_timeout_elapsed_s_ = timeouts_in_meta();
+  }
+
+  // The elapsed times of the timeouts the completed run's meta.json lists. results.h5 is
+  // renamed into place before meta.json is written, so a meta.json that cannot be read (a kill
+  // between the two) leaves the times at 0 s, as results.h5 alone would.
+  std::vector<std::pair<std::size_t, double>> timeouts_in_meta() const {
+    std::vector<std::pair<std::size_t, double>> elapsed;
+    try {
+      const Json meta = Json::parse(read_file(out_dir_ / "meta.json"));
+      if (meta.value("study_fingerprint", std::string()) != expected_.study_fingerprint) return {};
+      for (const Json& entry : meta.at("failed_points"))
+        if (entry.value("status", std::string()) == "timeout" && entry.contains("elapsed_s"))
+          elapsed.emplace_back(entry.at("point").get<std::size_t>(),
+                               entry.at("elapsed_s").get<double>());
+    } catch (const std::exception&) {
+      return {};
+    }
+    std::sort(elapsed.begin(), elapsed.end());
+    return elapsed;
   }
 
   // Every journal, oldest session first, one line at a time.

@@ -50,6 +50,9 @@ class ResumedPoints {
   std::vector<std::unique_ptr<JournalCursor>> journals_;
   std::unique_ptr<Hdf5ResultsReader> h5_;
   std::vector<PointResult> h5_row_;  // the chunk row of results.h5 being taken
+  // results.h5 keeps a timeout's status, not how long it ran: the completed run's meta.json
+  // (failed_points) does. Point -> elapsed_s, timeouts only (few: each took a whole limit).
+  std::vector<std::pair<std::size_t, double>> h5_timeout_elapsed_s_;
   std::size_t h5_row_first_ = 0, h5_row_next_ = 0;
   std::size_t next_ = 0;  // the lowest point take() accepts
 };
