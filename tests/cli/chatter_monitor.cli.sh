@@ -44,4 +44,21 @@ expect_exit 2 "$work/bad_labels" "$bin" run "$work/studies/bad_labels.toml" --ou
 grep -qF "bp_network.onset_s = [0.9, 1.2]: outside the signal, which ends at t = 0.999875 s" \
   "$work/bad_labels.err" || fail "labels outside: $(cat "$work/bad_labels.err")"
 [ ! -e "$work/bad_labels_out" ] || fail "output written for labels outside the signal"
+
+# [monitor] series_csv: a bad value exits 2 naming the key and the choices; "never" leaves
+# alarms.csv and features.csv out, says so in summary.json and gives the same results.
+study_with bad_series_csv 's/^snapshot_times_s = .*/&\nseries_csv = "sometimes"/'
+expect_exit 2 "$work/bad_series_csv" "$bin" run "$work/studies/bad_series_csv.toml" --out "$work/bad_series_csv_out"
+grep -qF 'bad_series_csv.toml:30: monitor.series_csv = "sometimes": not one of: always, auto, never' \
+  "$work/bad_series_csv.err" || fail "bad series_csv: $(cat "$work/bad_series_csv.err")"
+[ ! -e "$work/bad_series_csv_out" ] || fail "output written for a bad series_csv"
+
+study_with never 's/^snapshot_times_s = .*/&\nseries_csv = "never"/'
+expect_exit 0 "$work/never" "$bin" run "$work/studies/never.toml" --out "$work/never_out"
+[ ! -e "$work/never_out/alarms.csv" ] && [ ! -e "$work/never_out/features.csv" ] ||
+  fail "series_csv = \"never\": alarms.csv or features.csv written"
+grep -qF '"series_csv": "not written: 8000 samples, monitor.series_csv = \"never\"' "$work/never_out/summary.json" ||
+  fail "series_csv = \"never\": summary.json does not say why the tables are missing"
+[ "$(tail -n 1 "$work/never_out/results.csv")" = "$(tail -n 1 "$out/results.csv")" ] ||
+  fail "series_csv = \"never\" changed results.csv"
 finish

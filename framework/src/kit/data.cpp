@@ -62,8 +62,13 @@ fs::path resolve_data_file(const Json& value, const std::string& path, const Sou
 }
 
 DataTable read_table_at(const fs::path& file, const std::string& path, const SourceMap& sources) {
+  return *read_shared_table_at(file, path, sources);
+}
+
+std::shared_ptr<const DataTable> read_shared_table_at(const fs::path& file, const std::string& path,
+                                                      const SourceMap& sources) {
   try {
-    return read_data_table(file);
+    return read_shared_data_table(file);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}: {}", sources.locate(path).str(), path, e.what()));
   }

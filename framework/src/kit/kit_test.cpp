@@ -3,11 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <span>
+#include <sstream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "chatterlab/kit/model.hpp"
+#include "chatterlab/kit/output.hpp"
 #include "chatterlab/kit/plots.hpp"
 #include "chatterlab/kit/settings.hpp"
 #include "chatterlab/kit/simulation.hpp"
@@ -239,6 +245,54 @@ TEST(KitPlots, DecimationKeepsEachBucketsExtremesInOrder) {
   // A short series is drawn whole.
   EXPECT_EQ(kit::decimated("short", std::vector<double>{0, 1, 2}, std::vector<double>{5, 4, 6}, 5000).y,
             (std::vector<double>{5, 4, 6}));
+}
+
+// A table streamed in blocks (70,000 rows, about 2 MB: five blocks of rows) is exactly its
+// csv_text; nothing is left beside the file. An empty table is its header line.
+TEST(KitOutput, StreamedCsvEqualsCsvText) {
+  TempDir dir;
+  const std::size_t rows = 70000;
+  std::vector<double> x(rows), y(rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    x[r] = static_cast<double>(r) * 0.1;
+    y[r] = std::sin(static_cast<double>(r)) / 3.0;
+  }
+  const std::vector<std::string> header = {"x_mm", "y \"um\""};
+  kit::write_csv_streamed(dir.path() / "t.csv", header, rows, [&](std::size_t r, std::span<double> cells) {
+    cells[0] = x[r];
+    cells[1] = y[r];
+  });
+  auto read = [&](const char* name) {
+    std::ifstream in(dir.path() / name);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  EXPECT_EQ(read("t.csv"), csv_text(header, {x, y}));
+  kit::write_csv_streamed(dir.path() / "empty.csv", header, 0, [](std::size_t, std::span<double>) {});
+  EXPECT_EQ(read("empty.csv"), csv_text(header, {{}, {}}));
+  EXPECT_EQ(read("empty.csv").find('\n'), read("empty.csv").size() - 1);  // the header line only
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
+}
+
+// A file written on request above a size: "auto" writes it up to the limit (inclusive), "always"
+// at any size, "never" not at all; the reason a skipped file is missing names the key and how to
+// get the file.
+TEST(KitOutput, OnRequestFileIsWrittenUpToItsLimitUnlessAskedOtherwise) {
+  const kit::OnRequestFile file{"monitor", "series_csv", "alarms.csv", 1000};
+  EXPECT_EQ(file.skipped("auto", 1000), std::nullopt);
+  EXPECT_EQ(file.skipped("always", 5000), std::nullopt);
+  EXPECT_EQ(file.skipped("auto", 1001),
+            "not written: 1001 samples > 1000 (monitor.series_csv = \"auto\") "
+            "(monitor.series_csv = \"always\" writes it)");
+  EXPECT_EQ(file.skipped("never", 10),
+            "not written: 10 samples, monitor.series_csv = \"never\" "
+            "(monitor.series_csv = \"always\" writes it)");
+  const ParamSpec spec = file.spec();
+  EXPECT_EQ(spec.key, "series_csv");
+  EXPECT_EQ(spec.default_value, "auto");
+  EXPECT_EQ(spec.choices, (std::vector<std::string>{"auto", "always", "never"}));
+  EXPECT_EQ(spec.description, "write alarms.csv: auto (inputs of up to 1000 samples), always or never");
 }
 
 }  // namespace

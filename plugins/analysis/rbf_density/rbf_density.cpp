@@ -145,6 +145,9 @@ void RbfDensityAnalysis::check(const SampledSeries& series) const {
 monitor::ScoreTrack RbfDensityAnalysis::scores(const SampledSeries& series, Json& details) const {
   monitor::ScoreTrack track{"rbf_density", "density criterion (5-22)", {}, {}, rho_};
   const std::span<const double> values(series.values);
+  const std::size_t evaluations = values.size() >= window_ ? (values.size() - window_) / hop_ + 1 : 0;
+  track.t_s.reserve(evaluations);  // exact: 10^6 evaluations of a long signal without slack
+  track.score.reserve(evaluations);
   for (std::size_t last = window_ - 1; last < values.size(); last += hop_) {
     const auto window = values.subspan(last + 1 - window_, window_);
     track.t_s.push_back(static_cast<double>(last) * series.sample_interval);

@@ -33,11 +33,12 @@ WindowFeatures window_features(std::span<const double> x) {
 FeatureSeries feature_series(std::span<const double> values, std::size_t window, std::size_t hop,
                              double sample_interval) {
   FeatureSeries out;
-  for (std::size_t start = 0; start + window <= values.size(); start += hop) {
-    out.first_sample.push_back(start);
-    out.t_s.push_back(static_cast<double>(start + window - 1) * sample_interval);
-    out.features.push_back(window_features(values.subspan(start, window)));
-  }
+  for_each_window(values, window, hop, sample_interval,
+                  [&](std::size_t first, double t_s, const WindowFeatures& f) {
+                    out.first_sample.push_back(first);
+                    out.t_s.push_back(t_s);
+                    out.features.push_back(f);
+                  });
   return out;
 }
 

@@ -35,4 +35,15 @@ struct FeatureSeries {
 FeatureSeries feature_series(std::span<const double> values, std::size_t window, std::size_t hop,
                              double sample_interval);
 
+// The same windows one at a time, nothing stored: visit(first_sample, t_s, features) in order,
+// t_s the time of the window's last sample. For signals of 10^7 samples, whose FeatureSeries
+// (40 bytes a window) a caller that only reduces it need not hold.
+template <class Visit>
+void for_each_window(std::span<const double> values, std::size_t window, std::size_t hop,
+                     double sample_interval, Visit&& visit) {
+  for (std::size_t start = 0; start + window <= values.size(); start += hop)
+    visit(start, static_cast<double>(start + window - 1) * sample_interval,
+          window_features(values.subspan(start, window)));
+}
+
 }  // namespace chatterlab

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/plots.hpp"
@@ -78,9 +79,35 @@ ResultWithArrays detector_result(const Detector& detector, const SampledSeries& 
   return out;
 }
 
+DetectorTrack detector_track(ResultWithArrays&& result) {
+  DetectorTrack track;
+  for (ResultArray& a : result.arrays) {
+    std::vector<double>* to = a.key == "t_s"     ? &track.t_s
+                              : a.key == "score" ? &track.score
+                              : a.key == "alarm" ? &track.alarm
+                                                 : nullptr;
+    if (!to) throw std::logic_error("detector_track: unexpected series '" + a.key + "'");
+    *to = std::move(a.values);
+    result.result.erase(a.key);
+  }
+  track.result = std::move(result.result);
+  return track;
+}
+
 void plot_scores(const Json& result, const std::string& title, const std::string& score_label,
                  const std::filesystem::path& out_dir, const std::string& stem) {
-  const auto t = result.at("t_s").get<std::vector<double>>();
+  DetectorTrack track;
+  track.result = {{"threshold", result.at("threshold")},
+                  {"persistence_windows", result.at("persistence_windows")}};
+  track.t_s = result.at("t_s").get<std::vector<double>>();
+  track.score = result.at("score").get<std::vector<double>>();
+  for (const Json& a : result.at("alarm")) track.alarm.push_back(a.get<bool>() ? 1.0 : 0.0);
+  plot_scores(track, title, score_label, out_dir, stem);
+}
+
+void plot_scores(const DetectorTrack& track, const std::string& title,
+                 const std::string& score_label, const std::filesystem::path& out_dir,
+                 const std::string& stem) {
   plot::Curves c;
   c.title = title;
   c.x_label = "time of the latest sample used [s]";
@@ -89,18 +116,17 @@ void plot_scores(const Json& result, const std::string& title, const std::string
   // score and alarm state in time order (at most ~2 x plot_buckets points a series), so its
   // files stay bounded and no spike or alarm vanishes from the picture.
   constexpr std::size_t plot_buckets = 4000;
-  plot::Series score = kit::decimated("score", t, result.at("score").get<std::vector<double>>(), plot_buckets);
+  plot::Series score = kit::decimated("score", track.t_s, track.score, plot_buckets);
   score.style = "points";
   c.series.push_back(std::move(score));
-  std::vector<double> state;
-  for (const Json& a : result.at("alarm")) state.push_back(a.get<bool>() ? 1.0 : 0.0);
+  const Json& r = track.result;
   plot::Series alarm = kit::decimated(
-      fmt::format("alarm state (persistence {})", result.at("persistence_windows").get<int>()), t, state,
-      plot_buckets);
+      fmt::format("alarm state (persistence {})", r.at("persistence_windows").get<int>()),
+      track.t_s, track.alarm, plot_buckets);
   alarm.style = "steps";
   c.series.push_back(std::move(alarm));
-  c.reference_y = result.at("threshold").get<double>();
-  c.reference_label = fmt::format("threshold {}", result.at("threshold").get<double>());
+  c.reference_y = r.at("threshold").get<double>();
+  c.reference_label = fmt::format("threshold {}", r.at("threshold").get<double>());
   plot::render(c, out_dir, stem);
 }
 

@@ -83,10 +83,23 @@ class Detector {
 // (chatterlab/analysis_arrays.hpp).
 ResultWithArrays detector_result(const Detector& detector, const SampledSeries& series);
 
+// A detector_result() with its per-evaluation series as vectors (ResultWithArrays moved apart):
+// what a caller that keeps 10^6 evaluations per detector holds instead of JSON arrays.
+struct DetectorTrack {
+  Json result;                  // everything else (alarms, threshold, training ...); no t_s, score, alarm
+  std::vector<double> t_s;      // time of each evaluation, increasing
+  std::vector<double> score;
+  std::vector<double> alarm;    // state after each evaluation, 0 / 1
+};
+DetectorTrack detector_track(ResultWithArrays&& result);
+
 // Plot of a detector_result(): scores over time, the alarm state (0/1, after persistence) as a
 // step line and the threshold dashed; <stem>.png/.svg in out_dir.
 void plot_scores(const Json& result, const std::string& title, const std::string& score_label,
                  const std::filesystem::path& out_dir, const std::string& stem);
+void plot_scores(const DetectorTrack& track, const std::string& title,
+                 const std::string& score_label, const std::filesystem::path& out_dir,
+                 const std::string& stem);
 
 // A figure of density snapshots (Detector::snapshot: "t_s", "x", "density", "mean", "x_max",
 // "ratio", "flagged"), each window scaled to its own |x_max - mean|; <stem>.png/.svg in out_dir.

@@ -5,11 +5,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
+#include <memory>
 #include <optional>
+#include <span>
+#include <stdexcept>
 
+#include "chatterlab/analysis_arrays.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
+#include "chatterlab/kit/output.hpp"
+#include "chatterlab/kit/plots.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/param_table.hpp"
 #include "chatterlab/plot.hpp"
@@ -26,8 +33,15 @@ namespace fs = std::filesystem;
 
 constexpr const char* time_column = "t_s";       // a simulate study's timeseries.csv
 constexpr std::size_t shading_lines = 1500;      // vertical lines drawing the alarm shading
-constexpr std::size_t plot_max_points = 20000;   // longer signals are drawn as min/max envelope
+constexpr std::size_t plot_buckets = 10000;      // signal plot: each bucket's min and max
 constexpr double uniform_tolerance = 1e-6;       // relative spread of t_s steps accepted
+
+// alarms.csv (~45 bytes per evaluation) and features.csv (~75 bytes per window): for a signal
+// of 10^7 samples 170 MB, more than the run holds in memory. Written by default up to 10^6
+// samples, above that only on request ([monitor] series_csv = "always").
+const kit::OnRequestFile series_csv_file{
+    "monitor", "series_csv",
+    "alarms.csv and features.csv (a row per detector evaluation, per network window)", 1'000'000};
 
 // [input] and the kind's own [monitor] keys, declared once.
 struct MonitorInput {
@@ -66,6 +80,13 @@ const ParamTable<MonitorSettings>& monitor_table() {
     return t;
   }();
   return table;
+}
+
+// The kind's own [monitor] keys.
+std::vector<ParamSpec> monitor_specs() {
+  std::vector<ParamSpec> specs = monitor_table().specs();
+  specs.push_back(series_csv_file.spec());
+  return specs;
 }
 
 const Registry<Analysis>::Entry& detector_entry(const std::string& name) {
@@ -115,8 +136,9 @@ void validate_input(Json& document, const SourceMap& sources) {
   Json input = validate_params(document["input"], input_table().specs(), "input", sources);
   const std::string where = sources.locate("input.file").str();
   input["file"] = kit::resolve_data_file(input["file"], "input.file", sources).string();
-  const DataTable table =
-      kit::read_table_at(input["file"].get<std::string>(), "input.file", sources);
+  const std::shared_ptr<const DataTable> shared_table =
+      kit::read_shared_table_at(input["file"].get<std::string>(), "input.file", sources);
+  const DataTable& table = *shared_table;
   if (input["column"].is_null()) {
     std::vector<std::string> candidates;
     for (const auto& name : table.names)
@@ -150,35 +172,20 @@ void validate_input(Json& document, const SourceMap& sources) {
   document["input"] = std::move(input);
 }
 
-std::string csv_number(double v) { return fmt::format("{}", v); }
-
-// Long signals as a min/max envelope per block, so the plot stays small and shows the extremes.
+// The signal for a plot: fewer than 2 x plot_buckets samples whole, longer ones as the lowest
+// and highest sample of each of ~plot_buckets buckets in time order, so the plot stays small and
+// shows the extremes.
 plot::Series signal_series(const SampledSeries& s) {
-  plot::Series out{s.name, {}, {}, "lines"};
-  const std::size_t n = s.values.size();
-  const std::size_t block = std::max<std::size_t>(1, (n + plot_max_points / 2 - 1) / (plot_max_points / 2));
-  for (std::size_t start = 0; start < n; start += block) {
-    const std::size_t end = std::min(n, start + block);
-    if (block == 1) {
-      out.x.push_back(static_cast<double>(start) * s.sample_interval);
-      out.y.push_back(s.values[start]);
-      continue;
-    }
-    auto [lo, hi] = std::minmax_element(s.values.begin() + static_cast<std::ptrdiff_t>(start),
-                                        s.values.begin() + static_cast<std::ptrdiff_t>(end));
-    for (auto it : lo < hi ? std::array{lo, hi} : std::array{hi, lo}) {
-      out.x.push_back(static_cast<double>(it - s.values.begin()) * s.sample_interval);
-      out.y.push_back(*it);
-    }
-  }
-  return out;
+  return kit::decimated(
+      s.name, s.values.size(), [&](std::size_t i) { return static_cast<double>(i) * s.sample_interval; },
+      [&](std::size_t i) { return s.values[i]; }, plot_buckets);
 }
 
 // Alarm state at time t: the state after the latest evaluation at or before t.
-bool alarm_at(const std::vector<double>& t_s, const std::vector<bool>& alarm, double t) {
-  auto it = std::upper_bound(t_s.begin(), t_s.end(), t);
-  if (it == t_s.begin()) return false;
-  return alarm[static_cast<std::size_t>(it - t_s.begin() - 1)];
+bool alarm_at(const monitor::DetectorTrack& track, double t) {
+  auto it = std::upper_bound(track.t_s.begin(), track.t_s.end(), t);
+  if (it == track.t_s.begin()) return false;
+  return track.alarm[static_cast<std::size_t>(it - track.t_s.begin() - 1)] != 0.0;
 }
 
 // Draws every figure even when one fails; the failures go to summary.json.
@@ -195,16 +202,16 @@ class Figures {
   std::vector<std::string> errors;
 };
 
-void plot_point(const SampledSeries& series, const std::map<std::string, Json>& results,
+using Tracks = std::map<std::string, monitor::DetectorTrack>;  // by detector name
+
+void plot_point(const SampledSeries& series, const Tracks& results,
                 const std::vector<Json>& snapshots, const fs::path& dir, Figures& figures) {
   const double end = monitor::end_time_s(series);
   double amplitude = 0.0;
   for (double v : series.values) amplitude = std::max(amplitude, std::abs(v));
   if (!(amplitude > 0.0)) amplitude = 1.0;
-  for (const auto& [name, r] : results) {
-    const auto t = r.at("t_s").get<std::vector<double>>();
-    const auto alarm = r.at("alarm").get<std::vector<bool>>();
-    const Json& alarms = r.at("alarms");
+  for (const auto& [name, track] : results) {
+    const Json& alarms = track.result.at("alarms");
     const std::string first =
         alarms.at("first_alarm_s").is_number()
             ? fmt::format("first alarm at {:.4g} s", alarms.at("first_alarm_s").get<double>())
@@ -217,7 +224,7 @@ void plot_point(const SampledSeries& series, const std::map<std::string, Json>& 
     plot::Series shade{fmt::format("{} alarm on", name), {}, {}, "impulses"};
     for (std::size_t k = 0; k < shading_lines; ++k) {
       const double tk = end * static_cast<double>(k) / static_cast<double>(shading_lines - 1);
-      if (!alarm_at(t, alarm, tk)) continue;
+      if (!alarm_at(track, tk)) continue;
       for (double y : {amplitude, -amplitude}) {
         shade.x.push_back(tk);
         shade.y.push_back(y);
@@ -228,7 +235,7 @@ void plot_point(const SampledSeries& series, const std::map<std::string, Json>& 
     figures.attempt([&] { plot::render(signal, dir, "signal_alarms_" + name); });
 
     figures.attempt([&] {
-      monitor::plot_scores(r, fmt::format("{} score over time ({})", name, first),
+      monitor::plot_scores(track, fmt::format("{} score over time ({})", name, first),
                            name == "bp_network"
                                ? "network output (0 stable, 1 chatter onset)"
                                : "|x_at_max_density - mean| / |x_max - mean| (5-22)",
@@ -246,9 +253,13 @@ void plot_point(const SampledSeries& series, const std::map<std::string, Json>& 
 }  // namespace
 
 SampledSeries monitor_input_signal(const Json& input) {
+  // The column of the run's parsed table itself, kept alive by an aliasing pointer: a copy would
+  // cost 8 bytes per sample beside the table (and the file's bytes) the run keeps anyway.
+  const std::shared_ptr<const DataTable> table =
+      read_shared_data_table(input.at("file").get<std::string>());
   SampledSeries s;
-  s.set_samples(read_signal_column(input.at("file").get<std::string>(),
-                                   input.at("column").get<std::string>()));
+  s.share_samples(std::shared_ptr<const std::vector<double>>(
+      table, &table->column(input.at("column").get<std::string>())));
   s.sample_interval = 1.0 / input.at("sample_rate_hz").get<double>();
   s.sample_unit = "s";
   s.name = input.at("column").get<std::string>();
@@ -257,7 +268,7 @@ SampledSeries monitor_input_signal(const Json& input) {
 
 PluginInfo ChatterMonitor::info() {
   return plugin_info("chatter_monitor", "C1, C2, C3",
-                     monitor_table().specs(),
+                     monitor_specs(),
                      Json::object(),
                      "chatter onset monitoring of one signal (window features, 3-4-1 network, RBF amplitude "
                      "density): alarm times, scores, training and test results");
@@ -278,11 +289,14 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     const bool detector = std::find(std::begin(detector_names), std::end(detector_names), key) !=
                           std::end(detector_names);
     if (!detector) {
-      const auto specs = monitor_table().specs();
-      if (std::none_of(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.key == key; }))
-        throw InputError(fmt::format(
-            "{}: unknown key 'monitor.{}' (valid: {}, snapshot_times_s)",
-            sources.locate("monitor." + key).str(), key, fmt::join(detector_names, ", ")));
+      const auto specs = monitor_specs();
+      if (std::none_of(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.key == key; })) {
+        std::vector<std::string> valid(std::begin(detector_names), std::end(detector_names));
+        for (const ParamSpec& spec : specs) valid.push_back(spec.key);
+        throw InputError(fmt::format("{}: unknown key 'monitor.{}' (valid: {})",
+                                     sources.locate("monitor." + key).str(), key,
+                                     fmt::join(valid, ", ")));
+      }
       own[key] = value;
       continue;
     }
@@ -292,7 +306,7 @@ void ChatterMonitor::validate(Json& document, const SourceMap& sources) const {
     validated_detectors[key] = validate_params(value, detector_entry(key).info.params,
                                                "monitor." + key, sources);
   }
-  own = validate_params(own, monitor_table().specs(), "monitor", sources);
+  own = validate_params(own, monitor_specs(), "monitor", sources);
   if (validated_detectors.empty())
     throw InputError(fmt::format(
         "{}: [monitor] enables no detector: add [monitor.bp_network] (with stable_s and onset_s, "
@@ -340,7 +354,8 @@ std::vector<std::string> ChatterMonitor::output_columns(const Json& document) co
 namespace {
 
 // One detector's entry in summary.json: alarm times, threshold, parameters, training and test.
-Json detector_summary(const Json& r, const Json& parameters) {
+Json detector_summary(const monitor::DetectorTrack& track, const Json& parameters) {
+  const Json& r = track.result;
   const Json& alarms = r.at("alarms");
   Json entry = {{"first_alarm_s", alarms.at("first_alarm_s")},
                 {"first_flag_s", alarms.at("first_flag_s")},
@@ -348,7 +363,7 @@ Json detector_summary(const Json& r, const Json& parameters) {
                 {"alarm_open_at_end", alarms.at("alarm_open_at_end")},
                 {"threshold", r.at("threshold")},
                 {"persistence_windows", r.at("persistence_windows")},
-                {"evaluations", r.at("t_s").size()},
+                {"evaluations", track.t_s.size()},
                 {"parameters", parameters}};
   for (const char* key : {"training", "test"})
     if (r.contains(key)) entry[key] = r[key];
@@ -371,40 +386,60 @@ std::vector<Json> density_snapshots(const monitor::Detector& detector, const Jso
   return out;
 }
 
-// alarms.csv: every evaluation of every detector, in time order.
-void write_alarms_csv(const std::map<std::string, Json>& results, const fs::path& dir) {
-  struct Row { double t; std::string detector; double score; bool alarm; };
-  std::vector<Row> rows;
-  for (const auto& [name, r] : results) {
-    const auto t = r.at("t_s").get<std::vector<double>>();
-    const auto score = r.at("score").get<std::vector<double>>();
-    const auto alarm = r.at("alarm").get<std::vector<bool>>();
-    for (std::size_t k = 0; k < t.size(); ++k) rows.push_back({t[k], name, score[k], alarm[k]});
+// alarms.csv: every evaluation of every detector, in time order, streamed. Each detector's
+// evaluations are in time order already, so the file is their merge; at equal times the
+// detectors keep their order in `tracks` (the order a stable sort of all rows by time gives).
+void write_alarms_csv(const Tracks& tracks, const fs::path& path) {
+  struct Cursor {
+    const std::string* name;
+    const monitor::DetectorTrack* track;
+    std::size_t next = 0;
+  };
+  std::vector<Cursor> cursors;
+  for (const auto& [name, track] : tracks) {
+    if (!std::is_sorted(track.t_s.begin(), track.t_s.end()))
+      throw std::logic_error(fmt::format("alarms.csv: {} evaluations out of time order", name));
+    cursors.push_back({&name, &track});
   }
-  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
-  std::string csv = "t_s,detector,score,alarm\n";
-  for (const auto& row : rows)
-    csv += fmt::format("{},{},{},{}\n", csv_number(row.t), row.detector, csv_number(row.score),
-                       row.alarm ? 1 : 0);
-  write_file_atomically(dir / "alarms.csv", csv);
+  constexpr std::size_t block_bytes = 1 << 20;  // text handed to the file at a time
+  AtomicFileWriter out(path);
+  std::string text = "t_s,detector,score,alarm\n";
+  for (;;) {
+    Cursor* earliest = nullptr;
+    for (Cursor& c : cursors)
+      if (c.next < c.track->t_s.size() &&
+          (!earliest || c.track->t_s[c.next] < earliest->track->t_s[earliest->next]))
+        earliest = &c;
+    if (!earliest) break;
+    const std::size_t k = earliest->next++;
+    const monitor::DetectorTrack& t = *earliest->track;
+    fmt::format_to(std::back_inserter(text), "{},{},{},{}\n", t.t_s[k], *earliest->name,
+                   t.score[k], t.alarm[k] != 0.0 ? 1 : 0);
+    if (text.size() >= block_bytes) {
+      out.write(text);
+      text.clear();
+    }
+  }
+  out.write(text);
+  out.commit();
 }
 
-// features.csv: C1 features over the network's windows (10 samples unless configured).
-void write_features_csv(const SampledSeries& series, const Json& monitor, const fs::path& dir) {
+// features.csv: C1 features over the network's windows (10 samples unless configured), the
+// windows of feature_series(values, window, window, ...) computed as they are written.
+void write_features_csv(const SampledSeries& series, const Json& monitor, const fs::path& path) {
   const std::size_t window = monitor.contains("bp_network")
                                  ? monitor.at("bp_network").at("window_samples").get<std::size_t>()
                                  : 10;
   if (series.values.size() < window) return;
-  const FeatureSeries windows = feature_series(series.values, window, window, series.sample_interval);
-  std::vector<double> variance, rho1, residual;
-  for (const auto& f : windows.features) {
-    variance.push_back(f.variance);
-    rho1.push_back(f.rho1);
-    residual.push_back(f.residual_variance);
-  }
-  write_file_atomically(dir / "features.csv",
-                        csv_text({"t_s", "variance", "rho1", "residual_variance"},
-                                 {windows.t_s, variance, rho1, residual}));
+  kit::write_csv_streamed(path, {"t_s", "variance", "rho1", "residual_variance"},
+                          series.values.size() / window, [&](std::size_t w, std::span<double> cells) {
+                            const std::size_t first = w * window;
+                            const WindowFeatures f = window_features(series.values.subspan(first, window));
+                            cells[0] = static_cast<double>(first + window - 1) * series.sample_interval;
+                            cells[1] = f.variance;
+                            cells[2] = f.rho1;
+                            cells[3] = f.residual_variance;
+                          });
 }
 
 }  // namespace
@@ -413,7 +448,7 @@ std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
                                             const PointContext& context) const {
   const Json& monitor = point_document.at("monitor");
   const SampledSeries series = monitor_input_signal(point_document.at("input"));
-  std::map<std::string, Json> results;
+  Tracks results;
   std::vector<Json> outputs;
   Json summary = {{"input",
                    {{"file", point_document["input"]["file"]},
@@ -425,23 +460,32 @@ std::vector<Json> ChatterMonitor::run_point(const Json& point_document,
   std::vector<Json> snapshots;
   for (const auto& name : enabled_detectors(monitor)) {
     auto analysis = build_detector(name, monitor.at(name));
-    Json r = analysis->analyse(series, Json::object());
+    // The per-evaluation series as vectors, not JSON arrays: 10^6 evaluations a detector for a
+    // signal of 10^7 samples.
+    monitor::DetectorTrack track = monitor::detector_track(
+        dynamic_cast<const AnalysisWithArrays&>(*analysis).analyse_with_arrays(series, Json::object()));
+    const Json& r = track.result;
     const Json& alarms = r.at("alarms");
     outputs.push_back(alarms.at("first_alarm_s"));
     outputs.emplace_back(alarms.at("intervals").size());
     if (r.contains("snapshots"))  // a detector with a density state (rbf_density)
       snapshots = density_snapshots(as_detector(*analysis), r, monitor, name, series);
-    summary["detectors"][name] = detector_summary(r, monitor.at(name));
-    results[name] = std::move(r);
+    summary["detectors"][name] = detector_summary(track, monitor.at(name));
+    results.emplace(name, std::move(track));
   }
   if (context.artifact_dir.empty()) return outputs;
 
   const fs::path& dir = context.artifact_dir;
-  write_alarms_csv(results, dir);
-  write_features_csv(series, monitor, dir);
+  if (const auto skipped =
+          series_csv_file.skipped(monitor.at("series_csv").get<std::string>(), series.values.size())) {
+    summary["series_csv"] = *skipped;
+  } else {
+    write_alarms_csv(results, dir / "alarms.csv");
+    write_features_csv(series, monitor, dir / "features.csv");
+  }
   // A network trained here is saved for reuse (monitor.bp_network.weights_file).
   if (results.count("bp_network") && !ParamValues(monitor.at("bp_network")).has("weights_file"))
-    write_json_file(dir / "network_weights.json", results["bp_network"].at("weights"));
+    write_json_file(dir / "network_weights.json", results.at("bp_network").result.at("weights"));
 
   if (context.plots) {
     Figures figures;

@@ -6,10 +6,12 @@
 //   [input]   file = "...", column = "...", sample_rate_hz = ...  (optional for WAV files and for
 //             tables with a uniformly spaced t_s column, e.g. a `simulate` study's timeseries.csv)
 //   [monitor] snapshot_times_s = [...]                            (optional)
+//             series_csv = "auto" | "always" | "never"            (alarms.csv, features.csv)
 //   [monitor.bp_network]  parameters of the bp_network plugin      (present = detector enabled)
 //   [monitor.rbf_density] parameters of the rbf_density plugin     (present = detector enabled)
 //
-// Writes alarms.csv, features.csv, summary.json, network_weights.json (when trained) and plots.
+// Writes summary.json, network_weights.json (when trained), plots and, for signals of up to 10^6
+// samples unless series_csv says otherwise, alarms.csv and features.csv (streamed).
 // docs/analysis/monitoring.md is the user documentation.
 #include <filesystem>
 #include <iterator>

@@ -10,8 +10,13 @@
 #include <numbers>
 #include <sstream>
 
+#include <algorithm>
+
+#include "shared/monitoring/features.hpp"
 #include "shared/monitoring/monitor_common.hpp"
 #include "chatterlab/catalog.hpp"
+#include "chatterlab/output_files.hpp"
+#include "chatterlab/registry.hpp"
 #include "chatterlab/errors.hpp"
 #include "chatterlab/study.hpp"
 #include "unit/study_test_support.hpp"
@@ -87,6 +92,101 @@ TEST(ChatterMonitor, ShippedTransitionStudy) {
                 bp.at("test").at("confusion").at("true_negative").get<int>(),
             10);
   EXPECT_EQ(summary.at("detectors").at("rbf_density").at("alarm_intervals_s").size(), 1u);
+}
+
+// alarms.csv as it was assembled in memory: every detector's analyse() result (JSON arrays), one
+// row per evaluation, stable-sorted by time.
+std::string alarms_csv_in_memory(const Json& monitor, const SampledSeries& series) {
+  struct Row { double t; std::string detector; double score; bool alarm; };
+  std::vector<Row> rows;
+  for (const char* name : ChatterMonitor::detector_names) {
+    if (!monitor.contains(name)) continue;
+    const Json r = analysis_registry().at(name).create(ParamValues(monitor.at(name)))->analyse(series, Json::object());
+    const auto t = r.at("t_s").get<std::vector<double>>();
+    const auto score = r.at("score").get<std::vector<double>>();
+    const auto alarm = r.at("alarm").get<std::vector<bool>>();
+    for (std::size_t k = 0; k < t.size(); ++k) rows.push_back({t[k], name, score[k], alarm[k]});
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
+  std::string csv = "t_s,detector,score,alarm\n";
+  for (const auto& row : rows)
+    csv += fmt::format("{},{},{},{}\n", row.t, row.detector, row.score, row.alarm ? 1 : 0);
+  return csv;
+}
+
+// The streamed alarms.csv (a merge of the detectors' tracks) and features.csv (windows computed
+// as written) hold exactly the tables that were assembled in memory from the JSON results; the
+// two detectors evaluate at shared times (every 10 samples), so the merge's order at equal times
+// is checked too.
+TEST(ChatterMonitor, StreamedTablesEqualTheInMemoryOnes) {
+  const Study study = load_study(shipped);
+  const Json point = study.point_document(0);
+  TempDir dir;
+  PointContext context;
+  context.artifact_dir = dir.path();
+  context.plots = false;
+  ChatterMonitor().run_point(point, context);
+  const SampledSeries series = monitor_input_signal(point.at("input"));
+  const std::string alarms = read_text(dir.path() / "alarms.csv");
+  EXPECT_EQ(alarms, alarms_csv_in_memory(point.at("monitor"), series));
+  // rbf_density's first evaluation (sample 49) is also bp_network's fifth: its row comes first.
+  const std::size_t rbf = alarms.find(",rbf_density,");
+  ASSERT_NE(rbf, std::string::npos);
+  const std::size_t line = alarms.rfind('\n', rbf) + 1;
+  const std::string t = alarms.substr(line, rbf - line);
+  EXPECT_EQ(alarms.substr(alarms.rfind('\n', line - 2) + 1, t.size() + 12), t + ",bp_network,");
+
+  const FeatureSeries windows = feature_series(series.values, 10, 10, series.sample_interval);
+  std::vector<double> variance, rho1, residual;
+  for (const auto& f : windows.features) {
+    variance.push_back(f.variance);
+    rho1.push_back(f.rho1);
+    residual.push_back(f.residual_variance);
+  }
+  EXPECT_EQ(windows.t_s.size(), 800u);  // 8000 samples in windows of 10
+  EXPECT_EQ(read_text(dir.path() / "features.csv"),
+            csv_text({"t_s", "variance", "rho1", "residual_variance"},
+                     {windows.t_s, variance, rho1, residual}));
+  const Json summary = Json::parse(read_text(dir.path() / "summary.json"));
+  EXPECT_FALSE(summary.contains("series_csv"));
+  EXPECT_EQ(summary.at("detectors").at("rbf_density").at("evaluations"), 796);  // (8000 - 50) / 10 + 1
+}
+
+// [monitor] series_csv: "never" leaves both tables out (summary.json says why and how to get
+// them) without changing any result; "always" writes them; anything else is refused at load.
+TEST(ChatterMonitor, SeriesCsvOnRequest) {
+  TempDir dir;
+  dir.write("signal.csv", transition_csv());
+  const std::string input = "file = \"signal.csv\"\ncolumn = \"displacement_m\"";
+  PointContext context;
+  context.plots = false;
+  std::vector<std::vector<Json>> outputs;
+  for (const std::string choice : {"always", "never"}) {
+    const Study study = load_study(dir.write(
+        choice + ".toml",
+        study_text(input, "[monitor]\nseries_csv = \"" + choice + "\"\n" + monitor_tables)));
+    context.artifact_dir = dir.path() / choice;
+    outputs.push_back(ChatterMonitor().run_point(study.point_document(0), context));
+    const bool written = choice == "always";
+    EXPECT_EQ(fs::exists(dir.path() / choice / "alarms.csv"), written);
+    EXPECT_EQ(fs::exists(dir.path() / choice / "features.csv"), written);
+    const Json summary = Json::parse(read_text(dir.path() / choice / "summary.json"));
+    if (written) {
+      EXPECT_FALSE(summary.contains("series_csv"));
+    } else {
+      EXPECT_EQ(summary.at("series_csv"),
+                "not written: 8000 samples, monitor.series_csv = \"never\" "
+                "(monitor.series_csv = \"always\" writes it)");
+      ASSERT_TRUE(summary.at("detectors").at("bp_network").at("first_alarm_s").is_number());
+    }
+  }
+  EXPECT_EQ(outputs[0], outputs[1]);
+  const std::string message =
+      testing::load_error(dir, study_text(input, "[monitor]\nseries_csv = \"sometimes\"\n" +
+                                                     std::string(monitor_tables)));
+  EXPECT_NE(message.find("study.toml:8: monitor.series_csv = \"sometimes\": not one of: always, auto, never"),
+            std::string::npos)
+      << message;
 }
 
 TEST(ChatterMonitor, SavedWeightsReproduceTheAlarm) {
@@ -195,7 +295,7 @@ TEST(ChatterMonitor, BadInputNamesFileKeyAndLimit) {
                   {"study.toml:7: [monitor] enables no detector"});
   expect_mentions(error(dir, study_text("file = \"signal.csv\"\ncolumn = \"displacement_m\"",
                                         "[monitor.rbf]\nrho = 0.3\n")),
-                  {"unknown key 'monitor.rbf' (valid: bp_network, rbf_density, snapshot_times_s)"});
+                  {"unknown key 'monitor.rbf' (valid: bp_network, rbf_density, snapshot_times_s, series_csv)"});
   expect_mentions(error(dir, study_text("file = \"signal.csv\"\ncolumn = \"displacement_m\"",
                                         "[monitor.rbf_density]\nrho = 1.5\n")),
                   {"monitor.rbf_density.rho = 1.5"});

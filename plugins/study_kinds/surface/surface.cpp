@@ -6,11 +6,12 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <iterator>
 #include <memory>
+#include <span>
 
 #include "chatterlab/errors.hpp"
 #include "chatterlab/kit/data.hpp"
+#include "chatterlab/kit/output.hpp"
 #include "chatterlab/output_files.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/plugin_info.hpp"
@@ -23,38 +24,27 @@ namespace fs = std::filesystem;
 namespace {
 
 // filtered.csv holds four numbers per sample (about 60 bytes of text): written by default up to
-// this many samples, above it only on request ([parameters] filtered_csv = "always").
-constexpr std::size_t filtered_csv_auto_samples = 1'000'000;
+// 10^6 samples, above that only on request ([parameters] filtered_csv = "always").
+const kit::OnRequestFile filtered_csv_file{
+    "parameters", "filtered_csv",
+    "filtered.csv (position, profile, waviness, roughness per sample)", 1'000'000};
 
 // The kind's own [parameters] keys beside those the surface_profile analysis shares.
 std::vector<ParamSpec> kind_parameter_specs() {
   std::vector<ParamSpec> specs = parameter_specs();
-  ParamSpec filtered = param_spec(
-      "filtered_csv", ValueKind::string, "1",
-      fmt::format("write filtered.csv (position, profile, waviness, roughness per sample): auto "
-                  "(profiles of up to {} samples), always or never",
-                  filtered_csv_auto_samples));
-  filtered.default_value = "auto";
-  filtered.choices = {"auto", "always", "never"};
-  specs.push_back(filtered);
+  specs.push_back(filtered_csv_file.spec());
   return specs;
 }
 
-// filtered.csv streamed in blocks of rows: the same text csv_text gives, without holding it.
+// filtered.csv streamed: the same text csv_text gives, without holding it.
 void write_filtered_csv(const fs::path& path, const SurfaceEvaluation& e, bool closed) {
-  AtomicFileWriter out(path);
-  std::string text = std::string(closed ? "angle_deg" : "x_mm") + ",profile_um,waviness_um,roughness_um\n";
-  constexpr std::size_t rows_per_block = 65536;
-  for (std::size_t first = 0; first < e.samples(); first += rows_per_block) {
-    const std::size_t end = std::min(e.samples(), first + rows_per_block);
-    for (std::size_t i = first; i < end; ++i)
-      fmt::format_to(std::back_inserter(text), "{},{},{},{}\n", e.position(i), e.profile_um[i],
-                     e.waviness_um[i], e.roughness_um(i));
-    out.write(text);
-    text.clear();
-  }
-  out.write(text);
-  out.commit();
+  kit::write_csv_streamed(path, {closed ? "angle_deg" : "x_mm", "profile_um", "waviness_um", "roughness_um"},
+                          e.samples(), [&](std::size_t i, std::span<double> cells) {
+                            cells[0] = e.position(i);
+                            cells[1] = e.profile_um[i];
+                            cells[2] = e.waviness_um[i];
+                            cells[3] = e.roughness_um(i);
+                          });
 }
 
 // Reports a violated limit: fail(key, message) throws InputError at the key's line.
@@ -211,14 +201,10 @@ std::vector<Json> SurfaceStudy::run_point(const Json& point_document,
   const fs::path& dir = context.artifact_dir;
   Json summary = s;
   const std::string filtered_csv = point_document.at("parameters").at("filtered_csv").get<std::string>();
-  if (filtered_csv == "always" || (filtered_csv == "auto" && e.samples() <= filtered_csv_auto_samples))
-    write_filtered_csv(dir / "filtered.csv", e, series.closed);
+  if (const auto skipped = filtered_csv_file.skipped(filtered_csv, e.samples()))
+    summary["filtered_csv"] = *skipped;
   else
-    summary["filtered_csv"] = fmt::format(
-        "not written: {} samples{} (parameters.filtered_csv = \"always\" writes it)", e.samples(),
-        filtered_csv == "never" ? ", parameters.filtered_csv = \"never\""
-                                : fmt::format(" > {} (parameters.filtered_csv = \"auto\")",
-                                              filtered_csv_auto_samples));
+    write_filtered_csv(dir / "filtered.csv", e, series.closed);
   if (series.closed && point_document.at("filter")["cutoff_mm"].is_number()) {
     summary["filter"]["cutoff_mm"] = point_document.at("filter")["cutoff_mm"];
     summary["filter"]["circumference_mm"] =

@@ -6,6 +6,7 @@
 // (chatterlab/input_files.hpp, via read_data_table): every grid point of a run sees the bytes the
 // run first read, and the file's hash goes into meta.json.
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,6 +35,11 @@ std::filesystem::path resolve_data_file(const Json& value, const std::string& pa
 // read_data_table (read once per run) with the study's file:line and key in front of its messages.
 DataTable read_table_at(const std::filesystem::path& file, const std::string& path,
                         const SourceMap& sources);
+// The same without a copy: the run's parsed table itself (read_shared_data_table), for inputs of
+// 10^7 rows where a copy would cost 8 bytes per value.
+std::shared_ptr<const DataTable> read_shared_table_at(const std::filesystem::path& file,
+                                                      const std::string& path,
+                                                      const SourceMap& sources);
 
 // A column by header name or 1-based index ("2"), or InputError "<study>:<line>: <path>: no
 // column "<name>" in <file> (columns: ...)".
