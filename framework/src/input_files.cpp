@@ -93,29 +93,56 @@ class Sha256 {
   std::uint64_t length_ = 0;
 };
 
-// The whole file, or nullptr with errno set. A directory is EISDIR (open(2) would succeed on it).
-std::shared_ptr<std::string> read_whole_file(const fs::path& file, struct stat* info) {
+// Reads `file` block by block into `on_block`; false with errno set when it cannot be read. A
+// directory is EISDIR (open(2) would succeed on it). `on_size` hears a regular file's size first.
+template <class OnSize, class OnBlock>
+bool read_file_blocks(const fs::path& file, struct stat* info, OnSize on_size, OnBlock on_block) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return nullptr;
+  if (fd < 0) return false;
   auto fail = [fd](int error) {
     ::close(fd);
     errno = error;
-    return nullptr;
+    return false;
   };
   if (::fstat(fd, info) != 0) return fail(errno);
   if (S_ISDIR(info->st_mode)) return fail(EISDIR);
-  auto bytes = std::make_shared<std::string>();
-  if (S_ISREG(info->st_mode)) bytes->reserve(static_cast<std::size_t>(info->st_size));
+  if (S_ISREG(info->st_mode)) on_size(static_cast<std::size_t>(info->st_size));
   std::array<char, 1 << 16> buffer{};
   for (;;) {
     const ssize_t n = ::read(fd, buffer.data(), buffer.size());
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) return fail(errno);
     if (n == 0) break;
-    bytes->append(buffer.data(), static_cast<std::size_t>(n));
+    on_block(std::string_view(buffer.data(), static_cast<std::size_t>(n)));
   }
   ::close(fd);
+  return true;
+}
+
+// The whole file, or nullptr with errno set.
+std::shared_ptr<std::string> read_whole_file(const fs::path& file, struct stat* info) {
+  auto bytes = std::make_shared<std::string>();
+  if (!read_file_blocks(
+          file, info, [&](std::size_t size) { bytes->reserve(size); },
+          [&](std::string_view block) { bytes->append(block); }))
+    return nullptr;
   return bytes;
+}
+
+// The file's sha256 and size, hashed as it is read (a check of a 10^8-sample input must not hold
+// a second copy of it); false with errno set.
+bool hash_file(const fs::path& file, struct stat* info, std::string& sha256, std::size_t& bytes) {
+  Sha256 hash;
+  bytes = 0;
+  if (!read_file_blocks(
+          file, info, [](std::size_t) {},
+          [&](std::string_view block) {
+            hash.update(block);
+            bytes += block.size();
+          }))
+    return false;
+  sha256 = hash.hex_digest();
+  return true;
 }
 
 bool same_stat(const struct stat& a, const struct stat& b) {
@@ -166,15 +193,15 @@ struct InputSnapshot::State {
   // "" when the file on disk still has the recorded hash, else what changed. Updates `now`.
   static std::string change_of(const Entry& entry, struct stat* now) {
     const InputFileRecord& r = entry.record;
-    std::shared_ptr<std::string> bytes = read_whole_file(r.path, now);
-    if (!bytes)
+    std::string hash;
+    std::size_t bytes = 0;
+    if (!hash_file(r.path, now, hash, bytes))
       return fmt::format("{}: can no longer be read ({}) since the run read it", r.path.string(),
                          std::strerror(errno));
-    std::string hash = sha256_hex(*bytes);
     if (hash == r.sha256) return {};
     return fmt::format(
         "{}: changed since the run read it (sha256 {}... then, {}... now; {} bytes then, {} now)",
-        r.path.string(), short_hash(r.sha256), short_hash(hash), r.bytes, bytes->size());
+        r.path.string(), short_hash(r.sha256), short_hash(hash), r.bytes, bytes);
   }
 };
 
