@@ -231,5 +231,24 @@ TEST(LyapunovAccuracy, HenonCurvesAreParallelInEveryDimension) {
   EXPECT_EQ(selected, 6u);
 }
 
+// The divergence curves are sums of logs over thousands of references: the same bits with one
+// thread, with two, and from one run to the next. Rosenstein's curve sums fixed blocks of
+// references in block order. runs: one thread, two, two again.
+template <class Curves>
+void expect_same_sums(const std::array<Curves, 3>& runs) {
+  EXPECT_EQ(runs[0].sum, runs[1].sum) << "one thread against two";
+  EXPECT_EQ(runs[0].count, runs[1].count) << "one thread against two";
+  EXPECT_EQ(runs[1].sum, runs[2].sum) << "two runs with two threads";
+  EXPECT_EQ(runs[1].count, runs[2].count) << "two runs with two threads";
+}
+
+TEST(Lyapunov, RosensteinCurveDoesNotDependOnTheThreadCount) {
+  const auto x = test_signals::henon(20000);
+  const auto runs = test_signals::with_one_two_two_threads(
+      [&] { return rosenstein_curve(x, 2, 1, 10, 20, 1, 5000); });
+  EXPECT_GT(runs[0].references_at_start(), 4000);
+  expect_same_sums(runs);
+}
+
 }  // namespace
 }  // namespace chatterlab
