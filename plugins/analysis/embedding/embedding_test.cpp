@@ -57,5 +57,23 @@ TEST(Embedding, BadSeriesNameTheProblem) {
   }
 }
 
+// Cao's E1 and E2 and the FNN fractions are sums over up to 10,000 reference vectors: summed in
+// fixed blocks merged in block order, they are the same bits with one thread, with two, and from
+// one run to the next (a `reduction` made E1 differ by 1e-15 between runs).
+TEST(Embedding, CaoAndFnnDoNotDependOnTheThreadCount) {
+  const auto x = test_signals::lorenz(20000);
+  const auto [one, two, again] = test_signals::with_one_two_two_threads([&] {
+    return choose_dimension(x, 16, 6, 100, embedding_default_distance_ratio,
+                            embedding_default_fnn_threshold);
+  });
+  ASSERT_EQ(one.cao_e1.size(), 6u);
+  EXPECT_EQ(one.cao_e1, two.cao_e1);
+  EXPECT_EQ(one.cao_e2, two.cao_e2);
+  EXPECT_EQ(one.fnn_fraction, two.fnn_fraction);
+  EXPECT_EQ(two.cao_e1, again.cao_e1);
+  EXPECT_EQ(two.cao_e2, again.cao_e2);
+  EXPECT_EQ(two.fnn_fraction, again.fnn_fraction);
+}
+
 }  // namespace
 }  // namespace chatterlab

@@ -231,5 +231,42 @@ TEST(LyapunovAccuracy, HenonCurvesAreParallelInEveryDimension) {
   EXPECT_EQ(selected, 6u);
 }
 
+// The divergence curves are sums of logs over thousands of references: the same bits with one
+// thread, with two, and from one run to the next. Rosenstein's curve sums fixed blocks of
+// references in block order; the Kantz scan merges its grid rows (logs and leftover products)
+// in row order. runs: one thread, two, two again.
+template <class Curves>
+void expect_same_sums(const std::array<Curves, 3>& runs) {
+  EXPECT_EQ(runs[0].sum, runs[1].sum) << "one thread against two";
+  EXPECT_EQ(runs[0].count, runs[1].count) << "one thread against two";
+  EXPECT_EQ(runs[1].sum, runs[2].sum) << "two runs with two threads";
+  EXPECT_EQ(runs[1].count, runs[2].count) << "two runs with two threads";
+}
+
+TEST(Lyapunov, RosensteinCurveDoesNotDependOnTheThreadCount) {
+  const auto x = test_signals::henon(20000);
+  const auto runs = test_signals::with_one_two_two_threads(
+      [&] { return rosenstein_curve(x, 2, 1, 10, 20, 1, 5000); });
+  EXPECT_GT(runs[0].references_at_start(), 4000);
+  expect_same_sums(runs);
+}
+
+TEST(Lyapunov, KantzScanDoesNotDependOnTheThreadCount) {
+  const auto x = test_signals::henon(20000);
+  expect_same_sums(test_signals::with_one_two_two_threads(
+      [&] { return kantz_scan(x, 2, 4, 1, 0, 30, 0, {0.005, 0.02, 0.08}); }));
+}
+
+// The whole analysis (embedding, Kantz scan, Rosenstein curves, bootstrap): the same result
+// with one thread, with two, and from one run to the next.
+TEST(Lyapunov, ResultDoesNotDependOnTheThreadCount) {
+  const auto x = test_signals::henon(4000);
+  const auto [one, two, again] = test_signals::with_one_two_two_threads([&] {
+    return make_analysis("lyapunov")->analyse(series(x, 1.0, "henon x"), Json::object()).dump();
+  });
+  EXPECT_EQ(one, two);
+  EXPECT_EQ(two, again);
+}
+
 }  // namespace
 }  // namespace chatterlab

@@ -13,6 +13,7 @@
 #include "shared/nonlinear/divergence.hpp"
 #include "shared/nonlinear/kantz_scan.hpp"
 #include "shared/nonlinear/nonlinear_common.hpp"
+#include "shared/nonlinear/ordered_sum.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/plot.hpp"
 #include "chatterlab/plugin_info.hpp"
@@ -81,20 +82,30 @@ double prediction_error(std::span<const double> x, int dimension, int delay,
   const nonlinear::Embedding e(x, dimension, delay, count);
   const nonlinear::NeighbourSearch search(e);
   references = std::min(references, count);
-  double sse = 0, used = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(+ : sse, used)
-  for (std::size_t r = 0; r < references; ++r) {
-    const std::size_t i = std::size_t(double(r) * double(count) / double(references));
-    const auto nn = search.nearest(i, neighbours, theiler, count);
-    if (nn.empty()) continue;
-    double prediction = 0;
-    for (const auto& m : nn) prediction += x[m.index + window + 1];
-    prediction /= double(nn.size());
-    const double err = x[i + window + 1] - prediction;
-    sse += err * err;
-    used += 1;
-  }
-  return std::sqrt(sse / used) / nonlinear::standard_deviation(x);
+  // Summed in fixed blocks of references (ordered_sum.hpp): the same error whatever the
+  // thread count.
+  struct ErrorSums {
+    double squared_error = 0, used = 0;
+    ErrorSums& operator+=(const ErrorSums& o) {
+      squared_error += o.squared_error;
+      used += o.used;
+      return *this;
+    }
+  };
+  constexpr std::size_t reference_block = 64;
+  const ErrorSums sums = nonlinear::ordered_block_sum<ErrorSums>(
+      references, reference_block, [&](std::size_t r, ErrorSums& s) {
+        const std::size_t i = std::size_t(double(r) * double(count) / double(references));
+        const auto nn = search.nearest(i, neighbours, theiler, count);
+        if (nn.empty()) return;
+        double prediction = 0;
+        for (const auto& m : nn) prediction += x[m.index + window + 1];
+        prediction /= double(nn.size());
+        const double err = x[i + window + 1] - prediction;
+        s.squared_error += err * err;
+        s.used += 1;
+      });
+  return std::sqrt(sums.squared_error / sums.used) / nonlinear::standard_deviation(x);
 }
 
 double time_reversal_asymmetry(std::span<const double> x, int delay) {

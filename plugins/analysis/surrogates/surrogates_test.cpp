@@ -72,5 +72,16 @@ TEST(Surrogates, LinearStochasticProcessIsNotRejected) {
   }
 }
 
+// The prediction error sums over 10,000 references: the same bits with one thread, with two,
+// and from one run to the next (fixed blocks merged in block order).
+TEST(Surrogates, PredictionErrorDoesNotDependOnTheThreadCount) {
+  const auto x = test_signals::henon(20000);
+  const auto [one, two, again] = test_signals::with_one_two_two_threads(
+      [&] { return prediction_error(x, 2, 1, 10, 5, 10000); });
+  EXPECT_GT(one, 0.0);
+  EXPECT_EQ(one, two);
+  EXPECT_EQ(two, again);
+}
+
 }  // namespace
 }  // namespace chatterlab

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
+#include "shared/nonlinear/ordered_sum.hpp"
 
 namespace chatterlab {
 
@@ -34,29 +35,49 @@ BlockCurve rosenstein_curve(std::span<const double> x, int dimension, int delay,
   if (n <= future + 10) return out;
   const std::size_t limit = n - future;  // references and neighbours keep the horizon
   references = std::max<std::size_t>(1, std::min(references, limit));
-#pragma omp parallel
-  {
-    std::vector<double> sum(out.sum.size(), 0.0), count(out.count.size(), 0.0);
-#pragma omp for schedule(dynamic, 16)
-    for (std::size_t r = 0; r < references; ++r) {
+  // References in fixed blocks, merged in block order (ordered_sum.hpp): the same curve
+  // whatever the thread count. A block of consecutive references adds to one or two bootstrap
+  // blocks' rows: [first, last) of the table, the only part merged and reset.
+  struct Partial {
+    std::vector<double> sum, count;
+    std::size_t first = 0, last = 0;
+  };
+  nonlinear::OrderedMerge<Partial> merger(
+      [&] {
+        return Partial{std::vector<double>(out.sum.size(), 0.0),
+                       std::vector<double>(out.count.size(), 0.0)};
+      },
+      [&](Partial& p) {
+        for (std::size_t q = p.first; q < p.last; ++q) {
+          out.sum[q] += p.sum[q];
+          out.count[q] += p.count[q];
+          p.sum[q] = p.count[q] = 0;
+        }
+        p.first = p.last = 0;
+      });
+  constexpr std::size_t reference_block = 16;
+  const std::size_t units = (references + reference_block - 1) / reference_block;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t unit = 0; unit < units; ++unit) {
+    Partial p = merger.take();
+    const std::size_t end = std::min(references, (unit + 1) * reference_block);
+    for (std::size_t r = unit * reference_block; r < end; ++r) {
       const std::size_t i = std::size_t(double(r) * double(limit) / double(references));
       const std::size_t offset = (i * kantz_blocks / limit) * steps;
       const auto nn = search.nearest(i, 1, theiler, limit);
       if (nn.empty() || !(nn[0].distance > 0)) continue;
       const std::size_t j = nn[0].index;
+      if (p.first == p.last) p.first = offset;
+      p.last = offset + steps;  // offsets grow with r
       for (std::size_t k = 0; k < steps; ++k) {
         const double d = e.distance(i + k * stride, j + k * stride);
         if (d > 0) {
-          sum[offset + k] += std::log(d);
-          count[offset + k] += 1;
+          p.sum[offset + k] += std::log(d);
+          p.count[offset + k] += 1;
         }
       }
     }
-#pragma omp critical
-    for (std::size_t k = 0; k < sum.size(); ++k) {
-      out.sum[k] += sum[k];
-      out.count[k] += count[k];
-    }
+    merger.give(unit, std::move(p));
   }
   return out;
 }

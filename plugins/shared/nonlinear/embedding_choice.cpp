@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
+#include "shared/nonlinear/ordered_sum.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab {
@@ -18,6 +19,22 @@ using nonlinear::NeighbourSearch;
 
 // Reference vectors used by FNN/Cao at most (evenly spread): fractions to 0.1 % (10 vectors).
 constexpr std::size_t max_fnn_references = 10000;
+// Reference vectors per block of the ordered FNN/Cao sums (a unit of parallel work).
+constexpr std::size_t fnn_reference_block = 64;
+
+// One dimension's false nearest neighbours (Kennel) and Cao's sums over the reference vectors.
+struct FnnCaoSums {
+  double false_neighbours = 0, valid = 0;  // references with a nearest neighbour
+  double e_sum = 0, e_star_sum = 0, cao_count = 0;
+  FnnCaoSums& operator+=(const FnnCaoSums& o) {
+    false_neighbours += o.false_neighbours;
+    valid += o.valid;
+    e_sum += o.e_sum;
+    e_star_sum += o.e_star_sum;
+    cao_count += o.cao_count;
+    return *this;
+  }
+};
 
 std::vector<double> autocorrelation(std::span<const double> x, std::size_t max_lag) {
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
@@ -120,28 +137,32 @@ DimensionChoice choose_dimension(std::span<const double> x, int delay, int max_d
     const NeighbourSearch search(embedding);
     const std::size_t stride = std::max<std::size_t>(1, count / max_fnn_references);
     const std::size_t extra = std::size_t(d) * std::size_t(delay);
-    double false_count = 0, valid = 0, e_sum = 0, e_star_sum = 0, cao_count = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : false_count, valid, e_sum, e_star_sum, cao_count)
-    for (std::size_t i = 0; i < count; i += stride) {
-      const auto nn = search.nearest(i, 1, theiler, count);
-      if (nn.empty() || !(nn[0].distance > 0)) continue;
-      const std::size_t j = nn[0].index;
-      const double r = nn[0].distance;
-      const double gain = std::abs(x[i + extra] - x[j + extra]);
-      valid += 1;
-      if (gain / r > distance_ratio || std::sqrt(r * r + gain * gain) / sigma > attractor_ratio)
-        false_count += 1;
-      const double rmax = embedding.max_distance(i, j);
-      if (rmax > 0) {
-        e_sum += std::max(rmax, gain) / rmax;
-        e_star_sum += gain;
-        cao_count += 1;
-      }
-    }
-    if (valid == 0 || cao_count == 0) break;
-    e[std::size_t(d)] = e_sum / cao_count;
-    e_star[std::size_t(d)] = e_star_sum / cao_count;
-    if (d <= max_dimension) out.fnn_fraction.push_back(false_count / valid);
+    // Reference vectors i = r * stride, summed in fixed blocks of r (ordered_sum.hpp): the
+    // same E1, E2 and FNN fraction whatever the thread count.
+    const std::size_t reference_count = (count + stride - 1) / stride;
+    const FnnCaoSums sums = nonlinear::ordered_block_sum<FnnCaoSums>(
+        reference_count, fnn_reference_block, [&](std::size_t r, FnnCaoSums& s) {
+          const std::size_t i = r * stride;
+          const auto nn = search.nearest(i, 1, theiler, count);
+          if (nn.empty() || !(nn[0].distance > 0)) return;
+          const std::size_t j = nn[0].index;
+          const double distance = nn[0].distance;
+          const double gain = std::abs(x[i + extra] - x[j + extra]);
+          s.valid += 1;
+          if (gain / distance > distance_ratio ||
+              std::sqrt(distance * distance + gain * gain) / sigma > attractor_ratio)
+            s.false_neighbours += 1;
+          const double rmax = embedding.max_distance(i, j);
+          if (rmax > 0) {
+            s.e_sum += std::max(rmax, gain) / rmax;
+            s.e_star_sum += gain;
+            s.cao_count += 1;
+          }
+        });
+    if (sums.valid == 0 || sums.cao_count == 0) break;
+    e[std::size_t(d)] = sums.e_sum / sums.cao_count;
+    e_star[std::size_t(d)] = sums.e_star_sum / sums.cao_count;
+    if (d <= max_dimension) out.fnn_fraction.push_back(sums.false_neighbours / sums.valid);
   }
   for (std::size_t d = 1; d < out.fnn_fraction.size() + 1 && d + 1 < e.size(); ++d) {
     if (e[d + 1] == 0) break;

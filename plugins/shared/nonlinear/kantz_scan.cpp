@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "shared/nonlinear/box_grid.hpp"
+#include "shared/nonlinear/ordered_sum.hpp"
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab {
@@ -605,16 +606,54 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
 
   out.sum.assign(kantz_blocks * row_size, 0.0);
   out.count.assign(kantz_blocks * row_size, 0.0);
-  // Products of per-reference mean square distances, one per block and table entry, are logged
-  // every `flush` references of the block (a log per reference and entry would cost as much as
-  // the neighbours) or when they approach under/overflow: every product is checked against
-  // 1e-200 / 1e200 after each factor, whatever the interval.
+  // ln rms = ln(mean square) / 2 is summed over the references as the log of products of
+  // per-reference mean squares, one product per block and table entry: a log per reference and
+  // entry would cost as much as the neighbours. A product is logged every `flush` references of
+  // its block within a grid row, or when it approaches under/overflow: every product is checked
+  // against 1e-200 / 1e200 after each factor, whatever the interval.
+  //
+  // Reproducible whatever the thread count (ordered_sum.hpp): a grid row is one unit of work.
+  // Its logs and the products left over at its end (RowSums) depend on the row alone, and the
+  // rows are merged in row_order, one at a time: the leftover products multiplied into running
+  // products (a product logged first when the two would leave [1e-200, 1e200]), the logs added.
+  // The counts are integers (exact in any order): per thread, added at the end.
   constexpr std::size_t flush = 32;
+  constexpr double tiny = 1e-200, huge = 1e200;
+  struct RowSums {
+    std::vector<double> sum, product;  // per block and table entry: logs, product left over
+    std::vector<std::uint8_t> touched;    // per block: a reference of the row is in it
+  };
+  std::vector<double> running(out.sum.size(), 1.0);
+  nonlinear::OrderedMerge<RowSums> merger(
+      [&] {
+        return RowSums{std::vector<double>(out.sum.size(), 0.0),
+                       std::vector<double>(out.sum.size(), 1.0),
+                       std::vector<std::uint8_t>(kantz_blocks, 0)};
+      },
+      [&](RowSums& row) {
+        for (std::size_t b = 0; b < kantz_blocks; ++b) {
+          if (!row.touched[b]) continue;
+          row.touched[b] = 0;
+          for (std::size_t q = b * row_size; q < (b + 1) * row_size; ++q) {
+            out.sum[q] += row.sum[q];
+            row.sum[q] = 0.0;
+            const double p = row.product[q];
+            if (p == 1.0) continue;
+            row.product[q] = 1.0;
+            const double joined = running[q] * p;
+            if (joined < tiny || joined > huge) {
+              out.sum[q] += 0.5 * std::log(running[q]);
+              running[q] = p;
+            } else {
+              running[q] = joined;
+            }
+          }
+        }
+      });
 #pragma omp parallel
   {
-    // Per-thread accumulators, merged once at the end: no shared writes in the loop.
-    std::vector<double> sum(out.sum.size(), 0.0), count(out.count.size(), 0.0);
-    std::vector<double> product(out.sum.size(), 1.0), factors(out.sum.size(), 0.0);
+    // Per-thread counts, merged once at the end: no shared writes in the loop.
+    std::vector<double> count(out.count.size(), 0.0);
     std::vector<std::size_t> pending(kantz_blocks, 0);
     // A group of consecutive references: their neighbours and their tables of binned sums.
     const std::size_t table = nr * dims * shape.padded;
@@ -627,13 +666,12 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       sums.head.assign(shape.profile_count() + 1, -1);
       sums.profile_count.assign(shape.profile_count() + 1, 0);
     }
+    RowSums row_sums;
     auto log_products = [&](std::size_t block) {
       for (std::size_t q = block * row_size; q < (block + 1) * row_size; ++q) {
-        if (factors[q] == 0) continue;
-        sum[q] += 0.5 * std::log(product[q]);  // ln rms = ln(mean square) / 2
-        count[q] += factors[q];
-        product[q] = 1.0;
-        factors[q] = 0.0;
+        if (row_sums.product[q] == 1.0) continue;  // no factor (or ln 1 = 0)
+        row_sums.sum[q] += 0.5 * std::log(row_sums.product[q]);  // ln rms = ln(mean square) / 2
+        row_sums.product[q] = 1.0;
       }
       pending[block] = 0;
     };
@@ -645,16 +683,19 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
                         bin_count.data() + g * nr * dims);
       for (std::size_t g = 0; g < members; ++g) {
         const std::size_t block = block_of(window.index[member_own[g]]);
+        row_sums.touched[block] = 1;
         const bool extreme = multiply_mean_squares(
             shape, steps, bins.data() + g * table, bin_count.data() + g * nr * dims,
-            mean_square.data(), product.data() + block * row_size,
-            factors.data() + block * row_size);
+            mean_square.data(), row_sums.product.data() + block * row_size,
+            count.data() + block * row_size);
         if (extreme || ++pending[block] == flush) log_products(block);
       }
       members = 0;
     };
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t rank = 0; rank < row_order.size(); ++rank) {
+      row_sums = merger.take();
+      std::fill(pending.begin(), pending.end(), 0);
       const std::size_t row = row_order[rank];
       // The window: reach_rows rows on either side.
       const std::size_t low = row > reach_rows ? row - reach_rows : 0;
@@ -687,14 +728,14 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
         if (members == reference_group) sum_group();
       }
       sum_group();
+      merger.give(rank, std::move(row_sums));
     }
-    for (std::size_t b = 0; b < kantz_blocks; ++b) log_products(b);
 #pragma omp critical
-    for (std::size_t q = 0; q < sum.size(); ++q) {
-      out.sum[q] += sum[q];
-      out.count[q] += count[q];
-    }
+    for (std::size_t q = 0; q < count.size(); ++q) out.count[q] += count[q];
   }
+  // The products left over after the last row.
+  for (std::size_t q = 0; q < running.size(); ++q)
+    if (running[q] != 1.0) out.sum[q] += 0.5 * std::log(running[q]);
   return out;
 }
 
