@@ -193,7 +193,7 @@ void RootSearch::locate_from_guesses() {
     if (best)
       std::erase_if(candidates, [&](const NewtonIterate& it) {
         if (reach(it) >= best->real()) return false;
-        if (options_.keep_approximate_roots) dropped_.push_back(it.s);
+        dropped_.push_back(it.s);
         return true;
       });
     if (stage == kPruningStages || candidates.empty()) break;
@@ -205,7 +205,7 @@ void RootSearch::locate_from_guesses() {
   }
   for (NewtonIterate& it : candidates) {  // still sorted by reach
     if (best && reach(it) < best->real()) {
-      if (options_.keep_approximate_roots) dropped_.push_back(it.s);
+      dropped_.push_back(it.s);
       continue;
     }
     finish(it);
@@ -392,6 +392,12 @@ RightmostRoot RootSearch::run() {
   double sigma_c = 0.0;
   try {
     locate_from_guesses();
+    if (options_.contour_hints) {
+      // Where the zeros are, to the Newton iterates' accuracy: the contours' step proposals.
+      std::vector<Complex> hints = roots_.roots();
+      hints.insert(hints.end(), dropped_.begin(), dropped_.end());
+      tracker_.set_zero_hints(std::move(hints));
+    }
     for (int round = 0;; ++round) {
       rightmost = rightmost_in_band();
       if (!rightmost)

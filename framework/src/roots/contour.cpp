@@ -61,7 +61,13 @@ double ContourTracker::model_step(const LocalModel& model, Complex s, Complex di
   const double theta = settings_.phase_step;
   double step = theta / std::max(std::abs((model.background * direction).imag()), 1e-300);
   if (!model.has_zero) return step;
-  const Complex w = (s - model.zero) * std::conj(direction);  // the zero at the origin, path along +real
+  return std::min(step, zero_step(model.zero, s, direction));
+}
+
+// The step from s along the path that turns the angle subtended by a zero by phase_step (infinite
+// once the zero is passed by more than that angle; 0 for a zero on the path).
+double ContourTracker::zero_step(Complex zero, Complex s, Complex direction) const {
+  const Complex w = (s - zero) * std::conj(direction);  // the zero at the origin, path along +real
   const double x = w.real(), y = std::abs(w.imag());
   if (y == 0.0) return 0.0;
   // The angle a = atan2(y, x) subtended by the zero decreases towards 0 along the path; the step
@@ -69,7 +75,29 @@ double ContourTracker::model_step(const LocalModel& model, Complex s, Complex di
   // and a > theta exactly when y - x tan(theta) > 0 (a in (0, pi), theta < pi/2): no atan2, no
   // tan per step.
   const double denominator = y - x * tan_phase_step_;
-  if (denominator > 0.0) step = std::min(step, tan_phase_step_ * (x * x + y * y) / denominator);
+  if (denominator > 0.0) return tan_phase_step_ * (x * x + y * y) / denominator;
+  return std::numeric_limits<double>::infinity();
+}
+
+void ContourTracker::set_zero_hints(std::vector<Complex> hints) {
+  hints_ = std::move(hints);
+  std::sort(hints_.begin(), hints_.end(), [](Complex a, Complex b) { return a.imag() < b.imag(); });
+}
+
+// On a vertical edge: the least step that turns the angle of a hinted zero by phase_step, over the
+// few hints nearest along the edge on either side (farther ones subtend less).
+double ContourTracker::hint_step(Complex s, Complex direction) const {
+  constexpr std::ptrdiff_t kNeighbours = 3;
+  double step = std::numeric_limits<double>::infinity();
+  if (hints_.empty() || direction.real() != 0.0) return step;
+  const auto above = std::upper_bound(hints_.begin(), hints_.end(), s.imag(),
+                                      [](double im, Complex h) { return im < h.imag(); });
+  const auto first = above - std::min(kNeighbours, above - hints_.begin());
+  const auto last = above + std::min(kNeighbours, hints_.end() - above);
+  for (auto it = first; it != last; ++it) {
+    const double hinted = zero_step(*it, s, direction);
+    if (hinted > 0.0) step = std::min(step, hinted);
+  }
   return step;
 }
 
@@ -125,6 +153,7 @@ bool ContourTracker::segment(const Node& from, const Node& to, PathIntegral& sum
   while (position < length) {
     double proposal = model ? model_step(*model, current.s, direction) : rate_step(current);
     if (!(proposal > 0.0)) proposal = rate_step(current);
+    proposal = std::min(proposal, hint_step(current.s, direction));
     double step = std::min({proposal, 4.0 * previous_step, length - position});
     for (;;) {
       bool last = position + step >= length * (1.0 - 1e-15);
@@ -132,24 +161,25 @@ bool ContourTracker::segment(const Node& from, const Node& to, PathIntegral& sum
           last ? std::optional<Node>(to) : node(from.s + direction * (position + step));
       if (next) {
         const double phase_change = wrap_phase(next->arg - current.arg);
-        const Complex log_change(next->log_abs - current.log_abs, phase_change);
-        const LocalModel fitted = fit(current, *next);
         const double l0 = magnitude(current.log_derivative), l1 = magnitude(next->log_derivative);
         // The step may not be longer than the larger of its ends' Newton distances |E/E'| (~ the
         // distance to the nearest zero): this refuses a long step that passes zeros in its
         // middle while the one-zero model still fits its ends (two zeros on one side make the
         // principal phase off by exactly 2 pi; found by the cross-check test in roots_test.cpp).
-        const double newton_distances = step * std::min(l0, l1);
+        // The cheap tests first: the local model is fitted only for a step that passes them.
         if (std::abs(phase_change) <= settings_.max_phase_step &&
-            newton_distances <= settings_.newton_distance_factor &&
-            magnitude(log_change - fitted.log_change) <= settings_.consistency) {
-          sum.phase += phase_change;
-          add_moments(current, *next, fitted, sum);
-          current = *next;
-          position = last ? length : position + step;
-          previous_step = step;
-          model = fitted;
-          break;
+            step * std::min(l0, l1) <= settings_.newton_distance_factor) {
+          const Complex log_change(next->log_abs - current.log_abs, phase_change);
+          const LocalModel fitted = fit(current, *next);
+          if (magnitude(log_change - fitted.log_change) <= settings_.consistency) {
+            sum.phase += phase_change;
+            add_moments(current, *next, fitted, sum);
+            current = *next;
+            position = last ? length : position + step;
+            previous_step = step;
+            model = fitted;
+            break;
+          }
         }
       }
       model.reset();
