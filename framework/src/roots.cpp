@@ -67,6 +67,10 @@ constexpr int kCertificateAttempts = 4;
 constexpr int kPruningStages = 2;
 constexpr double kPruningMargin = 3.0;
 constexpr int kMaxSubdivisionDepth = 60;
+// Contour hints pay where the certificate's edge passes many zeros (delay lattices: hundreds);
+// with a few, E's own local model sizes the steps as well and the hint lookup per step costs more
+// than it saves (roots_bench's neuron grid, ~170 evaluations per point, ran slower with hints).
+constexpr std::size_t kMinContourHints = 64;
 
 std::string show(Complex s) { return fmt::format("{:.6g}{:+.6g}i", s.real(), s.imag()); }
 
@@ -392,7 +396,7 @@ RightmostRoot RootSearch::run() {
   double sigma_c = 0.0;
   try {
     locate_from_guesses();
-    if (options_.contour_hints) {
+    if (options_.contour_hints && roots_.roots().size() + dropped_.size() >= kMinContourHints) {
       // Where the zeros are, to the Newton iterates' accuracy: the contours' step proposals.
       std::vector<Complex> hints = roots_.roots();
       hints.insert(hints.end(), dropped_.begin(), dropped_.end());
