@@ -81,17 +81,22 @@ double ContourTracker::zero_step(Complex zero, Complex s, Complex direction) con
 
 void ContourTracker::set_zero_hints(std::vector<Complex> hints) {
   hints_ = std::move(hints);
+  hint_cursor_ = 0;
   std::sort(hints_.begin(), hints_.end(), [](Complex a, Complex b) { return a.imag() < b.imag(); });
 }
 
 // On a vertical edge: the least step that turns the angle of a hinted zero by phase_step, over the
 // few hints nearest along the edge on either side (farther ones subtend less).
-double ContourTracker::hint_step(Complex s, Complex direction) const {
+double ContourTracker::hint_step(Complex s, Complex direction) {
   constexpr std::ptrdiff_t kNeighbours = 3;
   double step = std::numeric_limits<double>::infinity();
   if (hints_.empty() || direction.real() != 0.0) return step;
-  const auto above = std::upper_bound(hints_.begin(), hints_.end(), s.imag(),
-                                      [](double im, Complex h) { return im < h.imag(); });
+  // The first hint above s (an upper bound by Im), found by walking from the last one: the
+  // contour visits the edge in order, so the walk is a step or two (a binary search per step
+  // was 7 % of feed_risk_problem2's time).
+  while (hint_cursor_ < hints_.size() && hints_[hint_cursor_].imag() <= s.imag()) ++hint_cursor_;
+  while (hint_cursor_ > 0 && hints_[hint_cursor_ - 1].imag() > s.imag()) --hint_cursor_;
+  const auto above = hints_.begin() + static_cast<std::ptrdiff_t>(hint_cursor_);
   const auto first = above - std::min(kNeighbours, above - hints_.begin());
   const auto last = above + std::min(kNeighbours, hints_.end() - above);
   for (auto it = first; it != last; ++it) {

@@ -87,7 +87,7 @@ class ContourTracker {
   void add_moments(const Node& a, const Node& b, const LocalModel& model, PathIntegral& sum) const;
   double model_step(const LocalModel& model, Complex s, Complex direction) const;
   double zero_step(Complex zero, Complex s, Complex direction) const;
-  double hint_step(Complex s, Complex direction) const;
+  double hint_step(Complex s, Complex direction);
   bool segment(const Node& from, const Node& to, PathIntegral& sum, Complex& failure_point);
   bool path(const std::vector<Complex>& vertices, PathIntegral& sum, Complex& failure_point);
 
@@ -96,6 +96,7 @@ class ContourTracker {
   double tan_phase_step_;  // tan(settings_.phase_step), for model_step
   Complex centre_ = 0.0;  // moments are taken about this point
   std::vector<Complex> hints_;  // sorted by Im
+  std::size_t hint_cursor_ = 0;  // index of the first hint above the last point asked about
 };
 
 }  // namespace chatterlab::roots_detail
