@@ -67,10 +67,6 @@ constexpr int kCertificateAttempts = 4;
 constexpr int kPruningStages = 2;
 constexpr double kPruningMargin = 3.0;
 constexpr int kMaxSubdivisionDepth = 60;
-// Contour hints pay where the certificate's edge passes many zeros (delay lattices: hundreds);
-// with a few, E's own local model sizes the steps as well and the hint lookup per step costs more
-// than it saves (roots_bench's neuron grid, ~170 evaluations per point, ran slower with hints).
-constexpr std::size_t kMinContourHints = 64;
 
 std::string show(Complex s) { return fmt::format("{:.6g}{:+.6g}i", s.real(), s.imag()); }
 
@@ -197,7 +193,7 @@ void RootSearch::locate_from_guesses() {
     if (best)
       std::erase_if(candidates, [&](const NewtonIterate& it) {
         if (reach(it) >= best->real()) return false;
-        dropped_.push_back(it.s);
+        if (options_.keep_approximate_roots) dropped_.push_back(it.s);
         return true;
       });
     if (stage == kPruningStages || candidates.empty()) break;
@@ -209,7 +205,7 @@ void RootSearch::locate_from_guesses() {
   }
   for (NewtonIterate& it : candidates) {  // still sorted by reach
     if (best && reach(it) < best->real()) {
-      dropped_.push_back(it.s);
+      if (options_.keep_approximate_roots) dropped_.push_back(it.s);
       continue;
     }
     finish(it);
@@ -396,12 +392,6 @@ RightmostRoot RootSearch::run() {
   double sigma_c = 0.0;
   try {
     locate_from_guesses();
-    if (options_.contour_hints && roots_.roots().size() + dropped_.size() >= kMinContourHints) {
-      // Where the zeros are, to the Newton iterates' accuracy: the contours' step proposals.
-      std::vector<Complex> hints = roots_.roots();
-      hints.insert(hints.end(), dropped_.begin(), dropped_.end());
-      tracker_.set_zero_hints(std::move(hints));
-    }
     for (int round = 0;; ++round) {
       rightmost = rightmost_in_band();
       if (!rightmost)

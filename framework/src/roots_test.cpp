@@ -234,42 +234,6 @@ TEST(Roots, ContourCountsAgreeWithConservativeSettings) {
   }
 }
 
-// Hints (approximate zeros) only size the steps: on the dense-lattice rectangles of the test
-// above, exact hints, hints off by a tenth of the lattice spacing and hints far from any zero all
-// give the exact count; exact hints take fewer evaluations than none.
-TEST(Roots, ContourHintsChangeTheStepsNotTheCount) {
-  KnownZeros e({{-0.3, 700.0}, {-2e-3, 2500.0}, {0.4, 0.0}}, {{0.999, 60.0 / 55.0}, {0.9, 0.9}});
-  const double work_re = std::log(0.999) * 55.0 / 60.0, work_spacing = kTwoPi * 55.0 / 60.0;
-  const double other_re = std::log(0.9) / 0.9, other_spacing = kTwoPi / 0.9;
-  std::vector<Complex> exact = {{-0.3, 700.0}, {-2e-3, 2500.0}, {0.4, 0.0}}, shifted, wrong;
-  for (double y = 0.0; y < 3200.0; y += work_spacing) exact.emplace_back(work_re, y);
-  for (double y = 0.0; y < 3200.0; y += other_spacing) exact.emplace_back(other_re, y);
-  for (Complex z : exact) {
-    shifted.push_back(z + Complex(0.0, 0.1 * work_spacing));
-    wrong.push_back(Complex(-40.0, z.imag() + 0.5 * work_spacing));
-  }
-  std::mt19937 random(5);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (int trial = 0; trial < 12; ++trial) {
-    const double offset = std::pow(10.0, -7.0 + 7.0 * unit(random)) * (unit(random) < 0.5 ? -1.0 : 1.0);
-    const Box box{work_re + offset, 2.0, 0.0, 100.0 + 3000.0 * unit(random)};
-    long plain_evaluations = 0;
-    const std::vector<const std::vector<Complex>*> hint_sets = {nullptr, &exact, &shifted, &wrong};
-    for (const std::vector<Complex>* hints : hint_sets) {
-      Evaluator evaluate(e, 10'000'000);
-      ContourTracker tracker(evaluate, ContourSettings{});
-      if (hints) tracker.set_zero_hints(*hints);
-      const auto count = tracker.count(box);
-      ASSERT_TRUE(count.ok) << "trial " << trial;
-      EXPECT_EQ(count.zeros, e.zeros_in(box)) << "trial " << trial << " left edge offset " << offset;
-      if (!hints) plain_evaluations = evaluate.count();
-      if (hints == &exact) {
-        EXPECT_LT(evaluate.count(), plain_evaluations) << "trial " << trial;
-      }
-    }
-  }
-}
-
 // A warm start from a neighbouring parameter set's roots: the same certified root with fewer
 // evaluations; from useless guesses, the search falls back to the model's own and still finds it.
 TEST(Roots, WarmStartGivesTheSameCertifiedRoot) {
@@ -343,20 +307,6 @@ TEST(Roots, ExhaustedBudgetIsUncertifiedOrAFailure) {
   EXPECT_NE(found.certificate.find("budget"), std::string::npos) << found.certificate;
   options.max_function_evaluations = 1;
   EXPECT_THROW(find_rightmost_root(e, options), PointFailure);
-}
-
-// The search with contour hints (the default) and without: the same certified root.
-TEST(Roots, ContourHintsKeepTheCertifiedRoot) {
-  KnownZeros e({{-4e-4, 2000.0}, {-0.2, 300.0}}, {{0.999, 60.0 / 55.0}, {0.98, 60.0 / 1450.0}});
-  RootSearchOptions options;
-  options.max_frequency_hz = 500.0;
-  const RightmostRoot hinted = find_rightmost_root(e, options);
-  options.contour_hints = false;
-  const RightmostRoot plain = find_rightmost_root(e, options);
-  ASSERT_TRUE(hinted.certified && plain.certified) << hinted.certificate << " / " << plain.certificate;
-  EXPECT_LE(std::abs(hinted.root - Complex(-4e-4, 2000.0)), 1e-9 * 2000.0);
-  EXPECT_LE(std::abs(hinted.root - plain.root), 1e-12 * std::abs(plain.root));
-  EXPECT_LT(hinted.function_evaluations, plain.function_evaluations);
 }
 
 TEST(Roots, ConcurrentSearchesAreIdenticalToASerialOne) {

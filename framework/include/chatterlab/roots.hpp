@@ -37,9 +37,6 @@ struct RootSearchOptions {
   const std::vector<Complex>* warm_start = nullptr;
   // Fill RightmostRoot::approximate_roots (for warm-starting a neighbouring search).
   bool keep_approximate_roots = false;
-  // Size the certificate contour's steps from the located roots and the dropped Newton candidates
-  // as well as from E along the path (fewer refused steps; the acceptance tests are the same).
-  bool contour_hints = true;
 };
 
 struct RightmostRoot {

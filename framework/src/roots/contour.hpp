@@ -56,13 +56,6 @@ class ContourTracker {
 
   BoxCount count(const Box& box);
 
-  // Approximate positions of zeros (Im >= 0; e.g. Newton iterates), used only to PROPOSE step
-  // lengths on vertical edges, where the left edge of a certificate passes hundreds of zeros: a
-  // step aimed from the zero ahead is rarely refused, where one extrapolated from the zero behind
-  // lands on the next zero and is cut back. Every step is still accepted only by the tests above,
-  // so wrong or missing hints cost evaluations, never a zero.
-  void set_zero_hints(std::vector<Complex> hints);
-
  private:
   struct Node {
     Complex s;
@@ -86,8 +79,6 @@ class ContourTracker {
   static LocalModel fit(const Node& a, const Node& b);
   void add_moments(const Node& a, const Node& b, const LocalModel& model, PathIntegral& sum) const;
   double model_step(const LocalModel& model, Complex s, Complex direction) const;
-  double zero_step(Complex zero, Complex s, Complex direction) const;
-  double hint_step(Complex s, Complex direction);
   bool segment(const Node& from, const Node& to, PathIntegral& sum, Complex& failure_point);
   bool path(const std::vector<Complex>& vertices, PathIntegral& sum, Complex& failure_point);
 
@@ -95,8 +86,6 @@ class ContourTracker {
   ContourSettings settings_;
   double tan_phase_step_;  // tan(settings_.phase_step), for model_step
   Complex centre_ = 0.0;  // moments are taken about this point
-  std::vector<Complex> hints_;  // sorted by Im
-  std::size_t hint_cursor_ = 0;  // index of the first hint above the last point asked about
 };
 
 }  // namespace chatterlab::roots_detail
