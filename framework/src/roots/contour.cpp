@@ -132,24 +132,26 @@ bool ContourTracker::segment(const Node& from, const Node& to, PathIntegral& sum
           last ? std::optional<Node>(to) : node(from.s + direction * (position + step));
       if (next) {
         const double phase_change = wrap_phase(next->arg - current.arg);
-        const Complex log_change(next->log_abs - current.log_abs, phase_change);
-        const LocalModel fitted = fit(current, *next);
         const double l0 = magnitude(current.log_derivative), l1 = magnitude(next->log_derivative);
         // The step may not be longer than the larger of its ends' Newton distances |E/E'| (~ the
         // distance to the nearest zero): this refuses a long step that passes zeros in its
         // middle while the one-zero model still fits its ends (two zeros on one side make the
         // principal phase off by exactly 2 pi; found by the cross-check test in roots_test.cpp).
-        const double newton_distances = step * std::min(l0, l1);
+        // The cheap tests first: the local model is fitted only for a step that passes them (the
+        // same tests and results; ~14 % of the fits were for steps these two refuse).
         if (std::abs(phase_change) <= settings_.max_phase_step &&
-            newton_distances <= settings_.newton_distance_factor &&
-            magnitude(log_change - fitted.log_change) <= settings_.consistency) {
-          sum.phase += phase_change;
-          add_moments(current, *next, fitted, sum);
-          current = *next;
-          position = last ? length : position + step;
-          previous_step = step;
-          model = fitted;
-          break;
+            step * std::min(l0, l1) <= settings_.newton_distance_factor) {
+          const Complex log_change(next->log_abs - current.log_abs, phase_change);
+          const LocalModel fitted = fit(current, *next);
+          if (magnitude(log_change - fitted.log_change) <= settings_.consistency) {
+            sum.phase += phase_change;
+            add_moments(current, *next, fitted, sum);
+            current = *next;
+            position = last ? length : position + step;
+            previous_step = step;
+            model = fitted;
+            break;
+          }
         }
       }
       model.reset();

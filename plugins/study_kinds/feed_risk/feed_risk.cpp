@@ -699,13 +699,12 @@ void stable_window(OptimiseResult& result) {
 }
 
 // The candidates (amplitude ratio x spindle speed, in increasing speed per amplitude) and their
-// plans at the spindle speed. The planner runs serially, once per planning speed (a modulated
-// candidate is planned at its lowest speed).
+// plans at the spindle speed. The planner runs once per planning speed (a modulated candidate is
+// planned at its lowest speed), the speeds in parallel: plans are independent and the planner's
+// expression trees are immutable, so the plans are the same for any thread count.
 std::vector<std::vector<planner::SegmentConditions>> candidates_and_plans(const Replan& replan,
                                                                         const OptimiseSettings& settings,
                                                                         std::vector<Candidate>& candidates) {
-  std::map<double, std::vector<planner::SegmentConditions>> plans;  // by planning speed
-  std::vector<std::vector<planner::SegmentConditions>> candidate_plans;
   for (double a : settings.amplitude_ratios) {
     const double lo = settings.spindle_min_rpm / (1.0 - a), hi = settings.spindle_max_rpm / (1.0 + a);
     if (!(a >= 0.0 && a < 1.0) || lo > hi * (1 + 1e-12))
@@ -717,13 +716,20 @@ std::vector<std::vector<planner::SegmentConditions>> candidates_and_plans(const 
       c.amplitude_ratio = a;
       c.spindle_speed_rpm = steps == 1 ? std::min(lo, hi) : lo + (hi - lo) * i / (steps - 1);
       c.planning_speed_rpm = c.spindle_speed_rpm * (1.0 - a);
-      auto it = plans.find(c.planning_speed_rpm);
-      if (it == plans.end()) it = plans.emplace(c.planning_speed_rpm, replan(c.planning_speed_rpm)).first;
-      std::vector<planner::SegmentConditions> plan = it->second;
-      for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
       candidates.push_back(c);
-      candidate_plans.push_back(std::move(plan));
     }
+  }
+  std::map<double, std::size_t> plan_of_speed;  // planning speed -> index into plans
+  for (const Candidate& c : candidates) plan_of_speed.emplace(c.planning_speed_rpm, plan_of_speed.size());
+  std::vector<double> speeds(plan_of_speed.size());
+  for (const auto& [speed, index] : plan_of_speed) speeds[index] = speed;
+  std::vector<std::vector<planner::SegmentConditions>> plans(speeds.size());
+  parallel_tasks(speeds.size(), [&](std::size_t k) { plans[k] = replan(speeds[k]); });
+  std::vector<std::vector<planner::SegmentConditions>> candidate_plans;
+  for (const Candidate& c : candidates) {
+    std::vector<planner::SegmentConditions> plan = plans[plan_of_speed.at(c.planning_speed_rpm)];
+    for (auto& seg : plan) seg.spindle_speed_rpm = c.spindle_speed_rpm;
+    candidate_plans.push_back(std::move(plan));
   }
   return candidate_plans;
 }

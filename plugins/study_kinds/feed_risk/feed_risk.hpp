@@ -215,7 +215,8 @@ struct Candidate {
   bool admissible = false;  // within the time limit
 };
 
-// Re-plans at a spindle speed: the planner's segments at that speed.
+// Re-plans at a spindle speed: the planner's segments at that speed. optimise calls it once per
+// planning speed, concurrently from its OpenMP threads: it must be thread-safe.
 using Replan = std::function<std::vector<planner::SegmentConditions>(double spindle_speed_rpm)>;
 
 struct OptimiseResult {

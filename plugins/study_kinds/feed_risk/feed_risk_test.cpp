@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <numbers>
 #include <set>
 #include <span>
@@ -271,8 +272,12 @@ TEST(FeedRisk, OptimiserReplansRatesAndKeepsTheTimeLimit) {
   // The planner's behaviour in miniature: the axial-speed bound grows with the spindle speed, so
   // the same 20 segments take 300/n times as long at n rpm.
   std::vector<double> replanned_at;
+  std::mutex replanned_mutex;  // the optimiser plans its speeds concurrently
   const Replan replan = [&](double rpm) {
-    replanned_at.push_back(rpm);
+    {
+      const std::lock_guard<std::mutex> lock(replanned_mutex);
+      replanned_at.push_back(rpm);
+    }
     return constant_plan(20, 300.0 / rpm, 100.0, rpm);
   };
   OptimiseSettings o;
