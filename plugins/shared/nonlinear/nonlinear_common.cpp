@@ -74,13 +74,13 @@ std::size_t vector_count(std::size_t n, int dimension, int delay) {
 }
 
 Embedding::Embedding(std::span<const double> x, int dimension, int delay, std::size_t count)
-    : dimension_(dimension), delay_(delay) {
+    : x_(x.data()), delay_samples_(std::size_t(delay)), dimension_(dimension), delay_(delay) {
+  if (dimension < 1 || dimension > max_dimension || delay < 1)
+    throw PointFailure(fmt::format("delay embedding: dimension {} and delay {} samples: needs "
+                                   "1 <= dimension <= {} and delay >= 1",
+                                   dimension, delay, max_dimension));
   const std::size_t available = vector_count(x.size(), dimension, delay);
   count_ = count == 0 ? available : std::min(count, available);
-  data_.resize(count_ * std::size_t(dimension));
-  for (std::size_t i = 0; i < count_; ++i)
-    for (int k = 0; k < dimension; ++k)
-      data_[i * std::size_t(dimension) + std::size_t(k)] = x[i + std::size_t(k * delay)];
 }
 
 // ---------------------------------------------------------------- neighbour search
@@ -163,8 +163,8 @@ NeighbourSearch::NeighbourSearch(const Embedding& embedding)
   // local stretching: neighbours closer than 1e-9 of the data range are skipped.
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t i = 0; i < embedding.size(); ++i) {
-    lo = std::min(lo, embedding.point(i)[0]);
-    hi = std::max(hi, embedding.point(i)[0]);
+    lo = std::min(lo, embedding.coordinate(i, 0));
+    hi = std::max(hi, embedding.coordinate(i, 0));
   }
   const double floor = 1e-9 * (hi - lo);
   floor2_ = floor * floor;
@@ -174,14 +174,18 @@ NeighbourSearch::~NeighbourSearch() = default;
 std::vector<Neighbour> NeighbourSearch::nearest(std::size_t i, std::size_t k,
                                                 std::size_t theiler, std::size_t limit) const {
   TheilerKnn result(k, i, theiler, limit, floor2_);
-  tree_->index.findNeighbors(result, embedding_.point(i), nanoflann::SearchParams());
+  double query[Embedding::max_dimension];
+  embedding_.copy_point(i, query);
+  tree_->index.findNeighbors(result, query, nanoflann::SearchParams());
   return result.sorted();
 }
 
 std::vector<Neighbour> NeighbourSearch::within(std::size_t i, double radius, std::size_t theiler,
                                                std::size_t limit, std::size_t max_count) const {
   TheilerRadius result(radius * radius, i, theiler, limit, floor2_, max_count);
-  tree_->index.findNeighbors(result, embedding_.point(i), nanoflann::SearchParams(32, 0, false));
+  double query[Embedding::max_dimension];
+  embedding_.copy_point(i, query);
+  tree_->index.findNeighbors(result, query, nanoflann::SearchParams(32, 0, false));
   return result.take();
 }
 
