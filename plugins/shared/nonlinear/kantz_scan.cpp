@@ -561,7 +561,7 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
-  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
+  nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
   if (profile_codes > (std::size_t(1) << 24))
@@ -580,24 +580,11 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
   const std::size_t rows = grid.rows();
-  std::vector<std::uint32_t> sorted(limit);
-  {
-    const nonlinear::BoxGrid::Entry* entries = grid.entries();
-    const double nonlinear::BoxGrid::Entry::*along =
-        shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
-    std::vector<std::uint32_t> order;
-    for (std::size_t row = 0; row < rows; ++row) {
-      order.clear();
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
-        order.push_back(std::uint32_t(q));
-      std::sort(order.begin(), order.end(), [&](std::uint32_t u, std::uint32_t w) {
-        const double au = entries[u].*along, aw = entries[w].*along;
-        return au < aw || (au == aw && entries[u].index < entries[w].index);
-      });
-      for (std::size_t n = 0; n < order.size(); ++n)
-        sorted[grid.row_begin(row) + n] = entries[order[n]].index;
-    }
-  }
+  // The sort axis: the second delay coordinate x_{j + delay} (one-axis grid: x_j).
+  const double* along_axis = x.data() + (shape.axes == 2 ? shape.step : 0);
+  grid.sort_rows_by(along_axis);
+  const std::uint32_t* sorted = grid.entries();
+  const bool every_reference = references == limit;
   const std::vector<std::size_t> row_order = grid.rows_most_work_first();
   // A candidate's sort-axis coordinate is at most eps from the reference's (the margin keeps
   // every pair whose rounded distance is within eps).
@@ -623,6 +610,37 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
     std::vector<double> mean_square(steps);
     std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
+    // The window's row boundaries (positions of rows low..high in it), and with sparse
+    // references the points it holds.
+    std::size_t row_first[2 * reach_rows + 2] = {};
+    std::vector<std::uint32_t> selected;
+    std::vector<double> reference_along;
+    // Sparse references (a sample of a long series): the window holds only the points of rows
+    // low..high within reach of one of the row's references along the sort axis, the union of
+    // their candidate stretches (the test below is the stretch's, so no candidate is lost and
+    // the candidates keep their order: the sums are the same). A whole window of a long series
+    // held the separation histories of a few per cent of all points per thread, hundreds of
+    // megabytes at 10^7 samples, most of them no reference's candidate. False when the row
+    // holds no reference.
+    auto select_candidates = [&](std::size_t row, std::size_t low, std::size_t high) {
+      reference_along.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        if (is_reference[sorted[q]]) reference_along.push_back(along_axis[sorted[q]]);
+      if (reference_along.empty()) return false;
+      selected.clear();
+      for (std::size_t u = low; u < high; ++u) {
+        row_first[u - low] = selected.size();
+        std::size_t k = 0;  // the first reference whose stretch does not end below the point
+        for (std::size_t q = grid.row_begin(u); q < grid.row_begin(u + 1); ++q) {
+          const double v = along_axis[sorted[q]];
+          while (k < reference_along.size() && !(v <= reference_along[k] + reach)) ++k;
+          if (k == reference_along.size()) break;
+          if (!(v < reference_along[k] - reach)) selected.push_back(sorted[q]);
+        }
+      }
+      row_first[high - low] = selected.size();
+      return true;
+    };
     for (NeighbourSums& sums : group) {
       sums.head.assign(shape.profile_count() + 1, -1);
       sums.profile_count.assign(shape.profile_count() + 1, 0);
@@ -660,8 +678,15 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       const std::size_t low = row > reach_rows ? row - reach_rows : 0;
       const std::size_t high = std::min(row + reach_rows + 1, rows);
       const std::size_t base = grid.row_begin(low);
-      window.fill(shape, x.data(), sorted.data() + base, grid.row_begin(high) - base);
-      auto first_of = [&](std::size_t u) { return grid.row_begin(u) - base; };
+      if (every_reference) {
+        window.fill(shape, x.data(), sorted + base, grid.row_begin(high) - base);
+        for (std::size_t u = low; u <= high; ++u) row_first[u - low] = grid.row_begin(u) - base;
+      } else if (!select_candidates(row, low, high)) {
+        continue;  // no reference in this row
+      } else {
+        window.fill(shape, x.data(), selected.data(), selected.size());
+      }
+      auto first_of = [&](std::size_t u) { return row_first[u - low]; };
       const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
       // Each row's stretch [first, last): the points within reach of the reference along the
       // sort axis; both ends only move forward as the references do.
