@@ -152,12 +152,14 @@ struct RowWindow {
   std::vector<double> time;              // j at [w] as a double (vector Theiler test)
   std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
   std::size_t count = 0, padded = 0;
-  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n) {
+  // The points' coordinates, indices and times; their histories too unless `with_histories` is
+  // false (sampled references: fill_histories later stores only those a group needs).
+  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n,
+            bool with_histories = true) {
     const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
     count = n;
     padded = s.padded;
     stride = count + 4;
-    histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
     index.assign(stride, 0);
     time.assign(stride, 0.0);
@@ -166,6 +168,17 @@ struct RowWindow {
       index[w] = std::uint32_t(j);
       time[w] = double(j);
       for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
+    }
+    if (with_histories) fill_histories(s, x, points, n);
+  }
+  // The separation histories of points[0..n), at positions 0..n-1.
+  void fill_histories(const ScanShape& s, const double* x, const std::uint32_t* points,
+                      std::size_t n) {
+    count = n;
+    padded = s.padded;
+    histories.resize(count * s.padded);
+    for (std::size_t w = 0; w < count; ++w) {
+      const std::size_t j = points[w];
       for (std::size_t c = 0; c < planes(); ++c) {
         // Samples t < history exist for every stored point (j < limit); zeros beyond.
         float* to = histories.data() + c * plane_width * count + w * width(c);
@@ -618,10 +631,8 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
     // Sparse references (a sample of a long series): the window holds only the points of rows
     // low..high within reach of one of the row's references along the sort axis, the union of
     // their candidate stretches (the test below is the stretch's, so no candidate is lost and
-    // the candidates keep their order: the sums are the same). A whole window of a long series
-    // held the separation histories of a few per cent of all points per thread, hundreds of
-    // megabytes at 10^7 samples, most of them no reference's candidate. False when the row
-    // holds no reference.
+    // the candidates keep their order: the sums are the same), without their histories (see
+    // gather_histories). False when the row holds no reference.
     auto select_candidates = [&](std::size_t row, std::size_t low, std::size_t high) {
       reference_along.clear();
       for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
@@ -655,12 +666,52 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       }
       pending[block] = 0;
     };
-    // The group's history sums plane by plane, then its tables into the products.
+    // Sampled references: the histories of one reference and its neighbours only, copied into
+    // `store` (a whole window's histories, a few per cent of a long series' points at ~4 bytes
+    // a history sample, were most of the scan's memory; a group's were still ~100 MB per thread
+    // at 10^6 samples). The neighbour lists are renumbered to store positions; their order, and
+    // so the sums, stay the same. Returns the reference's store position.
+    RowWindow store;
+    constexpr std::uint32_t not_stored = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> store_slot;  // per window position: its store position
+    std::vector<std::uint32_t> store_points, stored_positions;
+    auto gather_histories = [&](std::size_t own, NeighbourSums& sums) {
+      if (store_slot.size() < window.count) store_slot.resize(window.count, not_stored);
+      store_points.clear();
+      stored_positions.clear();
+      auto store_position = [&](std::uint32_t w) {
+        if (store_slot[w] == not_stored) {
+          store_slot[w] = std::uint32_t(store_points.size());
+          store_points.push_back(window.index[w]);
+          stored_positions.push_back(w);
+        }
+        return store_slot[w];
+      };
+      const std::size_t own_position = store_position(std::uint32_t(own));
+      for (std::size_t u = 0; u < sums.used; ++u)
+        for (std::int32_t p = sums.head[sums.present[u]]; p >= 0; p = sums.next[std::size_t(p)])
+          sums.near[std::size_t(p)] = store_position(sums.near[std::size_t(p)]);
+      store.fill_histories(shape, x.data(), store_points.data(), store_points.size());
+      for (const std::uint32_t w : stored_positions) store_slot[w] = not_stored;
+      return own_position;
+    };
+    // The group's history sums plane by plane (sampled references: reference by reference, each
+    // from its own store; each reference's sums are its own, so the order changes nothing),
+    // then its tables into the products.
     auto sum_group = [&]() {
-      for (std::size_t c = 0; c < window.planes(); ++c)
-        for (std::size_t g = 0; g < members; ++g)
-          add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
-                        bin_count.data() + g * nr * dims);
+      if (every_reference) {
+        for (std::size_t c = 0; c < window.planes(); ++c)
+          for (std::size_t g = 0; g < members; ++g)
+            add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
+                          bin_count.data() + g * nr * dims);
+      } else {
+        for (std::size_t g = 0; g < members; ++g) {
+          const std::size_t own = gather_histories(member_own[g], group[g]);
+          for (std::size_t c = 0; c < store.planes(); ++c)
+            add_histories(shape, store, own, c, group[g], bins.data() + g * table,
+                          bin_count.data() + g * nr * dims);
+        }
+      }
       for (std::size_t g = 0; g < members; ++g) {
         const std::size_t block = block_of(window.index[member_own[g]]);
         const bool extreme = multiply_mean_squares(
@@ -684,7 +735,7 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       } else if (!select_candidates(row, low, high)) {
         continue;  // no reference in this row
       } else {
-        window.fill(shape, x.data(), selected.data(), selected.size());
+        window.fill(shape, x.data(), selected.data(), selected.size(), false);
       }
       auto first_of = [&](std::size_t u) { return row_first[u - low]; };
       const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
