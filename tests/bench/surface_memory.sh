@@ -10,8 +10,11 @@
 # so the roundness evaluation (reference circles, UPR table, Wz|f) runs on all of them. FILTER
 # `monitor` measures a signal instead: a `chatter_monitor` study (both detectors, as
 # studies/chatter_monitor_transition.toml) on SAMPLES samples at 8 kHz of 0.1 um noise with a
-# 361.7 Hz chatter growing at 0.02 /s from 600 s, one column.
-# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER|closed|monitor [BASELINE]]]
+# 361.7 Hz chatter growing at 0.02 /s from 600 s, one column. FILTER `chaos` measures a
+# `signal_analysis` study instead (the methods of studies/signal_analysis_lorenz.toml, each with
+# its default reference-point counts) on SAMPLES samples of the Lorenz x coordinate (sigma 10,
+# rho 28, beta 8/3, RK4 at dt = 0.01 as 100 Hz, after 50 time units of transient, "%.8g").
+# Usage: surface_memory.sh CHATTERLAB WORK_DIR [SAMPLES [FILTER|closed|monitor|chaos [BASELINE]]]
 set -eu
 bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
 mkdir -p "$work"
@@ -49,6 +52,39 @@ seed = 1
 [monitor.rbf_density]
 window_samples = 50
 rho = 0.2
+EOF
+elif [ "$filter" = chaos ]; then
+  data=$work/lorenz_$samples.csv
+  generate "$data" 'function f(x, y, z) { dx = 10 * (y - x); dy = x * (28 - z) - y; dz = x * y - 8 / 3 * z }
+    BEGIN {
+      x = 1; y = 1; z = 1; h = 0.01; print "x"
+      for (i = -5000; i < n; i++) {
+        f(x, y, z); k1x = dx; k1y = dy; k1z = dz
+        f(x + h / 2 * k1x, y + h / 2 * k1y, z + h / 2 * k1z); k2x = dx; k2y = dy; k2z = dz
+        f(x + h / 2 * k2x, y + h / 2 * k2y, z + h / 2 * k2z); k3x = dx; k3y = dy; k3z = dz
+        f(x + h * k3x, y + h * k3y, z + h * k3z)
+        x += h / 6 * (k1x + 2 * k2x + 2 * k3x + dx)
+        y += h / 6 * (k1y + 2 * k2y + 2 * k3y + dy)
+        z += h / 6 * (k1z + 2 * k2z + 2 * k3z + dz)
+        if (i >= 0) printf "%.8g\n", x
+      }
+    }'
+  study=$work/chaos_$samples.toml
+  cat >"$study" <<EOF
+[study]
+kind = "signal_analysis"
+name = "memory: Lorenz x, $samples samples"
+
+[input]
+file = "lorenz_$samples.csv"
+column = "x"
+sample_rate_hz = 100.0
+
+[analysis]
+methods = ["embedding", "correlation_dimension", "lyapunov", "lyapunov_spectrum", "surrogates"]
+
+[analysis.surrogates]
+surrogates = 19
 EOF
 elif [ "$filter" = closed ]; then
   data=$work/roundness_$samples.csv

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "shared/nonlinear/nonlinear_common.hpp"
 #include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/errors.hpp"
 
@@ -10,6 +11,31 @@ namespace {
 
 using test_signals::make_analysis;
 using test_signals::series;
+
+// Delay vectors are read from the series (no copy): coordinate k of vector i is x[i + k delay],
+// and the k-d tree built over the view finds the nearest neighbour outside the Theiler window
+// that a search over every vector finds.
+TEST(Embedding, DelayVectorsAreViewsOfTheSeriesAndTheTreeFindsTheNearest) {
+  const std::vector<double> x = test_signals::lorenz(3000, 0.01);
+  const int dimension = 3, delay = 7;
+  const std::size_t theiler = 20;
+  const nonlinear::Embedding e(x, dimension, delay);
+  ASSERT_EQ(e.size(), x.size() - 14);
+  EXPECT_EQ(e.coordinate(100, 2), x[114]);
+  EXPECT_EQ(e.kdtree_get_pt(5, 1), x[12]);
+  const nonlinear::NeighbourSearch search(e);
+  for (std::size_t i = 0; i < e.size(); i += 97) {
+    std::size_t best = e.size();
+    for (std::size_t j = 0; j < e.size(); ++j)
+      if ((j > i ? j - i : i - j) > theiler && (best == e.size() || e.distance(i, j) < e.distance(i, best)))
+        best = j;
+    const auto nn = search.nearest(i, 1, theiler, e.size());
+    ASSERT_EQ(nn.size(), 1u);
+    EXPECT_EQ(nn[0].index, best) << "vector " << i;
+    EXPECT_NEAR(nn[0].distance, e.distance(i, best), 1e-12 * e.distance(i, best));
+  }
+  EXPECT_THROW(nonlinear::Embedding(x, 65, 1), PointFailure);
+}
 
 TEST(Embedding, HenonNeedsDelayOneDimensionTwo) {
   const Json r = make_analysis("embedding")->analyse(

@@ -125,12 +125,19 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
                                                   int delay, std::size_t theiler,
                                                   std::size_t steps,
                                                   const std::vector<double>& radii,
-                                                  bool exact = false, std::size_t stride = 1) {
-  const auto scan = kantz_scan(x, m0, m1, delay, theiler, steps, 0, radii, stride);
+                                                  bool exact = false, std::size_t stride = 1,
+                                                  std::size_t references = 0) {
+  const auto scan = kantz_scan(x, m0, m1, delay, theiler, steps, references, radii, stride);
   // Curve point k is the separation after k stride samples.
   const std::size_t reach = (steps - 1) * stride + std::size_t(m1 - 1) * std::size_t(delay) + 1;
   const std::size_t limit = x.size() - reach + 1;
-  ASSERT_EQ(scan.references, limit);
+  ASSERT_EQ(scan.references, references == 0 ? limit : references);
+  // The scan's references: every vector, or `references` evenly spread.
+  std::vector<std::size_t> reference_index;
+  for (std::size_t r = 0; r < scan.references; ++r)
+    reference_index.push_back(references == 0 ? r
+                                              : std::size_t(double(r) * double(limit) /
+                                                            double(references)));
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double unit = std::ldexp(1.0, -24), range = *hi - *lo;
   const double coincident2 = std::pow(1e-9 * range, 2);  // the scan's coincidence rule
@@ -144,7 +151,7 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
       // refs[k]: references whose neighbours are not all coincident at step k (the scan, like
       // TISEAN, leaves a zero mean out of the average).
       std::vector<double> sum(steps, 0.0), bound(steps, 0.0), refs(steps, 0.0);
-      for (std::size_t i = 0; i < limit; ++i) {
+      for (const std::size_t i : reference_index) {
         std::vector<double> mean(steps, 0.0);
         double n = 0;
         for (std::size_t j = 0; j < limit; ++j) {
@@ -164,7 +171,8 @@ void expect_kantz_scan_matches_direct_evaluation(const std::vector<double>& x, i
           bound[k] += std::sqrt(double(m)) * unit * range / rms + (n + 3) * unit;
         }
       }
-      ASSERT_GT(refs[0], 50) << "radius " << radii[r] << ", m = " << m;
+      ASSERT_GT(refs[0], references == 0 ? 50.0 : 0.2 * double(references))
+          << "radius " << radii[r] << ", m = " << m;
       const auto curve = scan.curve(r, m);
       for (std::size_t k = 0; k < steps; ++k) {
         const double tolerance = exact ? 1e-11 : bound[k] / refs[k] + 1e-11;
@@ -213,6 +221,19 @@ TEST(Lyapunov, KantzScanMatchesDirectEvaluationExactlyOnAnIntegerSignal) {
   std::vector<double> x = test_signals::henon(1500);
   for (double& v : x) v = std::round(1000 * v);
   expect_kantz_scan_matches_direct_evaluation(x, 2, 3, 1, 0, 4, {12.5, 20.5, 40.5}, true);
+}
+
+TEST(Lyapunov, KantzScanMatchesDirectEvaluationWithSparseReferences) {
+  // A sample of references (a long series): each row's window holds only the candidates of its
+  // references. Two-axis grid with a Theiler window, exactly (integer signal) ...
+  std::vector<double> x = test_signals::henon(3000);
+  for (double& v : x) v = std::round(1000 * v);
+  expect_kantz_scan_matches_direct_evaluation(x, 2, 3, 1, 2, 4, {20.5, 40.5}, true, 1, 300);
+  // ... one-axis grid (m from 1) with delay 2, and a flow with a history stride.
+  expect_kantz_scan_matches_direct_evaluation(test_signals::henon(3000), 1, 3, 2, 3, 12,
+                                              {0.05, 0.1}, false, 1, 250);
+  expect_kantz_scan_matches_direct_evaluation(test_signals::lorenz(3000, 0.02), 2, 4, 6, 10, 15,
+                                              {1.0, 2.5}, false, 3, 200);
 }
 
 TEST(LyapunovAccuracy, HenonCurvesAreParallelInEveryDimension) {

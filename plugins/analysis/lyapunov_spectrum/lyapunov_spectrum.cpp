@@ -75,14 +75,11 @@ SpectrumEstimate lyapunov_spectrum(std::span<const double> x, int dimension, int
       if (nn.size() < dim + 1) continue;
       y.resize(Eigen::Index(nn.size()), d);
       z.resize(Eigen::Index(nn.size()), d);
-      const double* b = e.point(i);
-      const double* b1 = e.point(i + m);
       for (std::size_t r = 0; r < nn.size(); ++r) {
-        const double* a0 = e.point(nn[r].index);
-        const double* a1 = e.point(nn[r].index + m);
-        for (Eigen::Index c = 0; c < d; ++c) {
-          y(Eigen::Index(r), c) = a0[c] - b[c];
-          z(Eigen::Index(r), c) = a1[c] - b1[c];
+        const std::size_t j = nn[r].index;
+        for (int c = 0; c < dimension; ++c) {
+          y(Eigen::Index(r), c) = e.coordinate(j, c) - e.coordinate(i, c);
+          z(Eigen::Index(r), c) = e.coordinate(j + m, c) - e.coordinate(i + m, c);
         }
       }
       // Z = Y A^T in the least-squares sense (N3: A U = V with the covariance matrices).

@@ -13,14 +13,10 @@ namespace chatterlab::nonlinear {
 
 // A box grid over the first `axes` (1 or 2) delay coordinates of x (vectors 0..points-1),
 // boxes at least `radius` wide, so the neighbours of a point lie in its own and the adjacent
-// boxes. Points are stored box by box (coordinates copied next to the index) so a query streams
-// through contiguous memory.
+// boxes. Points are stored box by box as their time indices (4 bytes a point: the coordinates
+// are read from x, which must outlive the grid; a copy of them beside each index took 24).
 class BoxGrid {
  public:
-  struct Entry {
-    double a, b;
-    std::uint32_t index;
-  };
   BoxGrid(std::span<const double> x, int delay, int axes, std::size_t points, double radius)
       : axes_(axes), delay_(std::size_t(delay)) {
     const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
@@ -32,22 +28,32 @@ class BoxGrid {
     per_axis_ = std::size_t(range / width_) + 1;
     const std::size_t cells = axes == 2 ? per_axis_ * per_axis_ : per_axis_;
     start_.assign(cells + 1, 0);
-    std::vector<std::size_t> cell_of(points);
+    std::vector<std::uint32_t> cell_of(points);  // cells <= 2^20
     for (std::size_t j = 0; j < points; ++j) {
-      cell_of[j] = cell(x[j], axes == 2 ? x[j + delay_] : 0.0);
+      cell_of[j] = std::uint32_t(cell(x[j], axes == 2 ? x[j + delay_] : 0.0));
       ++start_[cell_of[j] + 1];
     }
     for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
     entries_.resize(points);
     std::vector<std::size_t> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t j = 0; j < points; ++j)
-      entries_[fill[cell_of[j]]++] = {x[j], axes == 2 ? x[j + delay_] : 0.0, std::uint32_t(j)};
+    for (std::size_t j = 0; j < points; ++j) entries_[fill[cell_of[j]]++] = std::uint32_t(j);
   }
   // Box of a point (its order in the grid's storage).
   std::size_t cell(double a, double b) const {
     return axes_ == 2 ? axis_box(a) * per_axis_ + axis_box(b) : axis_box(a);
   }
-  const Entry* entries() const { return entries_.data(); }
+  // The time indices of the points, box by box (within a box in time order).
+  const std::uint32_t* entries() const { return entries_.data(); }
+  // Sorts the points of each row by key[j] (ties by time j): a row is then one stretch along
+  // that coordinate, whatever its boxes along the second axis.
+  void sort_rows_by(const double* key) {
+    for (std::size_t u = 0; u < per_axis_; ++u)
+      std::sort(entries_.begin() + std::ptrdiff_t(row_begin(u)),
+                entries_.begin() + std::ptrdiff_t(row_begin(u + 1)),
+                [key](std::uint32_t a, std::uint32_t b) {
+                  return key[a] < key[b] || (key[a] == key[b] && a < b);
+                });
+  }
   // Rows: the boxes of the first axis. Row u's points are entries [row_begin(u), row_begin(u + 1))
   // (stored box by box along the second axis), so adjacent rows are adjacent in storage.
   std::size_t rows() const { return per_axis_; }
@@ -78,7 +84,7 @@ class BoxGrid {
   std::size_t delay_, per_axis_ = 1;
   double low_ = 0, width_ = 1;
   std::vector<std::size_t> start_;
-  std::vector<Entry> entries_;
+  std::vector<std::uint32_t> entries_;
 };
 
 }  // namespace chatterlab::nonlinear

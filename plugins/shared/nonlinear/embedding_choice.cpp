@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 
 #include "shared/nonlinear/nonlinear_common.hpp"
@@ -41,6 +42,8 @@ std::vector<double> autocorrelation(std::span<const double> x, std::size_t max_l
   double var = 0;
   for (double v : x) var += (v - mean) * (v - mean);
   std::vector<double> acf(max_lag + 1);
+  // Lags are independent (O(N) each, up to 1000 of them: threads share them out).
+#pragma omp parallel for schedule(dynamic, 4)
   for (std::size_t lag = 0; lag <= max_lag; ++lag) {
     double s = 0;
     for (std::size_t i = 0; i + lag < x.size(); ++i) s += (x[i] - mean) * (x[i + lag] - mean);
@@ -53,30 +56,40 @@ std::vector<double> mutual_information(std::span<const double> x, std::size_t ma
                                        int bins) {
   const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
   const double width = (*hi - *lo) / bins;
-  std::vector<int> box(x.size());
+  // One byte per sample (bins <= 256: the parameter's limit).
+  if (bins < 1 || bins > 256)
+    throw PointFailure(fmt::format("mutual information: {} bins: needs 1..256", bins));
+  std::vector<std::uint8_t> box(x.size());
   for (std::size_t i = 0; i < x.size(); ++i)
-    box[i] = std::min(bins - 1, int((x[i] - *lo) / width));
+    box[i] = std::uint8_t(std::min(bins - 1, int((x[i] - *lo) / width)));
   const std::size_t b = std::size_t(bins);
   std::vector<double> ami(max_lag + 1);
-  std::vector<double> joint(b * b), pa(b), pb(b);
-  for (std::size_t lag = 0; lag <= max_lag; ++lag) {
-    std::fill(joint.begin(), joint.end(), 0.0);
-    std::fill(pa.begin(), pa.end(), 0.0);
-    std::fill(pb.begin(), pb.end(), 0.0);
-    const std::size_t n = x.size() - lag;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t u = std::size_t(box[i]), v = std::size_t(box[i + lag]);
-      joint[u * b + v] += 1;
-      pa[u] += 1;
-      pb[v] += 1;
+  // Lags are independent (O(N) each, up to 1000 of them: threads share them out). The joint
+  // histogram is counted in integers; the marginals are its row and column sums (exact).
+#pragma omp parallel
+  {
+    std::vector<std::uint64_t> joint(b * b);
+    std::vector<double> pa(b), pb(b);
+#pragma omp for schedule(dynamic, 4)
+    for (std::size_t lag = 0; lag <= max_lag; ++lag) {
+      std::fill(joint.begin(), joint.end(), 0);
+      const std::size_t n = x.size() - lag;
+      for (std::size_t i = 0; i < n; ++i) ++joint[std::size_t(box[i]) * b + box[i + lag]];
+      std::fill(pa.begin(), pa.end(), 0.0);
+      std::fill(pb.begin(), pb.end(), 0.0);
+      for (std::size_t u = 0; u < b; ++u)
+        for (std::size_t v = 0; v < b; ++v) {
+          pa[u] += double(joint[u * b + v]);
+          pb[v] += double(joint[u * b + v]);
+        }
+      double s = 0;
+      for (std::size_t u = 0; u < b; ++u)
+        for (std::size_t v = 0; v < b; ++v) {
+          const double p = double(joint[u * b + v]);
+          if (p > 0) s += p / double(n) * std::log(p * double(n) / (pa[u] * pb[v]));
+        }
+      ami[lag] = s;
     }
-    double s = 0;
-    for (std::size_t u = 0; u < b; ++u)
-      for (std::size_t v = 0; v < b; ++v) {
-        const double p = joint[u * b + v];
-        if (p > 0) s += p / double(n) * std::log(p * double(n) / (pa[u] * pb[v]));
-      }
-    ami[lag] = s;
   }
   return ami;
 }

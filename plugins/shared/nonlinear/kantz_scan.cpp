@@ -153,12 +153,14 @@ struct RowWindow {
   std::vector<double> time;              // j at [w] as a double (vector Theiler test)
   std::size_t stride = 0;                // points + 4 (zero slack for the last vector)
   std::size_t count = 0, padded = 0;
-  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n) {
+  // The points' coordinates, indices and times; their histories too unless `with_histories` is
+  // false (sampled references: fill_histories later stores only those a group needs).
+  void fill(const ScanShape& s, const double* x, const std::uint32_t* points, std::size_t n,
+            bool with_histories = true) {
     const std::size_t coordinates = std::size_t(s.min_dimension) + s.dims - 1;
     count = n;
     padded = s.padded;
     stride = count + 4;
-    histories.resize(count * s.padded);
     columns.assign(coordinates * stride, 0.0);
     index.assign(stride, 0);
     time.assign(stride, 0.0);
@@ -167,6 +169,17 @@ struct RowWindow {
       index[w] = std::uint32_t(j);
       time[w] = double(j);
       for (std::size_t l = 0; l < coordinates; ++l) columns[l * stride + w] = x[j + l * s.step];
+    }
+    if (with_histories) fill_histories(s, x, points, n);
+  }
+  // The separation histories of points[0..n), at positions 0..n-1.
+  void fill_histories(const ScanShape& s, const double* x, const std::uint32_t* points,
+                      std::size_t n) {
+    count = n;
+    padded = s.padded;
+    histories.resize(count * s.padded);
+    for (std::size_t w = 0; w < count; ++w) {
+      const std::size_t j = points[w];
       for (std::size_t c = 0; c < planes(); ++c) {
         // Samples t < history exist for every stored point (j < limit); zeros beyond.
         float* to = histories.data() + c * plane_width * count + w * width(c);
@@ -562,7 +575,7 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
   shape.places.assign(dims, 0.0);
   double place = 1;
   for (std::size_t d = 0; d < dims; ++d, place *= double(nr + 1)) shape.places[d] = place;
-  const nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
+  nonlinear::BoxGrid grid(x, delay, shape.axes, limit, radii.back() / double(reach_rows));
   std::size_t profile_codes = 1;
   for (std::size_t d = 0; d < dims; ++d) profile_codes *= nr + 1;
   if (profile_codes > (std::size_t(1) << 24))
@@ -581,24 +594,11 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       is_reference[std::size_t(double(r) * double(limit) / double(references))] = 1;
   auto block_of = [&](std::size_t i) { return i * kantz_blocks / limit; };
   const std::size_t rows = grid.rows();
-  std::vector<std::uint32_t> sorted(limit);
-  {
-    const nonlinear::BoxGrid::Entry* entries = grid.entries();
-    const double nonlinear::BoxGrid::Entry::*along =
-        shape.axes == 2 ? &nonlinear::BoxGrid::Entry::b : &nonlinear::BoxGrid::Entry::a;
-    std::vector<std::uint32_t> order;
-    for (std::size_t row = 0; row < rows; ++row) {
-      order.clear();
-      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
-        order.push_back(std::uint32_t(q));
-      std::sort(order.begin(), order.end(), [&](std::uint32_t u, std::uint32_t w) {
-        const double au = entries[u].*along, aw = entries[w].*along;
-        return au < aw || (au == aw && entries[u].index < entries[w].index);
-      });
-      for (std::size_t n = 0; n < order.size(); ++n)
-        sorted[grid.row_begin(row) + n] = entries[order[n]].index;
-    }
-  }
+  // The sort axis: the second delay coordinate x_{j + delay} (one-axis grid: x_j).
+  const double* along_axis = x.data() + (shape.axes == 2 ? shape.step : 0);
+  grid.sort_rows_by(along_axis);
+  const std::uint32_t* sorted = grid.entries();
+  const bool every_reference = references == limit;
   const std::vector<std::size_t> row_order = grid.rows_most_work_first();
   // A candidate's sort-axis coordinate is at most eps from the reference's (the margin keeps
   // every pair whose rounded distance is within eps).
@@ -662,6 +662,35 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
     std::vector<double> mean_square(steps);
     std::size_t members = 0, member_own[reference_group] = {};
     RowWindow window;
+    // The window's row boundaries (positions of rows low..high in it), and with sparse
+    // references the points it holds.
+    std::size_t row_first[2 * reach_rows + 2] = {};
+    std::vector<std::uint32_t> selected;
+    std::vector<double> reference_along;
+    // Sparse references (a sample of a long series): the window holds only the points of rows
+    // low..high within reach of one of the row's references along the sort axis, the union of
+    // their candidate stretches (the test below is the stretch's, so no candidate is lost and
+    // the candidates keep their order: the sums are the same), without their histories (see
+    // gather_histories). False when the row holds no reference.
+    auto select_candidates = [&](std::size_t row, std::size_t low, std::size_t high) {
+      reference_along.clear();
+      for (std::size_t q = grid.row_begin(row); q < grid.row_begin(row + 1); ++q)
+        if (is_reference[sorted[q]]) reference_along.push_back(along_axis[sorted[q]]);
+      if (reference_along.empty()) return false;
+      selected.clear();
+      for (std::size_t u = low; u < high; ++u) {
+        row_first[u - low] = selected.size();
+        std::size_t k = 0;  // the first reference whose stretch does not end below the point
+        for (std::size_t q = grid.row_begin(u); q < grid.row_begin(u + 1); ++q) {
+          const double v = along_axis[sorted[q]];
+          while (k < reference_along.size() && !(v <= reference_along[k] + reach)) ++k;
+          if (k == reference_along.size()) break;
+          if (!(v < reference_along[k] - reach)) selected.push_back(sorted[q]);
+        }
+      }
+      row_first[high - low] = selected.size();
+      return true;
+    };
     for (NeighbourSums& sums : group) {
       sums.head.assign(shape.profile_count() + 1, -1);
       sums.profile_count.assign(shape.profile_count() + 1, 0);
@@ -675,12 +704,52 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       }
       pending[block] = 0;
     };
-    // The group's history sums plane by plane, then its tables into the products.
+    // Sampled references: the histories of one reference and its neighbours only, copied into
+    // `store` (a whole window's histories, a few per cent of a long series' points at ~4 bytes
+    // a history sample, were most of the scan's memory; a group's were still ~100 MB per thread
+    // at 10^6 samples). The neighbour lists are renumbered to store positions; their order, and
+    // so the sums, stay the same. Returns the reference's store position.
+    RowWindow store;
+    constexpr std::uint32_t not_stored = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> store_slot;  // per window position: its store position
+    std::vector<std::uint32_t> store_points, stored_positions;
+    auto gather_histories = [&](std::size_t own, NeighbourSums& sums) {
+      if (store_slot.size() < window.count) store_slot.resize(window.count, not_stored);
+      store_points.clear();
+      stored_positions.clear();
+      auto store_position = [&](std::uint32_t w) {
+        if (store_slot[w] == not_stored) {
+          store_slot[w] = std::uint32_t(store_points.size());
+          store_points.push_back(window.index[w]);
+          stored_positions.push_back(w);
+        }
+        return store_slot[w];
+      };
+      const std::size_t own_position = store_position(std::uint32_t(own));
+      for (std::size_t u = 0; u < sums.used; ++u)
+        for (std::int32_t p = sums.head[sums.present[u]]; p >= 0; p = sums.next[std::size_t(p)])
+          sums.near[std::size_t(p)] = store_position(sums.near[std::size_t(p)]);
+      store.fill_histories(shape, x.data(), store_points.data(), store_points.size());
+      for (const std::uint32_t w : stored_positions) store_slot[w] = not_stored;
+      return own_position;
+    };
+    // The group's history sums plane by plane (sampled references: reference by reference, each
+    // from its own store; each reference's sums are its own, so the order changes nothing),
+    // then its tables into the products.
     auto sum_group = [&]() {
-      for (std::size_t c = 0; c < window.planes(); ++c)
-        for (std::size_t g = 0; g < members; ++g)
-          add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
-                        bin_count.data() + g * nr * dims);
+      if (every_reference) {
+        for (std::size_t c = 0; c < window.planes(); ++c)
+          for (std::size_t g = 0; g < members; ++g)
+            add_histories(shape, window, member_own[g], c, group[g], bins.data() + g * table,
+                          bin_count.data() + g * nr * dims);
+      } else {
+        for (std::size_t g = 0; g < members; ++g) {
+          const std::size_t own = gather_histories(member_own[g], group[g]);
+          for (std::size_t c = 0; c < store.planes(); ++c)
+            add_histories(shape, store, own, c, group[g], bins.data() + g * table,
+                          bin_count.data() + g * nr * dims);
+        }
+      }
       for (std::size_t g = 0; g < members; ++g) {
         const std::size_t block = block_of(window.index[member_own[g]]);
         row_sums.touched[block] = 1;
@@ -701,8 +770,15 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
       const std::size_t low = row > reach_rows ? row - reach_rows : 0;
       const std::size_t high = std::min(row + reach_rows + 1, rows);
       const std::size_t base = grid.row_begin(low);
-      window.fill(shape, x.data(), sorted.data() + base, grid.row_begin(high) - base);
-      auto first_of = [&](std::size_t u) { return grid.row_begin(u) - base; };
+      if (every_reference) {
+        window.fill(shape, x.data(), sorted + base, grid.row_begin(high) - base);
+        for (std::size_t u = low; u <= high; ++u) row_first[u - low] = grid.row_begin(u) - base;
+      } else if (!select_candidates(row, low, high)) {
+        continue;  // no reference in this row
+      } else {
+        window.fill(shape, x.data(), selected.data(), selected.size(), false);
+      }
+      auto first_of = [&](std::size_t u) { return row_first[u - low]; };
       const double* along = window.columns.data() + std::size_t(shape.axes - 1) * window.stride;
       // Each row's stretch [first, last): the points within reach of the reference along the
       // sort axis; both ends only move forward as the references do.

@@ -9,6 +9,8 @@
 #include <numeric>
 #include <random>
 
+#include <malloc.h>
+
 #include "chatterlab/errors.hpp"
 
 namespace chatterlab::nonlinear {
@@ -74,13 +76,13 @@ std::size_t vector_count(std::size_t n, int dimension, int delay) {
 }
 
 Embedding::Embedding(std::span<const double> x, int dimension, int delay, std::size_t count)
-    : dimension_(dimension), delay_(delay) {
+    : x_(x.data()), delay_samples_(std::size_t(delay)), dimension_(dimension), delay_(delay) {
+  if (dimension < 1 || dimension > max_dimension || delay < 1)
+    throw PointFailure(fmt::format("delay embedding: dimension {} and delay {} samples: needs "
+                                   "1 <= dimension <= {} and delay >= 1",
+                                   dimension, delay, max_dimension));
   const std::size_t available = vector_count(x.size(), dimension, delay);
   count_ = count == 0 ? available : std::min(count, available);
-  data_.resize(count_ * std::size_t(dimension));
-  for (std::size_t i = 0; i < count_; ++i)
-    for (int k = 0; k < dimension; ++k)
-      data_[i * std::size_t(dimension) + std::size_t(k)] = x[i + std::size_t(k * delay)];
 }
 
 // ---------------------------------------------------------------- neighbour search
@@ -151,9 +153,21 @@ class TheilerRadius {
 };
 }  // namespace
 
+// Vectors per leaf of the k-d tree at most. nanoflann's nodes take 48 bytes in its pool (size_t
+// leaf bounds, two child pointers, 16-byte words) and leaves of at most 16 vectors hold about 4.5
+// on average: ~21 bytes of nodes per vector beside its 4-byte index, the largest array of a
+// 10^7-sample analysis (250 MB). From 2^20 vectors on, leaves of up to 32 halve that (a query
+// scans a few more vectors per leaf). Below, 16 as always: the leaf size decides which of
+// several equally distant neighbours a query returns (quantised data have such ties), so
+// shorter series keep their results.
+namespace {
+std::size_t leaf_vectors(std::size_t vectors) { return vectors >= (std::size_t(1) << 20) ? 32 : 16; }
+}  // namespace
+
 struct NeighbourSearch::Tree {
   explicit Tree(const Embedding& e)
-      : index(std::size_t(e.dimension()), e, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
+      : index(std::size_t(e.dimension()), e,
+              nanoflann::KDTreeSingleIndexAdaptorParams(leaf_vectors(e.size()))) {}
   KdTree index;
 };
 
@@ -163,25 +177,35 @@ NeighbourSearch::NeighbourSearch(const Embedding& embedding)
   // local stretching: neighbours closer than 1e-9 of the data range are skipped.
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t i = 0; i < embedding.size(); ++i) {
-    lo = std::min(lo, embedding.point(i)[0]);
-    hi = std::max(hi, embedding.point(i)[0]);
+    lo = std::min(lo, embedding.coordinate(i, 0));
+    hi = std::max(hi, embedding.coordinate(i, 0));
   }
   const double floor = 1e-9 * (hi - lo);
   floor2_ = floor * floor;
 }
-NeighbourSearch::~NeighbourSearch() = default;
+NeighbourSearch::~NeighbourSearch() {
+  tree_.reset();
+  // nanoflann allocates its nodes in 8 KB blocks from the heap, which stay resident when freed
+  // (~150 MB after a tree of 10^7 vectors): return them, so that the next method's arrays do
+  // not come on top of them.
+  malloc_trim(0);
+}
 
 std::vector<Neighbour> NeighbourSearch::nearest(std::size_t i, std::size_t k,
                                                 std::size_t theiler, std::size_t limit) const {
   TheilerKnn result(k, i, theiler, limit, floor2_);
-  tree_->index.findNeighbors(result, embedding_.point(i), nanoflann::SearchParams());
+  double query[Embedding::max_dimension];
+  embedding_.copy_point(i, query);
+  tree_->index.findNeighbors(result, query, nanoflann::SearchParams());
   return result.sorted();
 }
 
 std::vector<Neighbour> NeighbourSearch::within(std::size_t i, double radius, std::size_t theiler,
                                                std::size_t limit, std::size_t max_count) const {
   TheilerRadius result(radius * radius, i, theiler, limit, floor2_, max_count);
-  tree_->index.findNeighbors(result, embedding_.point(i), nanoflann::SearchParams(32, 0, false));
+  double query[Embedding::max_dimension];
+  embedding_.copy_point(i, query);
+  tree_->index.findNeighbors(result, query, nanoflann::SearchParams(32, 0, false));
   return result.take();
 }
 

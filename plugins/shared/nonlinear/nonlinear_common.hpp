@@ -75,44 +75,53 @@ void check_finite(std::span<const double> x, const std::string& what);
 void check_series(std::span<const double> x, int dimension, int delay, const std::string& what);
 
 // ---------------------------------------------------------------- delay embedding (N1)
-// X_i = (x_i, x_{i+delay}, ..., x_{i+(dimension-1) delay}), i < count. The vectors are stored
-// contiguously (count x dimension doubles: O(N) memory) so the k-d tree and distance loops run
-// over cache-friendly rows. `count` may be set below the maximum so that embeddings of several
-// dimensions share the same vector indices.
+// X_i = (x_i, x_{i+delay}, ..., x_{i+(dimension-1) delay}), i < count: a view of the series,
+// each coordinate read from x when it is needed (the series must outlive the embedding). A copy
+// of the vectors would take dimension x 8 bytes per sample (80 for the FNN sweep's dimension 10,
+// an order of magnitude more than the series); reading them from the series gives the same
+// numbers in the same order of operations. `count` may be set below the maximum so that
+// embeddings of several dimensions share the same vector indices.
 class Embedding {
  public:
+  // Dimensions a view serves at most (the parameters allow 30; FNN examines one more).
+  static constexpr int max_dimension = 64;
   Embedding(std::span<const double> x, int dimension, int delay, std::size_t count = 0);
   std::size_t size() const { return count_; }
   int dimension() const { return dimension_; }
   int delay() const { return delay_; }
-  const double* point(std::size_t i) const { return data_.data() + i * std::size_t(dimension_); }
+  // Coordinate k of vector i.
+  double coordinate(std::size_t i, int k) const { return x_[i + std::size_t(k) * delay_samples_]; }
+  // Vector i copied to out[0 .. dimension) (a k-d tree query needs contiguous coordinates).
+  void copy_point(std::size_t i, double* out) const {
+    for (int k = 0; k < dimension_; ++k) out[k] = coordinate(i, k);
+  }
   // Euclidean and maximum-norm distances (inline: the Lyapunov loops spend most time here).
   double distance(std::size_t i, std::size_t j) const {
-    const double* a = point(i);
-    const double* b = point(j);
     double s = 0;
-    for (int k = 0; k < dimension_; ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
+    for (int k = 0; k < dimension_; ++k) {
+      const double d = coordinate(i, k) - coordinate(j, k);
+      s += d * d;
+    }
     return std::sqrt(s);
   }
   double max_distance(std::size_t i, std::size_t j) const {
-    const double* a = point(i);
-    const double* b = point(j);
     double s = 0;
-    for (int k = 0; k < dimension_; ++k) s = std::max(s, std::abs(a[k] - b[k]));
+    for (int k = 0; k < dimension_; ++k)
+      s = std::max(s, std::abs(coordinate(i, k) - coordinate(j, k)));
     return s;
   }
 
   // nanoflann dataset adaptor
   std::size_t kdtree_get_point_count() const { return count_; }
   double kdtree_get_pt(std::size_t i, std::size_t k) const {
-    return data_[i * std::size_t(dimension_) + k];
+    return x_[i + k * delay_samples_];
   }
   template <class Box>
   bool kdtree_get_bbox(Box&) const { return false; }
 
  private:
-  std::vector<double> data_;
-  std::size_t count_ = 0;
+  const double* x_ = nullptr;
+  std::size_t count_ = 0, delay_samples_ = 1;
   int dimension_ = 1, delay_ = 1;
 };
 
