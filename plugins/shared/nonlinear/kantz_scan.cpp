@@ -774,7 +774,8 @@ KantzScan kantz_scan(std::span<const double> x, int min_dimension, int max_dimen
         window.fill(shape, x.data(), sorted + base, grid.row_begin(high) - base);
         for (std::size_t u = low; u <= high; ++u) row_first[u - low] = grid.row_begin(u) - base;
       } else if (!select_candidates(row, low, high)) {
-        continue;  // no reference in this row
+        merger.give(rank, std::move(row_sums));  // no reference in this row: nothing to add,
+        continue;                                // but every unit is given (in-order merge)
       } else {
         window.fill(shape, x.data(), selected.data(), selected.size(), false);
       }
