@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -210,6 +211,15 @@ void plot_density_snapshots(const std::vector<Json>& snapshots, const std::strin
                         std::move(x), std::move(p)});
   }
   plot::render(c, out_dir, stem);
+}
+
+bool alarm_within(const DetectorTrack& track, double t0_s, double t1_s) {
+  auto it = std::upper_bound(track.t_s.begin(), track.t_s.end(), t0_s);
+  const auto at = [&](auto i) { return track.alarm[static_cast<std::size_t>(i - track.t_s.begin())]; };
+  if (it != track.t_s.begin() && at(it - 1) != 0.0) return true;
+  for (; it != track.t_s.end() && *it <= t1_s; ++it)
+    if (at(it) != 0.0) return true;
+  return false;
 }
 
 }  // namespace chatterlab::monitor

@@ -92,6 +92,11 @@ struct DetectorTrack {
   std::vector<double> alarm;    // state after each evaluation, 0 / 1
 };
 DetectorTrack detector_track(ResultWithArrays&& result);
+// Whether the alarm is on at any time in [t0_s, t1_s]: on at t0_s, or switched on by an
+// evaluation in (t0_s, t1_s]. A plot's shading line stands for its whole time bucket, so an
+// alarm shorter than a bucket (10^7 samples: 1500 lines of ~0.8 s) is drawn, not lost between
+// two lines.
+bool alarm_within(const DetectorTrack& track, double t0_s, double t1_s);
 
 // Plot of a detector_result(): scores over time, the alarm state (0/1, after persistence) as a
 // step line and the threshold dashed; <stem>.png/.svg in out_dir.

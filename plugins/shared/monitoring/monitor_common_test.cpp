@@ -48,6 +48,22 @@ TEST(AlarmPersistence, RaisesAndClearsAfterRuns) {
   EXPECT_TRUE(track_alarms(track_of({0, 0.49, 0}), 1, 1.0).intervals.empty());  // below threshold
 }
 
+// A plot's shading bucket is shaded when the alarm is on anywhere in it: an alarm between two
+// shading lines (on from 2.04 s to 2.06 s, evaluations every 0.01 s) is found in the bucket
+// [1.6, 2.4] s although it is off at both ends and at the bucket's centre.
+TEST(AlarmWithin, AnAlarmShorterThanTheBucketIsFound) {
+  DetectorTrack track;
+  for (int k = 0; k <= 400; ++k) {
+    track.t_s.push_back(0.01 * k);
+    track.alarm.push_back(k >= 204 && k < 206 ? 1.0 : 0.0);
+  }
+  EXPECT_TRUE(alarm_within(track, 1.6, 2.4));
+  EXPECT_TRUE(alarm_within(track, 2.045, 2.3));  // on at the bucket's start
+  EXPECT_FALSE(alarm_within(track, 1.6, 2.035)); // ends before the alarm starts
+  EXPECT_FALSE(alarm_within(track, 2.065, 3.0)); // starts after it ended
+  EXPECT_FALSE(alarm_within(track, -1.0, -0.5)); // before the first evaluation
+}
+
 TEST(TransitionSignal, AmplitudeLawAndNoiseLevel) {
   TransitionSignal spec;
   EXPECT_EQ(spec.amplitude(spec.onset_s - 1e-9), 0.0);

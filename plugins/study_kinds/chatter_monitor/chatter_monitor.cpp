@@ -182,12 +182,6 @@ plot::Series signal_series(const SampledSeries& s) {
 }
 
 // Alarm state at time t: the state after the latest evaluation at or before t.
-bool alarm_at(const monitor::DetectorTrack& track, double t) {
-  auto it = std::upper_bound(track.t_s.begin(), track.t_s.end(), t);
-  if (it == track.t_s.begin()) return false;
-  return track.alarm[static_cast<std::size_t>(it - track.t_s.begin() - 1)] != 0.0;
-}
-
 // Draws every figure even when one fails; the failures go to summary.json.
 class Figures {
  public:
@@ -223,8 +217,9 @@ void plot_point(const SampledSeries& series, const Tracks& results,
     signal.y_label = series.name;
     plot::Series shade{fmt::format("{} alarm on", name), {}, {}, "impulses"};
     for (std::size_t k = 0; k < shading_lines; ++k) {
+      const double bucket_s = end / static_cast<double>(shading_lines - 1);
       const double tk = end * static_cast<double>(k) / static_cast<double>(shading_lines - 1);
-      if (!alarm_at(track, tk)) continue;
+      if (!monitor::alarm_within(track, tk - 0.5 * bucket_s, tk + 0.5 * bucket_s)) continue;
       for (double y : {amplitude, -amplitude}) {
         shade.x.push_back(tk);
         shade.y.push_back(y);
