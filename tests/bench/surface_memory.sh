@@ -20,6 +20,13 @@ bin=$1 work=$2 samples=${3:-10000000} filter=${4:-gaussian} baseline=${5:-}
 mkdir -p "$work"
 # Writes the awk program's output (n = SAMPLES) to the file once: later runs reuse it.
 generate() { [ -s "$1" ] || { awk -v n="$samples" "$2" >"$1.tmp" && mv "$1.tmp" "$1"; }; }
+# Writes $study: [study] of KIND named "memory: NAME", [input] reading COLUMN of $data, then the
+# mode's own lines from standard input.
+write_study() {
+  { printf '[study]\nkind = "%s"\nname = "memory: %s"\n\n[input]\nfile = "%s"\ncolumn = "%s"\n' \
+      "$1" "$2" "$(basename "$data")" "$3"
+    cat; } >"$study"
+}
 if [ "$filter" = monitor ]; then
   # The network trains on 100 s of noise and at 669 s (chatter at ~4 x the noise).
   [ "$samples" -ge 5400000 ] || { echo "monitor needs SAMPLES >= 5400000 (675 s at 8 kHz)" >&2; exit 2; }
@@ -33,14 +40,7 @@ if [ "$filter" = monitor ]; then
       }
     }'
   study=$work/monitor_$samples.toml
-  cat >"$study" <<EOF
-[study]
-kind = "chatter_monitor"
-name = "memory: signal of $samples samples"
-
-[input]
-file = "signal_$samples.csv"
-column = "displacement_m"
+  write_study chatter_monitor "signal of $samples samples" displacement_m <<EOF
 sample_rate_hz = 8000.0
 
 [monitor.bp_network]
@@ -70,14 +70,7 @@ elif [ "$filter" = chaos ]; then
       }
     }'
   study=$work/chaos_$samples.toml
-  cat >"$study" <<EOF
-[study]
-kind = "signal_analysis"
-name = "memory: Lorenz x, $samples samples"
-
-[input]
-file = "lorenz_$samples.csv"
-column = "x"
+  write_study signal_analysis "Lorenz x, $samples samples" x <<EOF
 sample_rate_hz = 100.0
 
 [analysis]
@@ -96,14 +89,7 @@ elif [ "$filter" = closed ]; then
       }
     }'
   study=$work/roundness_$samples.toml
-  cat >"$study" <<EOF
-[study]
-kind = "surface"
-name = "memory: closed profile of $samples samples"
-
-[input]
-file = "roundness_$samples.csv"
-column = "radius_um"
+  write_study surface "closed profile of $samples samples" radius_um <<EOF
 closed = true
 samples_per_rev = $samples
 unit = "um"
@@ -126,14 +112,7 @@ generate "$data" 'BEGIN {
     }
   }'
 study=$work/surface_${samples}_$filter.toml
-cat >"$study" <<EOF
-[study]
-kind = "surface"
-name = "memory: $samples samples, $filter"
-
-[input]
-file = "profile_$samples.csv"
-column = "height_um"
+write_study surface "$samples samples, $filter" height_um <<EOF
 spacing_mm = 0.0005
 
 [filter]

@@ -76,7 +76,7 @@ std::size_t vector_count(std::size_t n, int dimension, int delay) {
 }
 
 Embedding::Embedding(std::span<const double> x, int dimension, int delay, std::size_t count)
-    : x_(x.data()), delay_samples_(std::size_t(delay)), dimension_(dimension), delay_(delay) {
+    : x_(x.data()), dimension_(dimension), delay_(delay) {
   if (dimension < 1 || dimension > max_dimension || delay < 1)
     throw PointFailure(fmt::format("delay embedding: dimension {} and delay {} samples: needs "
                                    "1 <= dimension <= {} and delay >= 1",

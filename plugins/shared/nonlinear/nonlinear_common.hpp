@@ -90,7 +90,7 @@ class Embedding {
   int dimension() const { return dimension_; }
   int delay() const { return delay_; }
   // Coordinate k of vector i.
-  double coordinate(std::size_t i, int k) const { return x_[i + std::size_t(k) * delay_samples_]; }
+  double coordinate(std::size_t i, int k) const { return x_[i + std::size_t(k) * std::size_t(delay_)]; }
   // Vector i copied to out[0 .. dimension) (a k-d tree query needs contiguous coordinates).
   void copy_point(std::size_t i, double* out) const {
     for (int k = 0; k < dimension_; ++k) out[k] = coordinate(i, k);
@@ -113,15 +113,13 @@ class Embedding {
 
   // nanoflann dataset adaptor
   std::size_t kdtree_get_point_count() const { return count_; }
-  double kdtree_get_pt(std::size_t i, std::size_t k) const {
-    return x_[i + k * delay_samples_];
-  }
+  double kdtree_get_pt(std::size_t i, std::size_t k) const { return coordinate(i, int(k)); }
   template <class Box>
   bool kdtree_get_bbox(Box&) const { return false; }
 
  private:
   const double* x_ = nullptr;
-  std::size_t count_ = 0, delay_samples_ = 1;
+  std::size_t count_ = 0;
   int dimension_ = 1, delay_ = 1;
 };
 
