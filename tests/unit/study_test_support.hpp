@@ -3,12 +3,16 @@
 //
 // The test-only plugins `test_fake_model` and study kind `test_fake_kind` are registered once, in
 // study_load_test.cpp; the other test files name them in their study texts (one test executable).
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <utility>
+
+#include <omp.h>
 
 #include <gtest/gtest.h>
 
@@ -17,6 +21,21 @@
 #include "chatterlab/study.hpp"
 
 namespace chatterlab::testing {
+
+// compute() run with one OpenMP thread, with two, and with two again (the previous setting
+// restored): the tests that a result does not depend on the thread count or the schedule
+// compare the three bit for bit.
+template <class Compute>
+std::array<std::invoke_result_t<const Compute&>, 3> with_one_two_two_threads(const Compute& compute) {
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  auto one = compute();
+  omp_set_num_threads(2);
+  auto two = compute();
+  auto again = compute();
+  omp_set_num_threads(before);
+  return {std::move(one), std::move(two), std::move(again)};
+}
 
 // A fresh directory under the system temporary directory, removed with its contents at scope exit.
 class TempDir {

@@ -5,7 +5,6 @@
 // noise; all deterministic (fixed seeds). tests/validation/ compares the analyses' estimates on
 // them with the literature.
 #include <array>
-#include <omp.h>
 #include <type_traits>
 #include <memory>
 #include <string>
@@ -17,6 +16,7 @@
 #include <vector>
 
 #include "chatterlab/analysis.hpp"
+#include "unit/study_test_support.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/kit/data.hpp"
 
@@ -260,19 +260,6 @@ inline std::unique_ptr<Analysis> make_analysis(const std::string& name,
   return entry.create(ParamValues(validate_params(params, entry.info.params, name, sources)));
 }
 
-// compute() run with one OpenMP thread, with two, and with two again (the previous setting
-// restored): the tests that a result does not depend on the thread count or the schedule
-// compare the three bit for bit (plugins/shared/nonlinear/ordered_sum.hpp).
-template <class Compute>
-std::array<std::invoke_result_t<const Compute&>, 3> with_one_two_two_threads(const Compute& compute) {
-  const int before = omp_get_max_threads();
-  omp_set_num_threads(1);
-  auto one = compute();
-  omp_set_num_threads(2);
-  auto two = compute();
-  auto again = compute();
-  omp_set_num_threads(before);
-  return {std::move(one), std::move(two), std::move(again)};
-}
+using chatterlab::testing::with_one_two_two_threads;
 
 }  // namespace chatterlab::test_signals

@@ -49,13 +49,32 @@ void parallel_tasks(std::size_t count, const Task& task, const std::vector<std::
 
 double surface_speed_m_per_s(double diameter_mm, double rpm) { return kPi * diameter_mm * 1e-3 * rpm / 60.0; }
 
-// Groups of segments whose model parameters are equal within a relative tolerance (every number
-// of the parameter table on a log grid), with the representative's parameter table.
+struct CellsHash {
+  std::size_t operator()(const std::vector<long long>& key) const {
+    std::size_t h = key.size();
+    for (long long v : key) h ^= std::hash<long long>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    return h;
+  }
+};
+
+// Groups of items (segments, or their phases) whose model parameters are equal within a relative
+// tolerance (every number of the parameter table on a log grid), each with its representative (the
+// first item in the order the items were added: its parameters are the group's). Cells of
+// different pools never merge, so ratings that must not share roots keep their own pools.
 struct Grouping {
-  std::vector<std::size_t> group_of_item;
-  std::vector<std::size_t> representative;  // item index per group
-  std::vector<Json> tables;                 // the representative's model table per group
-  std::vector<std::vector<long long>> cells;  // the representative's parameter cells per group
+  std::vector<SegmentProcess> representative;
+  std::vector<std::vector<long long>> cells;  // the representative's parameter cells, then its pool
+  std::unordered_map<std::vector<long long>, std::size_t, CellsHash> group_of_cells;
+
+  // The group of `cells`, a new one (represented by `item`) if none holds them yet.
+  std::size_t add(std::vector<long long>&& key, const SegmentProcess& item) {
+    auto [it, inserted] = group_of_cells.try_emplace(std::move(key), representative.size());
+    if (inserted) {
+      representative.push_back(item);
+      cells.push_back(it->first);
+    }
+    return it->second;
+  }
 };
 
 // The cells of every parameter value (positive ones on the log grid; others exactly, by their
@@ -71,13 +90,6 @@ void append_cells(const std::vector<double>& values, double tolerance, std::vect
   }
 }
 
-struct CellsHash {
-  std::size_t operator()(const std::vector<long long>& key) const {
-    std::size_t h = key.size();
-    for (long long v : key) h ^= std::hash<long long>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    return h;
-  }
-};
 
 // The [model] table: the model's type and its parameters.
 Json with_type(const Json& model_table, const Json& parameters) {
@@ -86,18 +98,15 @@ Json with_type(const Json& model_table, const Json& parameters) {
   return t;
 }
 
-Grouping group_items(const Json& model_table, const ProcessSettings& p, const std::vector<SegmentProcess>& items,
-                     double tolerance) {
+// Adds `items` (in their order) to the groups of `g` in `pool` and returns each item's group. The
+// keys come from the parameter values without their JSON table, in parallel (the model is const;
+// inside an enclosing parallel region the loop runs on its thread).
+std::vector<std::size_t> group_items(const ProcessSettings& p, const std::vector<SegmentProcess>& items,
+                                     double tolerance, Grouping& g, long long pool = 0) {
   const ProcessConditionsModel& process = process_model(p);
   const ProcessConditions reference = reference_conditions(p);
   ProcessScaling scaling;
   scaling.speed_dependent_stiffness = p.speed_scaling;
-  auto parameters_of = [&](std::size_t i) {
-    return process.parameters_at(reference, segment_conditions(p, items[i]), scaling);
-  };
-  // The keys in parallel (a plan's candidates rate ~10^5 segments; the model is const), from the
-  // parameter values without their JSON table; then the groups in item order, so the
-  // representatives are those of a serial pass.
   std::vector<std::vector<long long>> keys(items.size());
   const auto n = static_cast<long>(items.size());
 #pragma omp parallel
@@ -108,20 +117,22 @@ Grouping group_items(const Json& model_table, const ProcessSettings& p, const st
       const auto u = static_cast<std::size_t>(i);
       process.parameter_values_at(reference, segment_conditions(p, items[u]), scaling, values);
       append_cells(values, tolerance, keys[u]);
+      keys[u].push_back(pool);
     }
   }
-  Grouping g;
-  std::unordered_map<std::vector<long long>, std::size_t, CellsHash> cells;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    auto [it, inserted] = cells.emplace(std::move(keys[i]), g.representative.size());
-    if (inserted) {
-      g.representative.push_back(i);
-      g.tables.push_back(with_type(model_table, parameters_of(i)));
-      g.cells.push_back(it->first);
-    }
-    g.group_of_item.push_back(it->second);
-  }
-  return g;
+  std::vector<std::size_t> group_of_item(items.size());
+  for (std::size_t i = 0; i < items.size(); ++i) group_of_item[i] = g.add(std::move(keys[i]), items[i]);
+  return group_of_item;
+}
+
+// Adds the groups of `part` to `g` in their order and returns the group in `g` of each: merging the
+// groupings of consecutive batches in batch order gives the groups (and representatives) of one
+// serial pass over all items.
+std::vector<std::size_t> merge_groups(Grouping& g, Grouping&& part) {
+  std::vector<std::size_t> group_of_part(part.cells.size());
+  for (std::size_t j = 0; j < part.cells.size(); ++j)
+    group_of_part[j] = g.add(std::move(part.cells[j]), part.representative[j]);
+  return group_of_part;
 }
 
 struct RootValue {
@@ -155,7 +166,7 @@ long long cell_distance(const std::vector<long long>& a, const std::vector<long 
   return d;
 }
 
-std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, const Grouping& g,
+std::vector<RootValue> solve_groups(const Json& model_table, const ProcessSettings& p, const Grouping& g,
                                     const RootSettings& settings) {
   std::vector<RootValue> values(g.representative.size());
   const kit::StabilitySettings stability = kit::stability_settings_table().read(settings.stability);
@@ -168,7 +179,7 @@ std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, co
     std::vector<std::vector<Complex>> approximate(last - first);
     for (std::size_t u = first; u < last; ++u) {
       try {
-        auto model = kit::build_model(g.tables[u]);
+        auto model = kit::build_model(segment_model_table(model_table, p, g.representative[u]));
         auto characteristic = model->characteristic();
         if (!characteristic) throw PointFailure("the model has no characteristic function here");
         RootSearchOptions options = kit::root_search_options(stability, *characteristic);
@@ -196,8 +207,8 @@ std::vector<RootValue> solve_groups(const std::vector<SegmentProcess>& items, co
   for (std::size_t i = 0; i < values.size(); ++i)
     if (!values[i].error.empty())
       throw PointFailure(fmt::format("root search failed at x = {:.4g} mm (work {:.4g} rpm, contact width {:.4g} mm): {}",
-                                     items[g.representative[i]].x_mid_mm, items[g.representative[i]].work_speed_rpm,
-                                     items[g.representative[i]].contact_width_mm, values[i].error));
+                                     g.representative[i].x_mid_mm, g.representative[i].work_speed_rpm,
+                                     g.representative[i].contact_width_mm, values[i].error));
   return values;
 }
 
@@ -334,28 +345,45 @@ void accumulate(const std::vector<planner::SegmentConditions>& plan, const RiskT
 
 namespace {
 
-// Growth rate per segment, averaged over `phases` frozen work speeds n (1 + a sin phi_j) (S2,
-// eqs 5-37..5-39: the amplitude after many revolutions is the product of the per-revolution
-// factors); a = 0 is the root at the segment's own conditions.
-PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
-                   const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
-                   const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
-                   int phases) {
-  PlanRisk risk;
-  for (const auto& c : plan) risk.process.push_back(map_segment(p, c, generatrix));
-  const int phase_count = amplitude_ratio > 0.0 ? std::max(phases, 1) : 1;
-  std::vector<SegmentProcess> items;
-  items.reserve(risk.process.size() * static_cast<std::size_t>(phase_count));
+// The items of a rating: each segment's process at the plan's speed, and per segment its `phases`
+// frozen work speeds n (1 + a sin phi_j) (S2, eqs 5-37..5-39: the amplitude after many revolutions
+// is the product of the per-revolution factors); a = 0: the segment itself.
+struct RatingItems {
+  std::vector<SegmentProcess> process;  // per segment
+  std::vector<SegmentProcess> items;    // per segment and phase
+  int phase_count = 1;
+};
+
+RatingItems rating_items(const ProcessSettings& p, const std::vector<planner::SegmentConditions>& plan,
+                         const planner::Generatrix& generatrix, double amplitude_ratio, int phases) {
+  RatingItems r;
+  for (const auto& c : plan) r.process.push_back(map_segment(p, c, generatrix));
+  r.phase_count = amplitude_ratio > 0.0 ? std::max(phases, 1) : 1;
+  if (r.phase_count == 1) {
+    r.items = r.process;
+    return r;
+  }
+  r.items.reserve(r.process.size() * static_cast<std::size_t>(r.phase_count));
   for (std::size_t k = 0; k < plan.size(); ++k)
-    for (int j = 0; j < phase_count; ++j) {
+    for (int j = 0; j < r.phase_count; ++j) {
       planner::SegmentConditions c = plan[k];
-      c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / phase_count);
-      items.push_back(phase_count == 1 ? risk.process[k]
-                                       : map_segment_with_width(p, c, risk.process[k].contact_width_mm));
+      c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / r.phase_count);
+      r.items.push_back(map_segment_with_width(p, c, r.process[k].contact_width_mm));
     }
-  const Grouping g = group_items(model_table, p, items, roots.condition_tolerance);
-  const std::vector<RootValue> values = solve_groups(items, g, roots);
-  risk.groups = values.size();
+  return r;
+}
+
+// A rating from its items' groups and the groups' roots: the growth rate per segment averaged over
+// its phases (the frequency and group of the fastest-growing phase), then the amplification.
+PlanRisk assemble_rating(const std::vector<planner::SegmentConditions>& plan, const RiskThresholds& thresholds,
+                         RatingItems&& rating, const std::vector<std::size_t>& group_of_item,
+                         const std::vector<RootValue>& values) {
+  PlanRisk risk;
+  risk.process = std::move(rating.process);
+  const int phase_count = rating.phase_count;
+  std::vector<std::size_t> groups(group_of_item);
+  std::sort(groups.begin(), groups.end());
+  risk.groups = static_cast<std::size_t>(std::unique(groups.begin(), groups.end()) - groups.begin());
   risk.segments.resize(plan.size());
   for (std::size_t k = 0; k < plan.size(); ++k) {
     SegmentRisk& r = risk.segments[k];
@@ -364,18 +392,60 @@ PlanRisk rate_plan(const Json& model_table, const ProcessSettings& p,
     double best = -std::numeric_limits<double>::infinity();
     for (int j = 0; j < phase_count; ++j) {
       const std::size_t item = k * static_cast<std::size_t>(phase_count) + static_cast<std::size_t>(j);
-      const RootValue& v = values[g.group_of_item[item]];
+      const RootValue& v = values[group_of_item[item]];
       r.growth_rate_per_s += v.growth_rate_per_s / phase_count;
       r.certified = r.certified && v.certified;
       if (v.growth_rate_per_s > best) {
         best = v.growth_rate_per_s;
         r.chatter_frequency_hz = v.frequency_hz;
-        r.group = g.group_of_item[item];
+        r.group = group_of_item[item];
       }
     }
   }
   accumulate(plan, thresholds, risk);
   return risk;
+}
+
+// A rating to compute: a plan at its speeds, and the modulation whose frozen-speed phases it averages.
+struct RatingRequest {
+  std::vector<planner::SegmentConditions> plan;
+  double amplitude_ratio = 0.0;
+};
+
+// Rates the plans with one grouping and one batch of root searches. Ratings share condition groups
+// only where that is the approximation already made within one rating: the phases of all
+// modulated ratings (frozen speeds spread over +-amplitude around each one's speed) form one pool,
+// so a cell that several candidates' phases visit is solved once (the shipped problem-2 study's
+// candidates: about 1,200 roots instead of 6,600). An unmodulated rating keeps its own pool: it
+// stands for its exact speed, whose verdict may hinge on an exact speed ratio (a representative
+// from a rating 1 % away would hide or invent that artefact). Each rating's items are grouped in
+// parallel, the groupings merged in rating order (the groups and representatives of one serial
+// pass over all items) and the groups solved together (OpenMP over blocks of groups), so nothing
+// depends on the thread count.
+std::vector<PlanRisk> rate_plans(const Json& model_table, const ProcessSettings& p,
+                                 const std::vector<RatingRequest>& requests, const planner::Generatrix& generatrix,
+                                 const RootSettings& roots, const RiskThresholds& thresholds, int phases) {
+  const std::size_t count = requests.size();
+  std::vector<RatingItems> ratings(count);
+  std::vector<Grouping> own(count);
+  std::vector<std::vector<std::size_t>> group_of_item(count);
+  parallel_tasks(count, [&](std::size_t t) {
+    const RatingRequest& r = requests[t];
+    ratings[t] = rating_items(p, r.plan, generatrix, r.amplitude_ratio, phases);
+    const long long pool = r.amplitude_ratio > 0.0 ? 0 : static_cast<long long>(t) + 1;
+    group_of_item[t] = group_items(p, ratings[t].items, roots.condition_tolerance, own[t], pool);
+    ratings[t].items = {};  // the groups hold what the roots need
+  });
+  Grouping groups;
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::vector<std::size_t> merged = merge_groups(groups, std::move(own[t]));
+    for (std::size_t& g : group_of_item[t]) g = merged[g];
+  }
+  const std::vector<RootValue> values = solve_groups(model_table, p, groups, roots);
+  std::vector<PlanRisk> rated(count);
+  for (std::size_t t = 0; t < count; ++t)
+    rated[t] = assemble_rating(requests[t].plan, thresholds, std::move(ratings[t]), group_of_item[t], values);
+  return rated;
 }
 
 // The spindle-speed factors of a rating over the tolerance band: the nominal speed first.
@@ -407,28 +477,19 @@ PlanRisk worst_over_band(PlanRisk worst, const std::vector<const PlanRisk*>& shi
   return worst;
 }
 
-// rate_plan's worst case per segment over the spindle speeds n (1 - tol), n, n (1 + tol).
-PlanRisk rate_plan_band(const Json& model_table, const ProcessSettings& p,
-                        const std::vector<planner::SegmentConditions>& plan, const planner::Generatrix& generatrix,
-                        const RootSettings& roots, const RiskThresholds& thresholds, double amplitude_ratio,
-                        int phases, double tolerance) {
-  const std::vector<double> factors = band_factors(tolerance);
-  std::vector<PlanRisk> rated;
-  for (double factor : factors)
-    rated.push_back(rate_plan(model_table, p, at_speed_factor(plan, factor), generatrix, roots, thresholds,
-                              amplitude_ratio, phases));
-  std::vector<const PlanRisk*> shifted;
-  for (std::size_t i = 1; i < rated.size(); ++i) shifted.push_back(&rated[i]);
-  return worst_over_band(std::move(rated.front()), shifted, plan, thresholds);
-}
-
 }  // namespace
 
 PlanRisk evaluate_roots(const Json& model_table, const ProcessSettings& p,
                         const std::vector<planner::SegmentConditions>& plan,
                         const planner::Generatrix& generatrix, const RootSettings& roots,
                         const RiskThresholds& thresholds, double speed_tolerance) {
-  return rate_plan_band(model_table, p, plan, generatrix, roots, thresholds, 0.0, 1, speed_tolerance);
+  // The nominal rating and (with a tolerance) the band's shifted ones: the worst case per segment.
+  std::vector<RatingRequest> requests;
+  for (double factor : band_factors(speed_tolerance)) requests.push_back({at_speed_factor(plan, factor), 0.0});
+  std::vector<PlanRisk> rated = rate_plans(model_table, p, requests, generatrix, roots, thresholds, 1);
+  std::vector<const PlanRisk*> shifted;
+  for (std::size_t i = 1; i < rated.size(); ++i) shifted.push_back(&rated[i]);
+  return worst_over_band(std::move(rated.front()), shifted, plan, thresholds);
 }
 
 // ------------------------------------------------------------------ simulation
@@ -500,16 +561,17 @@ std::unique_ptr<TimeDomainModel> along_plan_model(const Json& model_table, const
                                                   const PlanRisk& risk) {
   // Own grouping of the segments' parameters (exact to 1e-9): the risk's groups may merge
   // segments within the root tolerance or come from averaged phases.
-  const Grouping g = group_items(model_table, p, risk.process, 1e-9);
+  Grouping g;
+  const std::vector<std::size_t> group_of_item = group_items(p, risk.process, 1e-9, g);
   std::map<std::size_t, std::size_t> model_of_group;
   std::vector<std::unique_ptr<TimeDomainModel>> models;
   std::vector<std::size_t> model_of_segment;
   std::vector<double> start;
   const double t0 = plan.empty() ? 0.0 : plan.front().start_s;
   for (std::size_t k = 0; k < plan.size(); ++k) {
-    auto [it, inserted] = model_of_group.emplace(g.group_of_item[k], models.size());
+    auto [it, inserted] = model_of_group.emplace(group_of_item[k], models.size());
     if (inserted) {
-      auto model = kit::build_model(g.tables[g.group_of_item[k]]);
+      auto model = kit::build_model(segment_model_table(model_table, p, g.representative[group_of_item[k]]));
       auto td = model->time_domain();
       if (!td) throw std::invalid_argument("the model has no time-domain form");
       models.push_back(std::move(td));
@@ -747,30 +809,16 @@ OptimiseResult optimise(const Json& model_table, const ProcessSettings& p, const
   std::vector<std::vector<planner::SegmentConditions>> candidate_plans =
       candidates_and_plans(replan, settings, result.candidates);
   // 2. Every rating (candidate x speed factor of the band, the nominal one also being the
-  // candidate's nominal rating) is independent: they run in parallel, each one's groups serially
-  // (nested), the largest first. Each rating is deterministic, so the results do not depend on
-  // the thread count or order.
+  // candidate's nominal rating), in one batch (rate_plans: the modulated candidates' phases share
+  // their roots).
   const std::vector<double> factors = band_factors(settings.speed_tolerance);
   const std::size_t per_candidate = factors.size();
-  const std::size_t task_count = result.candidates.size() * per_candidate;
-  auto items_of = [&](std::size_t t) {
-    const Candidate& c = result.candidates[t / per_candidate];
-    const std::size_t phases = c.amplitude_ratio > 0.0 ? static_cast<std::size_t>(std::max(settings.phase_samples, 1)) : 1;
-    return candidate_plans[t / per_candidate].size() * phases;
-  };
-  std::vector<std::size_t> order(task_count);
-  for (std::size_t t = 0; t < task_count; ++t) order[t] = t;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return items_of(x) > items_of(y); });
-  std::vector<PlanRisk> rated(task_count);
-  parallel_tasks(
-      task_count,
-      [&](std::size_t t) {
-        const std::size_t k = t / per_candidate;
-        rated[t] = rate_plan(model_table, p, at_speed_factor(candidate_plans[k], factors[t % per_candidate]),
-                             generatrix, coarse, thresholds, result.candidates[k].amplitude_ratio,
-                             settings.phase_samples);
-      },
-      order);
+  std::vector<RatingRequest> requests;
+  for (std::size_t k = 0; k < result.candidates.size(); ++k)
+    for (double factor : factors)
+      requests.push_back({at_speed_factor(candidate_plans[k], factor), result.candidates[k].amplitude_ratio});
+  std::vector<PlanRisk> rated =
+      rate_plans(model_table, p, requests, generatrix, coarse, thresholds, settings.phase_samples);
   // 3. The band's worst case per candidate, and the best candidate in candidate order.
   bool found = false;
   for (std::size_t k = 0; k < result.candidates.size(); ++k) {
