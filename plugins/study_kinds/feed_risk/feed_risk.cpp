@@ -66,30 +66,51 @@ struct Grouping {
   std::vector<std::vector<long long>> cells;  // the representative's parameter cells, then its pool
   std::unordered_map<std::vector<long long>, std::size_t, CellsHash> group_of_cells;
 
-  // The group of `cells`, a new one (represented by `item`) if none holds them yet.
-  std::size_t add(std::vector<long long>&& key, const SegmentProcess& item) {
-    auto [it, inserted] = group_of_cells.try_emplace(std::move(key), representative.size());
-    if (inserted) {
-      representative.push_back(item);
-      cells.push_back(it->first);
-    }
-    return it->second;
+  // The group of `key`, a new one (represented by `item`) if none holds it yet.
+  std::size_t add(const std::vector<long long>& key, const SegmentProcess& item) {
+    if (auto it = group_of_cells.find(key); it != group_of_cells.end()) return it->second;
+    group_of_cells.emplace(key, representative.size());
+    representative.push_back(item);
+    cells.push_back(key);
+    return representative.size() - 1;
   }
 };
 
 // The cells of every parameter value (positive ones on the log grid; others exactly, by their
-// bits), in the model's order.
-void append_cells(const std::vector<double>& values, double tolerance, std::vector<long long>& key) {
-  for (double v : values) {
-    if (v > 0.0 && std::isfinite(v)) {
-      key.push_back(std::llround(std::log(v) / std::max(tolerance, 1e-15)));
-    } else {
-      key.push_back(std::numeric_limits<long long>::min());
-      key.push_back(std::bit_cast<long long>(v));
-    }
-  }
-}
+// bits), in the model's order. Consecutive items mostly share most values (the structural modes
+// never change, a segment's phases share its width): a value equal to the previous call's at the
+// same position reuses its cell instead of another logarithm.
+class CellKeys {
+ public:
+  explicit CellKeys(double tolerance) : tolerance_(std::max(tolerance, 1e-15)) {}
 
+  // The key of `values` in `pool` (valid until the next call).
+  const std::vector<long long>& operator()(const std::vector<double>& values, long long pool) {
+    if (values.size() != values_.size()) {
+      values_.assign(values.size(), std::numeric_limits<double>::quiet_NaN());  // equal to no value
+      cells_.assign(values.size(), 0);
+    }
+    key_.clear();
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      const double v = values[k];
+      if (v > 0.0 && std::isfinite(v)) {
+        if (!(v == values_[k])) cells_[k] = std::llround(std::log(v) / tolerance_);
+        key_.push_back(cells_[k]);
+      } else {
+        key_.push_back(std::numeric_limits<long long>::min());
+        key_.push_back(std::bit_cast<long long>(v));
+      }
+      values_[k] = v;
+    }
+    key_.push_back(pool);
+    return key_;
+  }
+
+ private:
+  double tolerance_;
+  std::vector<double> values_;
+  std::vector<long long> cells_, key_;
+};
 
 // The [model] table: the model's type and its parameters.
 Json with_type(const Json& model_table, const Json& parameters) {
@@ -99,29 +120,21 @@ Json with_type(const Json& model_table, const Json& parameters) {
 }
 
 // Adds `items` (in their order) to the groups of `g` in `pool` and returns each item's group. The
-// keys come from the parameter values without their JSON table, in parallel (the model is const;
-// inside an enclosing parallel region the loop runs on its thread).
+// keys come from the parameter values without their JSON table. Serial: rate_plans groups its
+// ratings in parallel.
 std::vector<std::size_t> group_items(const ProcessSettings& p, const std::vector<SegmentProcess>& items,
                                      double tolerance, Grouping& g, long long pool = 0) {
   const ProcessConditionsModel& process = process_model(p);
   const ProcessConditions reference = reference_conditions(p);
   ProcessScaling scaling;
   scaling.speed_dependent_stiffness = p.speed_scaling;
-  std::vector<std::vector<long long>> keys(items.size());
-  const auto n = static_cast<long>(items.size());
-#pragma omp parallel
-  {
-    std::vector<double> values;
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      process.parameter_values_at(reference, segment_conditions(p, items[u]), scaling, values);
-      append_cells(values, tolerance, keys[u]);
-      keys[u].push_back(pool);
-    }
-  }
+  CellKeys keys(tolerance);
+  std::vector<double> values;
   std::vector<std::size_t> group_of_item(items.size());
-  for (std::size_t i = 0; i < items.size(); ++i) group_of_item[i] = g.add(std::move(keys[i]), items[i]);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    process.parameter_values_at(reference, segment_conditions(p, items[i]), scaling, values);
+    group_of_item[i] = g.add(keys(values, pool), items[i]);
+  }
   return group_of_item;
 }
 
@@ -131,7 +144,7 @@ std::vector<std::size_t> group_items(const ProcessSettings& p, const std::vector
 std::vector<std::size_t> merge_groups(Grouping& g, Grouping&& part) {
   std::vector<std::size_t> group_of_part(part.cells.size());
   for (std::size_t j = 0; j < part.cells.size(); ++j)
-    group_of_part[j] = g.add(std::move(part.cells[j]), part.representative[j]);
+    group_of_part[j] = g.add(part.cells[j], part.representative[j]);
   return group_of_part;
 }
 
