@@ -29,6 +29,13 @@ class CharacteristicFunction {
   // evaluate() that writes shared state would break determinism).
   virtual CharacteristicValue evaluate(Complex s) const = 0;
 
+  // Optional: F = E/G and F' for a factor G chosen so that F is closer to linear near the roots
+  // than E (e.g. a neutral delay chain's asymptotic factor 1 + c - e^{-T s}, whose zeros are the
+  // roots' high-frequency limit): the search's Newton iterations run on F and converge in fewer
+  // steps. F has E's zeros wherever G != 0 (Newton is repelled from G's zeros, F's poles); the
+  // certificate always counts the zeros of E itself, so this affects speed only. Default: E.
+  virtual CharacteristicValue newton_form(Complex s) const { return evaluate(s); }
+
   // Zeros of E(s) that are not characteristic roots (s = 0 for G1), with 0 <= Im s <=
   // max_angular_frequency (a little beyond is fine). Each listed once per multiplicity; the
   // conjugates (Im < 0) are implied. The solver never reports them and subtracts them from its

@@ -28,7 +28,8 @@
 // Raised whenever a change of the public headers would make an existing library misbehave (a
 // new virtual function, a changed struct layout, a new registry in Registries). 2: study kinds.
 // 3: SampledSeries::values is a read-only view (std::span), no longer a std::vector.
-#define CHATTERLAB_PLUGIN_API_VERSION 3
+// 4: CharacteristicFunction::newton_form (a new virtual function).
+#define CHATTERLAB_PLUGIN_API_VERSION 4
 
 namespace chatterlab {
 

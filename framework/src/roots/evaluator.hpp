@@ -20,13 +20,21 @@ class Evaluator {
       : function_(function), budget_(budget) {}
 
   CharacteristicValue operator()(Complex s) {
-    if (++count_ > budget_) throw BudgetExhausted("evaluation budget exhausted");
+    count_one();
     return function_.evaluate(s);
+  }
+  // The function's Newton form (CharacteristicFunction::newton_form), counted alike.
+  CharacteristicValue newton_form(Complex s) {
+    count_one();
+    return function_.newton_form(s);
   }
 
   long count() const { return count_; }
 
  private:
+  void count_one() {
+    if (++count_ > budget_) throw BudgetExhausted("evaluation budget exhausted");
+  }
   const CharacteristicFunction& function_;
   long budget_;
   long count_ = 0;

@@ -36,7 +36,8 @@ void newton_steps(Evaluator& evaluate, NewtonIterate& it, int steps, const Newto
       return;
     }
     ++it.iterations;
-    CharacteristicValue e = evaluate(it.s);
+    // On the model's Newton form E/G (same zeros; fewer steps where G captures the roots' lattice).
+    CharacteristicValue e = evaluate.newton_form(it.s);
     // An exact zero ends the iteration even if E' is not finite there (a model may form E' from
     // E'/E, which is 0 * inf at a zero).
     bool converged = e.value == Complex(0.0);

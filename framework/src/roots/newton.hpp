@@ -1,5 +1,6 @@
 #pragma once
-// Internal to find_rightmost_root: Newton's method on E(s) and the set of located roots.
+// Internal to find_rightmost_root: Newton's method on E(s) (on the model's Newton form E/G,
+// CharacteristicFunction::newton_form) and the set of located roots.
 #include <optional>
 #include <vector>
 

@@ -5,6 +5,7 @@
 #include "shared/nonlinear/nonlinear_common.hpp"
 #include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/errors.hpp"
+#include "unit/study_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -88,7 +89,7 @@ TEST(Embedding, BadSeriesNameTheProblem) {
 // one run to the next (a `reduction` made E1 differ by 1e-15 between runs).
 TEST(Embedding, CaoAndFnnDoNotDependOnTheThreadCount) {
   const auto x = test_signals::lorenz(20000);
-  const auto [one, two, again] = test_signals::with_one_two_two_threads([&] {
+  const auto [one, two, again] = testing::with_one_two_two_threads([&] {
     return choose_dimension(x, 16, 6, 100, embedding_default_distance_ratio,
                             embedding_default_fnn_threshold);
   });

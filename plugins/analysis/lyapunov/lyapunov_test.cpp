@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "shared/nonlinear/test_signals.hpp"
+#include "unit/study_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -266,7 +267,7 @@ void expect_same_sums(const std::array<Curves, 3>& runs) {
 
 TEST(Lyapunov, RosensteinCurveDoesNotDependOnTheThreadCount) {
   const auto x = test_signals::henon(20000);
-  const auto runs = test_signals::with_one_two_two_threads(
+  const auto runs = testing::with_one_two_two_threads(
       [&] { return rosenstein_curve(x, 2, 1, 10, 20, 1, 5000); });
   EXPECT_GT(runs[0].references_at_start(), 4000);
   expect_same_sums(runs);
@@ -274,7 +275,7 @@ TEST(Lyapunov, RosensteinCurveDoesNotDependOnTheThreadCount) {
 
 TEST(Lyapunov, KantzScanDoesNotDependOnTheThreadCount) {
   const auto x = test_signals::henon(20000);
-  expect_same_sums(test_signals::with_one_two_two_threads(
+  expect_same_sums(testing::with_one_two_two_threads(
       [&] { return kantz_scan(x, 2, 4, 1, 0, 30, 0, {0.005, 0.02, 0.08}); }));
 }
 
@@ -282,7 +283,7 @@ TEST(Lyapunov, KantzScanDoesNotDependOnTheThreadCount) {
 // with one thread, with two, and from one run to the next.
 TEST(Lyapunov, ResultDoesNotDependOnTheThreadCount) {
   const auto x = test_signals::henon(4000);
-  const auto [one, two, again] = test_signals::with_one_two_two_threads([&] {
+  const auto [one, two, again] = testing::with_one_two_two_threads([&] {
     return make_analysis("lyapunov")->analyse(series(x, 1.0, "henon x"), Json::object()).dump();
   });
   EXPECT_EQ(one, two);

@@ -6,6 +6,7 @@
 
 #include "shared/nonlinear/test_signals.hpp"
 #include "chatterlab/fft.hpp"
+#include "unit/study_test_support.hpp"
 
 namespace chatterlab {
 namespace {
@@ -76,7 +77,7 @@ TEST(Surrogates, LinearStochasticProcessIsNotRejected) {
 // and from one run to the next (fixed blocks merged in block order).
 TEST(Surrogates, PredictionErrorDoesNotDependOnTheThreadCount) {
   const auto x = test_signals::henon(20000);
-  const auto [one, two, again] = test_signals::with_one_two_two_threads(
+  const auto [one, two, again] = testing::with_one_two_two_threads(
       [&] { return prediction_error(x, 2, 1, 10, 5, 10000); });
   EXPECT_GT(one, 0.0);
   EXPECT_EQ(one, two);

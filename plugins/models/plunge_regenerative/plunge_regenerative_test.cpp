@@ -129,6 +129,46 @@ TEST(PlungeRegenerative, DerivativeAndConjugateSymmetry) {
 
 // ---------------------------------------------------------------- published behaviour
 
+// The Newton form is E / (1 + beta - e^{-Tw s}) (value and derivative), E itself when the work
+// chain is off, and the search finds the same certified rightmost root with it as with E alone.
+TEST(PlungeRegenerative, NewtonFormIsEOverTheWorkChainFactorAndFindsTheSameRoots) {
+  const PlungeRegenerativeParameters p = g8_assumed_modes(1e7);
+  const PlungeCharacteristic e(p);
+  const double tw = 60.0 / p.work_speed_rpm, beta = p.contact_stiffness_n_per_m / p.work_removal_stiffness_n_per_m;
+  for (Complex s : {Complex(-0.01, 1366.0), Complex(0.5, 300.0), Complex(-2.0, 2400.0)}) {
+    const Complex g = 1.0 + beta - std::exp(-tw * s);
+    const CharacteristicValue f = e.newton_form(s);
+    EXPECT_LE(std::abs(f.value * g - e.evaluate(s).value), 1e-13 * std::abs(e.evaluate(s).value)) << s;
+    const double h = 1e-5;
+    const Complex numeric = (e.newton_form(s + h).value - e.newton_form(s - h).value) / (2.0 * h);
+    EXPECT_LE(std::abs(numeric - f.derivative), 1e-6 * std::abs(f.derivative)) << s;
+  }
+  PlungeRegenerativeParameters wheel_only = p;
+  wheel_only.work_regeneration = false;
+  const PlungeCharacteristic w(wheel_only);
+  EXPECT_EQ(w.newton_form(Complex(0.5, 300.0)).value, w.evaluate(Complex(0.5, 300.0)).value);
+
+  // E alone: the same function without its Newton form (the interface's default).
+  struct EAlone final : CharacteristicFunction {
+    explicit EAlone(const PlungeCharacteristic& full) : f(full) {}
+    CharacteristicValue evaluate(Complex s) const override { return f.evaluate(s); }
+    std::vector<Complex> neutral_roots(double band) const override { return f.neutral_roots(band); }
+    void initial_guesses(double band, std::vector<Complex>& guesses) const override { f.initial_guesses(band, guesses); }
+    double real_part_bound() const override { return f.real_part_bound(); }
+    double natural_frequency_scale_hz() const override { return f.natural_frequency_scale_hz(); }
+    const PlungeCharacteristic& f;
+  };
+  for (double kc : {1e6, 1e7, 1e8}) {
+    const PlungeCharacteristic with_form(g8_assumed_modes(kc));
+    RootSearchOptions options;
+    options.max_frequency_hz = 1000.0;
+    const RightmostRoot a = find_rightmost_root(with_form, options);
+    const RightmostRoot b = find_rightmost_root(EAlone(with_form), options);
+    ASSERT_TRUE(a.certified && b.certified) << a.certificate << " / " << b.certificate;
+    EXPECT_LE(std::abs(a.root - b.root), 1e-12 * std::abs(b.root)) << "kc " << kc;
+  }
+}
+
 TEST(PlungeRegenerative, WheelOnlyGrowthRateAgreesWithG3ClosedForm) {
   // Work regeneration off (kw -> infinity: the term of eq 2-16 vanishes): the wheel-regenerative
   // system of eq 2-66. rho = Tg sigma / (2 pi) (eq 2-67, 2-70).

@@ -37,6 +37,10 @@ CharacteristicValue PenetrationDampingCharacteristic::evaluate(Complex s) const 
           full.derivative + delay_ratio_ * (off.value + s * off.derivative)};
 }
 
+CharacteristicValue PenetrationDampingCharacteristic::newton_form(Complex s) const {
+  return delay_ratio_ == 0.0 ? full_.newton_form(s) : evaluate(s);
+}
+
 std::vector<Complex> PenetrationDampingCharacteristic::neutral_roots(double max_w) const {
   // s = 0 stays (A = 0 and B + delta s = 0 there: cumulative removal); B + delta s has no other
   // zero on the axis (|1 - e^{-jwT}| = |delta w| needs sin(wT) = -delta w with cos(wT) = 1), so

@@ -33,6 +33,8 @@ class PenetrationDampingCharacteristic final : public CharacteristicFunction {
                                    double penetration_damping_n_s_per_m);
 
   CharacteristicValue evaluate(Complex s) const override;
+  // G1's Newton form at kd = 0 (the model is then G1, to the bit); E itself otherwise.
+  CharacteristicValue newton_form(Complex s) const override;
   std::vector<Complex> neutral_roots(double max_angular_frequency_rad_s) const override;
   void initial_guesses(double max_angular_frequency_rad_s,
                        std::vector<Complex>& guesses) const override;

@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "chatterlab/analysis.hpp"
-#include "unit/study_test_support.hpp"
 #include "chatterlab/fft.hpp"
 #include "chatterlab/kit/data.hpp"
 
@@ -259,7 +258,5 @@ inline std::unique_ptr<Analysis> make_analysis(const std::string& name,
   kit::FileSourceMap sources("test");
   return entry.create(ParamValues(validate_params(params, entry.info.params, name, sources)));
 }
-
-using chatterlab::testing::with_one_two_two_threads;
 
 }  // namespace chatterlab::test_signals

@@ -64,7 +64,18 @@ PlungeCharacteristic::PlungeCharacteristic(const PlungeRegenerativeParameters& p
   }
 }
 
-CharacteristicValue PlungeCharacteristic::evaluate(Complex s) const {
+CharacteristicValue PlungeCharacteristic::evaluate(Complex s) const { return evaluate_with_work_factor(s).e; }
+
+CharacteristicValue PlungeCharacteristic::newton_form(Complex s) const {
+  const auto [e, work] = evaluate_with_work_factor(s);
+  if (!work_on_) return e;
+  // F = E/G with G = B + beta, G' = B': F' = (E' - F G')/G.
+  const Complex g = work.value + beta_;
+  const Complex f = e.value / g;
+  return {f, (e.derivative - f * work.derivative) / g};
+}
+
+PlungeCharacteristic::Evaluation PlungeCharacteristic::evaluate_with_work_factor(Complex s) const {
   // Modal product Pi = prod P_i and Q = sum_i (kc/k_i) prod_{j != i} P_j, built incrementally
   // (Q_new = Q P + (kc/k) Pi_old), so a zero of one P_i never has to be divided by.
   Dual product{1.0, 0.0}, coupled{0.0, 0.0};
@@ -81,7 +92,7 @@ CharacteristicValue PlungeCharacteristic::evaluate(Complex s) const {
   Dual both = wheel * work;
   // E = Pi (A B + alpha B + beta A) + A B Q
   Dual e = product * (both + scaled(alpha_, work) + scaled(beta_, wheel)) + both * coupled;
-  return {e.value, e.derivative};
+  return {{e.value, e.derivative}, {work.value, work.derivative}};
 }
 
 Complex PlungeCharacteristic::structural_compliance(Complex s) const {

@@ -28,6 +28,11 @@ class PlungeCharacteristic final : public CharacteristicFunction {
   explicit PlungeCharacteristic(const PlungeRegenerativeParameters& parameters);
 
   CharacteristicValue evaluate(Complex s) const override;
+  // E / (1 + beta - e^{-Tw s}) when the work chain is on: at high frequency (kc H -> 0, alpha << 1)
+  // the work chain's roots satisfy 1 - e^{-Tw s} = -beta, so this factor holds their lattice and
+  // the quotient is nearly linear near them (Newton needs less than half the steps on the
+  // feed_risk problem-2 study's searches). Its zeros lie on Re s = -ln(1 + beta)/Tw.
+  CharacteristicValue newton_form(Complex s) const override;
   std::vector<Complex> neutral_roots(double max_angular_frequency_rad_s) const override;
   void initial_guesses(double max_angular_frequency_rad_s,
                        std::vector<Complex>& guesses) const override;
@@ -40,6 +45,13 @@ class PlungeCharacteristic final : public CharacteristicFunction {
   Complex structural_compliance(Complex s) const;
 
  private:
+  // E and the work chain's regeneration factor B = 1 - e^{-Tw s} (1 when that chain is off).
+  struct Evaluation {
+    CharacteristicValue e;
+    CharacteristicValue work;
+  };
+  Evaluation evaluate_with_work_factor(Complex s) const;
+
   struct Mode {
     double inverse_omega_squared;  // 1/w^2 [s^2]
     double two_zeta_over_omega;    // 2 zeta / w [s]
