@@ -364,16 +364,33 @@ std::string title_of(const Json& document) {
   return "feed risk";
 }
 
-void draw(const plot::Curves& figure, const fs::path& dir, const std::string& stem, Json& failures) {
-  try {
-    plot::render(figure, dir, stem);
-  } catch (const std::exception& e) {
-    failures.push_back(fmt::format("{}: {}", stem, e.what()));
-  }
-}
+// The point's figures, rendered together: one gnuplot process per figure, two at a time on two
+// threads (plot::render is safe to call concurrently for different stems); a figure that fails is
+// named in the failures, in the order the figures were added.
+struct Figures {
+  std::vector<std::pair<std::string, plot::Curves>> figures;
 
-void draw_plots(const Json& document, const fs::path& dir, const std::vector<SegmentConditions>& plan,
-                const PlanRisk& risk, const AlongPlanSimulation* sim, const Waviness& predicted_um, Json& failures) {
+  void add(const std::string& stem, plot::Curves figure) { figures.emplace_back(stem, std::move(figure)); }
+
+  void render(const fs::path& dir, Json& failures) const {
+    std::vector<std::string> errors(figures.size());
+    const auto n = static_cast<long>(figures.size());
+#pragma omp parallel for schedule(dynamic)
+    for (long i = 0; i < n; ++i) {
+      const auto& [stem, figure] = figures[static_cast<std::size_t>(i)];
+      try {
+        plot::render(figure, dir, stem);
+      } catch (const std::exception& e) {
+        errors[static_cast<std::size_t>(i)] = fmt::format("{}: {}", stem, e.what());
+      }
+    }
+    for (const std::string& error : errors)
+      if (!error.empty()) failures.push_back(error);
+  }
+};
+
+void add_plots(const Json& document, const std::vector<SegmentConditions>& plan, const PlanRisk& risk,
+               const AlongPlanSimulation* sim, const Waviness& predicted_um, Figures& figures) {
   const std::string name = title_of(document);
   plot::Curves growth;
   growth.title = fmt::format("{}: growth rate along the plan", name);
@@ -396,7 +413,7 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
   }
   growth.reference_y = 0.0;
   growth.reference_label = "stability limit (Re s = 0)";
-  draw(growth, dir, "growth_along_x", failures);
+  figures.add("growth_along_x", std::move(growth));
 
   plot::Curves waviness;
   waviness.title = fmt::format("{}: waviness along x", name);
@@ -421,7 +438,7 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
   }
   waviness.reference_y = predicted_um.cap_um;
   waviness.reference_label = "depth of cut (the linear model ends: the wheel leaves the work)";
-  draw(waviness, dir, "waviness_along_x", failures);
+  figures.add("waviness_along_x", std::move(waviness));
 
   plot::Curves amplification;
   amplification.title = fmt::format("{}: ln amplification over time", name);
@@ -436,7 +453,7 @@ void draw_plots(const Json& document, const fs::path& dir, const std::vector<Seg
     floored.y.push_back(risk.segments[k].floored_log_amplification);
   }
   amplification.series = {raw, floored};
-  draw(amplification, dir, "amplification_over_time", failures);
+  figures.add("amplification_over_time", std::move(amplification));
 }
 
 // ------------------------------------------------------------------ validation steps
@@ -799,7 +816,7 @@ plot::Curves before_after_figure(const Json& document, const PointSetup& in, con
 }
 
 void write_replan_files(const Json& document, const PointContext& context, const PointSetup& in, const Rated& base,
-                        const Replanned& re, Json& failures) {
+                        const Replanned& re, Figures& figures) {
   const fs::path& dir = context.artifact_dir;
   if (re.stable) {
     // Re-planned once more at the chosen planning speed (deterministic: the same plan).
@@ -808,8 +825,8 @@ void write_replan_files(const Json& document, const PointContext& context, const
   }
   write_optimisation_table(dir / "optimisation.csv", re.result.candidates);
   if (!context.plots) return;
-  draw(optimisation_figure(document, re), dir, "optimisation", failures);
-  draw(before_after_figure(document, in, base, re), dir, "before_after", failures);
+  figures.add("optimisation", optimisation_figure(document, re));
+  figures.add("before_after", before_after_figure(document, in, base, re));
 }
 
 void write_point_files(const Json& document, const PointContext& context, const PointSetup& in, const Rated& base,
@@ -817,11 +834,12 @@ void write_point_files(const Json& document, const PointContext& context, const 
   const fs::path& dir = context.artifact_dir;
   write_segments(dir / "segments.csv", in.model, in.p, in.src.segments, base.risk, in.predicted_um);
   if (base.simulated) write_along_x(dir / "along_x.csv", in.src.segments, base.risk, base.sim, in.predicted_um);
-  Json failures = Json::array();
+  Figures figures;
   if (context.plots)
-    draw_plots(document, dir, in.src.segments, base.risk, base.simulated ? &base.sim : nullptr, in.predicted_um,
-               failures);
-  if (re) write_replan_files(document, context, in, base, *re, failures);
+    add_plots(document, in.src.segments, base.risk, base.simulated ? &base.sim : nullptr, in.predicted_um, figures);
+  if (re) write_replan_files(document, context, in, base, *re, figures);
+  Json failures = Json::array();
+  figures.render(dir, failures);
   summary["plot_errors"] = failures;
   kit::write_summary(context, summary);
 }
