@@ -27,16 +27,16 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Runs task(i) for i = 0..count-1 on the OpenMP threads (dynamic schedule, in the order given by
-// `order` when not empty); exceptions are caught per task and the first one in index order is
-// rethrown after all tasks ran, so the outcome does not depend on the thread count.
+// Runs task(i) for i = 0..count-1 on the OpenMP threads (dynamic schedule); exceptions are caught
+// per task and the first one in index order is rethrown after all tasks ran, so the outcome does
+// not depend on the thread count.
 template <class Task>
-void parallel_tasks(std::size_t count, const Task& task, const std::vector<std::size_t>& order = {}) {
+void parallel_tasks(std::size_t count, const Task& task) {
   std::vector<std::exception_ptr> failures(count);
   const auto n = static_cast<long>(count);
 #pragma omp parallel for schedule(dynamic)
   for (long i = 0; i < n; ++i) {
-    const std::size_t t = order.empty() ? static_cast<std::size_t>(i) : order[static_cast<std::size_t>(i)];
+    const auto t = static_cast<std::size_t>(i);
     try {
       task(t);
     } catch (...) {
@@ -141,7 +141,7 @@ std::vector<std::size_t> group_items(const ProcessSettings& p, const std::vector
 // Adds the groups of `part` to `g` in their order and returns the group in `g` of each: merging the
 // groupings of consecutive batches in batch order gives the groups (and representatives) of one
 // serial pass over all items.
-std::vector<std::size_t> merge_groups(Grouping& g, Grouping&& part) {
+std::vector<std::size_t> merge_groups(Grouping& g, const Grouping& part) {
   std::vector<std::size_t> group_of_part(part.cells.size());
   for (std::size_t j = 0; j < part.cells.size(); ++j)
     group_of_part[j] = g.add(part.cells[j], part.representative[j]);
@@ -363,8 +363,11 @@ namespace {
 // is the product of the per-revolution factors); a = 0: the segment itself.
 struct RatingItems {
   std::vector<SegmentProcess> process;  // per segment
-  std::vector<SegmentProcess> items;    // per segment and phase
+  std::vector<SegmentProcess> phases;   // per segment and phase (empty when there is one phase)
   int phase_count = 1;
+
+  // The items whose roots the rating averages: the phases, or the segments themselves.
+  const std::vector<SegmentProcess>& items() const { return phase_count == 1 ? process : phases; }
 };
 
 RatingItems rating_items(const ProcessSettings& p, const std::vector<planner::SegmentConditions>& plan,
@@ -372,16 +375,13 @@ RatingItems rating_items(const ProcessSettings& p, const std::vector<planner::Se
   RatingItems r;
   for (const auto& c : plan) r.process.push_back(map_segment(p, c, generatrix));
   r.phase_count = amplitude_ratio > 0.0 ? std::max(phases, 1) : 1;
-  if (r.phase_count == 1) {
-    r.items = r.process;
-    return r;
-  }
-  r.items.reserve(r.process.size() * static_cast<std::size_t>(r.phase_count));
+  if (r.phase_count == 1) return r;
+  r.phases.reserve(r.process.size() * static_cast<std::size_t>(r.phase_count));
   for (std::size_t k = 0; k < plan.size(); ++k)
     for (int j = 0; j < r.phase_count; ++j) {
       planner::SegmentConditions c = plan[k];
       c.spindle_speed_rpm *= 1.0 + amplitude_ratio * std::sin(2 * kPi * (j + 0.5) / r.phase_count);
-      r.items.push_back(map_segment_with_width(p, c, r.process[k].contact_width_mm));
+      r.phases.push_back(map_segment_with_width(p, c, r.process[k].contact_width_mm));
     }
   return r;
 }
@@ -446,12 +446,12 @@ std::vector<PlanRisk> rate_plans(const Json& model_table, const ProcessSettings&
     const RatingRequest& r = requests[t];
     ratings[t] = rating_items(p, r.plan, generatrix, r.amplitude_ratio, phases);
     const long long pool = r.amplitude_ratio > 0.0 ? 0 : static_cast<long long>(t) + 1;
-    group_of_item[t] = group_items(p, ratings[t].items, roots.condition_tolerance, own[t], pool);
-    ratings[t].items = {};  // the groups hold what the roots need
+    group_of_item[t] = group_items(p, ratings[t].items(), roots.condition_tolerance, own[t], pool);
+    ratings[t].phases = {};  // the groups hold what the roots need
   });
   Grouping groups;
   for (std::size_t t = 0; t < count; ++t) {
-    const std::vector<std::size_t> merged = merge_groups(groups, std::move(own[t]));
+    const std::vector<std::size_t> merged = merge_groups(groups, own[t]);
     for (std::size_t& g : group_of_item[t]) g = merged[g];
   }
   const std::vector<RootValue> values = solve_groups(model_table, p, groups, roots);
